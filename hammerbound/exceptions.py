@@ -1,0 +1,65 @@
+"""Typed errors raised by hammerbound.
+
+Every error subclasses a built-in exception so that callers can catch either the
+precise hammerbound type or the generic one (``ValueError``, ``RuntimeError``...).
+Messages always say what to change.
+"""
+
+from __future__ import annotations
+
+
+class HammerboundError(Exception):
+    """Base class of every error raised on purpose by hammerbound."""
+
+
+class DataValidationError(HammerboundError, ValueError):
+    """Input data are malformed (NaN/inf, wrong shape, mismatched lengths ...)."""
+
+
+class ParameterValidationError(HammerboundError, ValueError):
+    """A hyper-parameter or model parameter is out of its valid range."""
+
+
+class NotEnoughAmplitudesError(DataValidationError):
+    """A backlash side has fewer than two distinct input amplitudes (Remark 22.2)."""
+
+
+class EmptyFeasibleSetError(HammerboundError, ValueError):
+    """No parameter of the model class explains the data within the noise bound.
+
+    Attributes
+    ----------
+    side : str or None
+        ``"left"``/``"right"`` for stage 1, ``None`` for stage 2.
+    first_index : int or None
+        Index (in the caller's data) of the first measurement that empties the set.
+    """
+
+    def __init__(self, message: str, *, side: str | None = None, first_index: int | None = None):
+        super().__init__(message)
+        self.side = side
+        self.first_index = first_index
+
+
+class IllPosedBacklashError(HammerboundError, ValueError):
+    """The backlash (22.1) is operated beyond the crossing of its two lines (m_l != m_r)."""
+
+
+class ResultOneViolationError(HammerboundError, ValueError):
+    """A PRBS level u* does not satisfy Result 1 (u* inside the dead zone or past the crossing)."""
+
+
+class UnboundedSetError(HammerboundError, ValueError):
+    """The data do not bound a parameter inside the a priori box; supply more data or a box."""
+
+
+class SolverError(HammerboundError, RuntimeError):
+    """A numerical solver failed and no guaranteed bound could be recovered."""
+
+
+class SolverNotAvailableError(HammerboundError, ValueError):
+    """An unknown or uninstalled solver backend was requested."""
+
+
+class SolverOptionError(HammerboundError, TypeError):
+    """Unknown or ill-typed solver options."""

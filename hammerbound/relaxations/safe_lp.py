@@ -1,0 +1,137 @@
+"""Linear programs whose reported bound is *guaranteed*, whatever the solver's accuracy.
+
+A floating-point LP solver returns an approximately optimal primal/dual pair. Its
+objective value is not a valid bound in general: an inaccurate solve can report a
+minimum slightly *above* the true one. When every variable has finite bounds
+``l <= z <= u``, weak duality gives a rigorous lower bound from *any* multipliers
+(Neumaier & Shcherbina, 2004)::
+
+    min c'z  s.t.  A_eq z = b_eq,  A_ub z <= b_ub,  l <= z <= u
+    >=  y_eq' b_eq + y_ub' b_ub + sum_i min(r_i l_i, r_i u_i),
+        r = c - A_eq' y_eq - A_ub' y_ub,   y_ub <= 0 (clipped).
+
+The sum is evaluated in floating point and then lowered by a rounding margin, so the
+result is a lower bound of the exact LP value. Infeasibility is certified the same way
+on the phase-1 problem (minimum total violation): a rigorous positive lower bound on the
+total violation proves that no feasible point exists.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True)
+class SafeLPResult:
+    """Outcome of :func:`safe_minimize`.
+
+    Attributes
+    ----------
+    status : {"optimal", "infeasible", "failed"}
+        ``"infeasible"`` is only returned with a certificate (see module docstring).
+    bound : float
+        Rigorous lower bound of the minimum (``+inf`` if certified infeasible,
+        ``-inf`` if nothing could be certified).
+    value : float
+        The solver's own (uncertified) objective value, or NaN.
+    x : ndarray or None
+        The solver's primal point.
+    message : str
+    """
+
+    status: str
+    bound: float
+    value: float
+    x: np.ndarray | None
+    message: str = ""
+
+
+def _csr(a, n):
+    if a is None:
+        return sp.csr_matrix((0, n))
+    return sp.csr_matrix(a)
+
+
+def dual_bound(c, A_ub, b_ub, A_eq, b_eq, lb, ub, y_ub, y_eq) -> float:
+    """Rigorous lower bound of the LP from arbitrary multipliers (see module docstring)."""
+    c = np.asarray(c, dtype=float)
+    y_ub = np.minimum(np.asarray(y_ub, dtype=float), 0.0)
+    y_eq = np.asarray(y_eq, dtype=float)
+    r = c - A_eq.T @ y_eq - A_ub.T @ y_ub
+    terms = np.concatenate([y_eq * b_eq, y_ub * b_ub, np.minimum(r * lb, r * ub)])
+    if not np.all(np.isfinite(terms)):
+        return -np.inf
+    total = float(np.sum(terms))
+    # rounding: the residual r and the sum each carry at most ~ (nnz + n) eps relative error
+    mag = float(
+        np.sum(np.abs(terms))
+        + np.abs(A_eq).T @ np.abs(y_eq) @ np.maximum(np.abs(lb), np.abs(ub))
+        + np.abs(A_ub).T @ np.abs(y_ub) @ np.maximum(np.abs(lb), np.abs(ub))
+    )
+    width = max(A_ub.shape[0], A_eq.shape[0]) + terms.size
+    return total - 4.0 * width * EPS * (mag + 1e-300) - 1e-300
+
+
+def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None) -> SafeLPResult:
+    """Minimise ``c'z`` with a rigorous lower bound. ``bounds`` must be a finite ``(n, 2)`` array.
+
+    Uses HiGHS through :func:`scipy.optimize.linprog` for the numbers and weak duality for
+    the guarantee.
+    """
+    c = np.asarray(c, dtype=float)
+    n = c.size
+    bounds = np.asarray(bounds, dtype=float)
+    if bounds.shape != (n, 2) or not np.all(np.isfinite(bounds)):
+        raise ValueError("safe_minimize needs finite bounds of shape (n, 2) on every variable.")
+    lb, ub = bounds[:, 0], bounds[:, 1]
+    A_ub = _csr(A_ub, n)
+    A_eq = _csr(A_eq, n)
+    b_ub = np.zeros(0) if b_ub is None else np.asarray(b_ub, dtype=float)
+    b_eq = np.zeros(0) if b_eq is None else np.asarray(b_eq, dtype=float)
+    if np.any(lb > ub):
+        return SafeLPResult("infeasible", np.inf, np.nan, None, "empty variable box")
+    res = linprog(
+        c,
+        A_ub=A_ub if A_ub.shape[0] else None,
+        b_ub=b_ub if A_ub.shape[0] else None,
+        A_eq=A_eq if A_eq.shape[0] else None,
+        b_eq=b_eq if A_eq.shape[0] else None,
+        bounds=bounds,
+        method="highs",
+    )
+    if res.status == 0:
+        y_ub = res.ineqlin.marginals if A_ub.shape[0] else np.zeros(0)
+        y_eq = res.eqlin.marginals if A_eq.shape[0] else np.zeros(0)
+        bnd = dual_bound(c, A_ub, b_ub, A_eq, b_eq, lb, ub, y_ub, y_eq)
+        return SafeLPResult("optimal", bnd, float(res.fun), res.x, res.message)
+    if res.status == 2:
+        if certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub):
+            return SafeLPResult("infeasible", np.inf, np.nan, None, "certified infeasible")
+        return SafeLPResult("failed", -np.inf, np.nan, None, "infeasibility not certified")
+    return SafeLPResult("failed", -np.inf, np.nan, None, str(res.message))
+
+
+def certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub) -> bool:
+    """True only if the phase-1 LP has a *rigorous* positive minimum total violation."""
+    n = lb.size
+    m_ub, m_eq = A_ub.shape[0], A_eq.shape[0]
+    # worst violation of every row over the box (finite) bounds the slacks
+    absb = np.maximum(np.abs(lb), np.abs(ub))
+    smax_ub = np.abs(A_ub) @ absb + np.abs(b_ub) + 1.0
+    smax_eq = np.abs(A_eq) @ absb + np.abs(b_eq) + 1.0
+    # variables: z, s_ub (m_ub), s_p (m_eq), s_m (m_eq)
+    c = np.concatenate([np.zeros(n), np.ones(m_ub + 2 * m_eq)])
+    Aub = sp.hstack([A_ub, -sp.eye(m_ub), sp.csr_matrix((m_ub, 2 * m_eq))]).tocsr()
+    Aeq = sp.hstack([A_eq, sp.csr_matrix((m_eq, m_ub)), sp.eye(m_eq), -sp.eye(m_eq)]).tocsr()
+    bnds = np.vstack(
+        [np.column_stack([lb, ub]), np.column_stack([np.zeros(m_ub), smax_ub]),
+         np.column_stack([np.zeros(2 * m_eq), np.concatenate([smax_eq, smax_eq])])]
+    )
+    res = safe_minimize(c, Aub, b_ub, Aeq, b_eq, bnds)
+    return res.status == "optimal" and res.bound > 0.0

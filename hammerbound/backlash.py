@@ -1,0 +1,439 @@
+"""Stage 1: guaranteed bounds on the backlash parameters (section 22.3).
+
+:class:`BacklashSetEstimator` takes steady-state samples of square-wave experiments
+(positive input -> right line, negative input -> left line) and computes the *exact*
+feasible set of each side, its tight orthotope (22.22)-(22.24), and the exact bounds on
+the inner PRBS levels (22.25)-(22.30).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
+
+from .exceptions import (
+    DataValidationError,
+    EmptyFeasibleSetError,
+    NotEnoughAmplitudesError,
+    ParameterValidationError,
+    ResultOneViolationError,
+    UnboundedSetError,
+)
+from .feasible_set import Constraint, Edge, PolygonFeasibleSet, algorithm_22_1, polygon_from_halfplanes
+
+__all__ = ["BacklashSetEstimator", "InnerSignalBounds"]
+
+_SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class InnerSignalBounds:
+    """Exact bounds on the inner PRBS levels for a PRBS ``+-u*`` (22.25)-(22.30).
+
+    ``x_hi`` is ``xbar* = m_r (u* - c_r)`` (input ``+u*``), ``x_lo`` is
+    ``x_* = m_l (-u* + c_l)`` (input ``-u*``; the chapter's (22.26) has a sign typo, we follow
+    (22.1)). Each is ``(min, max)``.
+    """
+
+    u_star: float
+    x_hi: tuple
+    x_lo: tuple
+
+    @property
+    def center(self) -> tuple[float, float]:
+        """Central values ``(xbar^c, x_^c)`` (22.29)-(22.30)."""
+        return 0.5 * (self.x_hi[0] + self.x_hi[1]), 0.5 * (self.x_lo[0] + self.x_lo[1])
+
+    @property
+    def radius(self) -> tuple[float, float]:
+        """Uncertainty bounds ``(Delta xbar, Delta x_)`` (22.29)-(22.30)."""
+        return 0.5 * (self.x_hi[1] - self.x_hi[0]), 0.5 * (self.x_lo[1] - self.x_lo[0])
+
+    def transform(self, u) -> tuple[np.ndarray, np.ndarray]:
+        """Central inner signal ``x^c_t`` and radius ``Delta x_t`` for a PRBS ``u`` (22.31)-(22.33)."""
+        u = np.asarray(u, dtype=float)
+        if u.ndim != 1:
+            raise DataValidationError("u must be a 1-D PRBS signal.")
+        tol = 1e-9 * self.u_star
+        hi = np.abs(u - self.u_star) <= tol
+        lo = np.abs(u + self.u_star) <= tol
+        if not np.all(hi | lo):
+            i = int(np.flatnonzero(~(hi | lo))[0])
+            raise DataValidationError(
+                f"u[{i}] = {u[i]:g} is not a PRBS level +-{self.u_star:g}; the inner-signal "
+                "bounds (22.31)-(22.33) hold only for a two-level input."
+            )
+        (ch, cl), (rh, rl) = self.center, self.radius
+        return np.where(hi, ch, cl), np.where(hi, rh, rl)
+
+
+class BacklashSetEstimator(RegressorMixin, BaseEstimator):
+    """Guaranteed backlash parameter bounds from steady-state data (stage 1, section 22.3).
+
+    Parameters
+    ----------
+    noise_bound : float or array-like of shape (n_samples,)
+        Bound ``Delta eta`` on the output error (22.5); scalar or one per sample, > 0.
+    method : {"polygon", "algorithm"}, default="polygon"
+        ``"polygon"``: exact half-plane intersection in ``(m, beta = m c)`` coordinates,
+        O(M log M). ``"algorithm"``: the chapter's Algorithm 22.1 (O(M^2)), same set.
+    well_posed_on_data : bool, default=True
+        Use the fact that the square-wave experiment itself drove the system up to
+        ``+U_R`` and ``-U_L``: (22.1) can only have produced those data if it is well posed
+        there, so every backlash that explains the data keeps a PRBS level
+        ``u* <= min(U_R, U_L)`` before the crossing of its lines. Without it, Result 1 is
+        checked against the crossing of *every* parameter in the feasible sets, which is
+        far more conservative when ``m_l`` and ``m_r`` are uncertain (large noise).
+
+    Attributes
+    ----------
+    left_, right_ : PolygonFeasibleSet
+        Exact feasible sets (22.13) and (22.12) with vertices, edges and orthotope.
+    gamma_bounds_ : ndarray of shape (4, 2)
+        Tight intervals (22.24) of ``[m_l, c_l, m_r, c_r]``.
+    gamma_center_, gamma_radius_ : ndarray of shape (4,)
+        Central estimate and uncertainty bound (22.23).
+    n_features_in_ : int
+        Always 1.
+
+    Notes
+    -----
+    ``X`` holds the steady-state input values, positive for the right line (22.9) and
+    negative for the left line (22.10); ``y`` the measured steady-state outputs. The
+    steady-state gain of the linear block is one (22.8).
+    """
+
+    def __init__(self, noise_bound=0.05, *, method="polygon", well_posed_on_data=True):
+        self.noise_bound = noise_bound
+        self.method = method
+        self.well_posed_on_data = well_posed_on_data
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.one_d_array = True
+        return tags
+
+    # ------------------------------------------------------------------ validation
+    def _validate(self, X, y):
+        if self.method not in ("polygon", "algorithm"):
+            raise ParameterValidationError(
+                f"method must be 'polygon' or 'algorithm'; got {self.method!r}."
+            )
+        X = _column(X, "X")
+        try:
+            y = np.asarray(y, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise DataValidationError("y must be numeric.") from exc
+        if y.ndim == 2 and y.shape[1] == 1:
+            y = y[:, 0]
+        if y.ndim != 1:
+            raise DataValidationError(f"y must be 1-D; got shape {y.shape}.")
+        if y.shape[0] != X.shape[0]:
+            raise DataValidationError(
+                f"X and y have different lengths ({X.shape[0]} vs {y.shape[0]}); pass one "
+                "output per steady-state input."
+            )
+        if not np.all(np.isfinite(y)):
+            raise DataValidationError(
+                f"y contains NaN or inf (first at index {int(np.flatnonzero(~np.isfinite(y))[0])})."
+            )
+        nb = self.noise_bound
+        if isinstance(nb, (str, bytes)) or nb is None:
+            raise ParameterValidationError("noise_bound must be a number or an array of numbers > 0.")
+        try:
+            nb = np.asarray(nb, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ParameterValidationError("noise_bound must be numeric.") from exc
+        if nb.ndim == 0:
+            nb = np.full(X.shape[0], float(nb))
+        if nb.shape != (X.shape[0],):
+            raise ParameterValidationError(
+                f"noise_bound must be a scalar or have one value per sample ({X.shape[0]}); "
+                f"got shape {nb.shape}."
+            )
+        if not np.all(np.isfinite(nb)) or np.any(nb <= 0):
+            raise ParameterValidationError(
+                "noise_bound must be finite and > 0 (a bound of 0 makes the set degenerate; "
+                "use the smallest bound you can guarantee)."
+            )
+        if np.any(X == 0):
+            raise DataValidationError(
+                f"X[{int(np.flatnonzero(X == 0)[0])}] = 0: steady-state inputs must be non-zero "
+                "(positive for the right line, negative for the left line)."
+            )
+        return X, y, nb
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, X, y):
+        """Compute the exact feasible sets of both sides.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_samples,) or (n_samples, 1)
+            Signed steady-state inputs ``u_s``.
+        y : array-like of shape (n_samples,)
+            Measured steady-state outputs ``y_s``.
+
+        Returns
+        -------
+        self
+        """
+        X, y, nb = self._validate(X, y)
+        self.n_features_in_ = 1
+        sets = {}
+        for side in _SIDES:
+            mask = X > 0 if side == "right" else X < 0
+            idx = np.flatnonzero(mask)
+            sets[side] = self._fit_side(side, X[idx], y[idx], nb[idx], idx)
+        self.left_, self.right_ = sets["left"], sets["right"]
+        self.input_range_ = (float(X.min()), float(X.max()))
+        self.gamma_bounds_ = np.vstack([self.left_.orthotope, self.right_.orthotope])
+        self.gamma_center_ = self.gamma_bounds_.mean(axis=1)
+        self.gamma_radius_ = 0.5 * (self.gamma_bounds_[:, 1] - self.gamma_bounds_[:, 0])
+        return self
+
+    def _fit_side(self, side, u, y, nb, idx):
+        sigma = -1.0 if side == "right" else 1.0
+        if np.unique(u).size < 2:
+            raise NotEnoughAmplitudesError(
+                f"the {side} side has {np.unique(u).size} distinct input amplitude(s); the "
+                "feasible set is unbounded with fewer than two (Remark 22.2). Add square waves "
+                "with at least two different amplitudes."
+            )
+        pairs = [
+            (Constraint((ui, sigma), yi + di, int(k), "+"),
+             Constraint((-ui, -sigma), -(yi - di), int(k), "-"))
+            for ui, yi, di, k in zip(u, y, nb, idx)
+        ]
+        positivity = [Constraint((-1.0, 0.0), 0.0, None, "m>=0"),
+                      Constraint((0.0, -1.0), 0.0, None, "c>=0")]
+        # a finite box far outside any sensible set keeps the half-plane algorithm bounded;
+        # it is checked afterwards never to carry an edge.
+        big_m = 1e6 * (1.0 + np.max(np.abs(y)) / np.min(np.abs(u)))
+        big_b = big_m * np.max(np.abs(u)) + np.max(np.abs(y))
+        box = [Constraint((1.0, 0.0), big_m, None, "box"), Constraint((0.0, 1.0), big_b, None, "box")]
+        cons = [c for pr in pairs for c in pr] + positivity + box
+        res = polygon_from_halfplanes(cons)
+        if res is None:
+            raise self._empty_error(side, pairs, positivity + box)
+        verts_mb, edge_cons = res
+        if any(c.sign == "box" for c in edge_cons):
+            raise UnboundedSetError(
+                f"the {side} feasible set is unbounded: the data do not bound the slope; add "
+                "square waves with more distinct amplitudes."
+            )
+        if self.method == "algorithm":
+            order = _processing_order(u)
+            v = algorithm_22_1([pairs[i] for i in order], extra=positivity)
+            if v.shape[0] < 3:
+                raise self._empty_error(side, pairs, positivity + box)
+            # order the algorithm's vertices counter-clockwise and relabel edges with the
+            # constraint active on both endpoints
+            c0 = v.mean(axis=0)
+            v = v[np.argsort(np.arctan2(v[:, 1] - c0[1], v[:, 0] - c0[0]))]
+            verts_mb, edge_cons = v, [_common_constraint(v[k], v[(k + 1) % len(v)], cons)
+                                      for k in range(len(v))]
+        return _make_polygon_set(side, sigma, verts_mb, edge_cons, cons)
+
+    def _empty_error(self, side, pairs, fixed):
+        # the smallest prefix (in the caller's order) whose set is empty: binary search
+        lo, hi = 1, len(pairs)
+        while lo < hi:
+            mid = (lo + hi) // 2
+            cons = [c for pr in pairs[: mid + 1] for c in pr] + list(fixed)
+            if polygon_from_halfplanes(cons) is None and _empty_by_lp(cons):
+                hi = mid
+            else:
+                lo = mid + 1
+        k = pairs[lo][0].index if lo < len(pairs) else pairs[-1][0].index
+        return EmptyFeasibleSetError(
+            f"no backlash parameters (m, c) > 0 explain the {side}-side steady-state data within "
+            f"the noise bound: the set becomes empty at measurement index {k}. Check that "
+            "sample, the noise bound (too small?) and that the data are at steady state.",
+            side=side, first_index=int(k),
+        )
+
+    # ------------------------------------------------------------------ results
+    @property
+    def feasible_sets_(self) -> dict:
+        check_is_fitted(self, "left_")
+        return {"left": self.left_, "right": self.right_}
+
+    def admissible_prbs_range(self) -> tuple[float, float]:
+        """Open interval ``(u_lo, u_hi)`` of PRBS levels that satisfy Result 1 for *every*
+        feasible backlash.
+
+        ``u* > u_lo = max(c_l^max, c_r^max)`` puts both levels outside the dead zone, and
+        ``u* < u_hi`` keeps both levels before the crossing of the two lines for every
+        feasible parameter: ``|m_r - m_l| u* < m_l c_l + m_r c_r``, i.e.
+        ``max_R (m_r u - b_r) + max_L (-m_l u - b_l) < 0`` and the mirrored condition; both
+        maxima sit at vertices (linear in ``(m, beta)``), so the range is exact.
+        With ``well_posed_on_data`` the upper end is at least ``min(U_R, U_L)``, the range
+        over which the experiment showed the system to be well posed.
+        """
+        check_is_fitted(self, "left_")
+        u_lo = max(self.left_.orthotope[1, 1], self.right_.orthotope[1, 1])
+        u_data = min(-self.input_range_[0], self.input_range_[1]) if self.well_posed_on_data else 0.0
+        lo_g, hi_g = self._geometric_prbs_range(u_lo)
+        if u_data > hi_g:
+            # closed at u_data: the data show (22.1) well posed *at* +-U (strictly)
+            return (u_lo, float(np.nextafter(u_data, np.inf)))
+        return (lo_g, hi_g)
+
+    def _geometric_prbs_range(self, u_lo):
+        L, R = self.left_.vertices_mb, self.right_.vertices_mb
+
+        def worst(u):
+            f1 = np.max(R[:, 0] * u - R[:, 1]) + np.max(-L[:, 0] * u - L[:, 1])
+            f2 = np.max(L[:, 0] * u - L[:, 1]) + np.max(-R[:, 0] * u - R[:, 1])
+            return max(f1, f2)
+
+        # worst(u) is convex piecewise linear with worst(0) < 0: find its root
+        if worst(0.0) >= 0:
+            return (u_lo, u_lo)
+        hi = max(1.0, 2 * u_lo)
+        while worst(hi) < 0 and hi < 1e12:
+            hi *= 2
+        if worst(hi) < 0:
+            return (u_lo, np.inf)
+        lo = 0.0
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            if worst(mid) < 0:
+                lo = mid
+            else:
+                hi = mid
+        return (u_lo, lo)
+
+    def check_prbs_level(self, u_star: float) -> None:
+        """Raise :class:`ResultOneViolationError` unless ``u*`` satisfies Result 1 for every
+        feasible backlash (outside the dead zone, before the line crossing)."""
+        if not np.isfinite(u_star) or u_star <= 0:
+            raise ParameterValidationError(f"u_star must be a finite number > 0; got {u_star!r}.")
+        u_lo, u_hi = self.admissible_prbs_range()
+        if u_star <= u_lo:
+            raise ResultOneViolationError(
+                f"u* = {u_star:g} is inside the dead zone: Result 1 needs u* > max(c_l^max, "
+                f"c_r^max) = {u_lo:.6g}. Choose u* in ({u_lo:.6g}, {u_hi:.6g}), e.g. "
+                "with suggest_prbs_level()."
+            )
+        if u_star >= u_hi:
+            raise ResultOneViolationError(
+                f"u* = {u_star:g} reaches the crossing of the backlash lines for some feasible "
+                f"parameters (ill-posed (22.1), three inner levels instead of two). Choose u* "
+                f"in ({u_lo:.6g}, {u_hi:.6g}), e.g. with suggest_prbs_level()."
+            )
+
+    def suggest_prbs_level(self, margin: float = 0.25) -> float:
+        """A PRBS level inside the admissible range: ``u_hi - margin (u_hi - u_lo)``.
+
+        With an unbounded range (``m_l == m_r`` can be excluded on neither side) it returns
+        ``(1 + margin) * 10 * u_lo``.
+        """
+        if not 0 < margin < 1:
+            raise ParameterValidationError("margin must be in (0, 1).")
+        u_lo, u_hi = self.admissible_prbs_range()
+        if u_hi <= u_lo:
+            raise ResultOneViolationError(
+                "no PRBS level satisfies Result 1 for every feasible backlash: the dead zone "
+                "and the line crossing overlap. Reduce the noise or add steady-state data."
+            )
+        if not np.isfinite(u_hi):
+            return float((1 + margin) * 10 * u_lo)
+        return float(u_hi - margin * (u_hi - u_lo))
+
+    def inner_signal_bounds(self, u_star: float) -> InnerSignalBounds:
+        """Exact bounds (22.25)-(22.26) on the inner PRBS levels, after checking Result 1."""
+        self.check_prbs_level(u_star)
+        x_hi = self.right_.linear_range(u_star, -1.0)  # m_r u* - beta_r
+        x_lo = self.left_.linear_range(-u_star, 1.0)  # -m_l u* + beta_l
+        return InnerSignalBounds(float(u_star), x_hi, x_lo)
+
+    def transform(self, u, u_star: float | None = None):
+        """Central inner signal and radius ``(x^c, Delta x)`` for a PRBS ``u`` (22.31)-(22.33)."""
+        check_is_fitted(self, "left_")
+        u = np.ravel(np.asarray(u, dtype=float))
+        if u_star is None:
+            u_star = float(np.max(np.abs(u)))
+        return self.inner_signal_bounds(u_star).transform(u)
+
+    def predict(self, X):
+        """Central steady-state output: ``m_r^c (u - c_r^c)`` for u > 0, ``m_l^c (u + c_l^c)`` else."""
+        check_is_fitted(self, "left_")
+        X = _column(X, "X")
+        ml, cl, mr, cr = self.gamma_center_
+        return np.where(X > 0, mr * (X - cr), ml * (X + cl))
+
+
+def _column(X, name):
+    try:
+        X = np.asarray(X, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise DataValidationError(f"{name} must be numeric.") from exc
+    if X.ndim == 2 and X.shape[1] == 1:
+        X = X[:, 0]
+    if X.ndim != 1:
+        raise DataValidationError(
+            f"{name} must have shape (n_samples,) or (n_samples, 1); got {X.shape}. "
+            "Reshape your data with X.reshape(-1, 1)."
+        )
+    if X.shape[0] == 0:
+        raise DataValidationError(f"{name} is empty: pass the steady-state samples.")
+    if not np.all(np.isfinite(X)):
+        raise DataValidationError(
+            f"{name} contains NaN or inf (first at index {int(np.flatnonzero(~np.isfinite(X))[0])})."
+        )
+    return X
+
+
+def _processing_order(u):
+    """Measurement order for Algorithm 22.1: the first two must differ in amplitude."""
+    order = list(range(len(u)))
+    j = next(k for k in range(1, len(u)) if u[k] != u[0])
+    order.insert(1, order.pop(j))
+    return order
+
+
+def _common_constraint(p, q, cons):
+    best, bv = None, np.inf
+    for c in cons:
+        v = abs(np.dot(c.a, p) - c.b) + abs(np.dot(c.a, q) - c.b)
+        v /= abs(c.b) + np.hypot(*c.a)
+        if v < bv:
+            best, bv = c, v
+    return best
+
+
+def _empty_by_lp(cons) -> bool:
+    from scipy.optimize import linprog
+
+    A = np.array([c.a for c in cons])
+    b = np.array([c.b for c in cons])
+    # Chebyshev-style: maximise the slack s of A p + s |a| <= b; empty iff s* < 0
+    norms = np.hypot(A[:, 0], A[:, 1])[:, None]
+    res = linprog([0, 0, -1], A_ub=np.hstack([A, norms]), b_ub=b,
+                  bounds=[(None, None), (None, None), (None, 1.0)], method="highs")
+    return res.status == 2 or (res.status == 0 and -res.fun <= 1e-13 * (1 + np.max(np.abs(b))))
+
+
+def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons) -> PolygonFeasibleSet:
+    n = len(verts_mb)
+    edges = tuple(Edge(edge_cons[k], verts_mb[k], verts_mb[(k + 1) % n]) for k in range(n))
+    m, beta = verts_mb[:, 0], verts_mb[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(m > 0, beta / m, np.inf)
+    if not np.all(np.isfinite(c)):
+        raise UnboundedSetError(
+            f"the {side} feasible set touches m = 0, so c is unbounded; add square waves with "
+            "larger amplitudes or reduce the noise bound."
+        )
+    orth = np.array([[m.min(), m.max()], [c.min(), c.max()]])
+    names = ("m_l", "c_l") if side == "left" else ("m_r", "c_r")
+    return PolygonFeasibleSet(
+        param_names=names, orthotope=orth, exact=True, vertices=np.column_stack([m, c]),
+        edges=edges, side=side, sigma=sigma, vertices_mb=np.asarray(verts_mb),
+        constraints=tuple(k for k in cons if k.sign != "box"),
+    )

@@ -1,0 +1,259 @@
+"""A persistent HiGHS LP with *guaranteed* bounds (row-bound form of :mod:`.safe_lp`).
+
+The LP is ``min c'z  s.t.  rl <= A z <= ru,  l <= z <= u`` with every column boxed
+(finite ``l, u``). The model is kept inside one :class:`highspy.Highs` object so that a
+branch-and-bound can change bounds, costs and a few coefficients and re-solve from the
+previous basis (warm start) instead of rebuilding the LP.
+
+Rigour (Neumaier & Shcherbina, 2004; same argument as :func:`.safe_lp.dual_bound`): for
+*any* row multipliers ``y``, with ``y+ = max(y, 0)`` paired with finite ``rl`` and
+``y- = min(y, 0)`` paired with finite ``ru``, and ``r = c - A'(y+ + y-)``::
+
+    min c'z  >=  y+'rl + y-'ru + sum_j min(r_j l_j, r_j u_j),
+
+evaluated in floating point and lowered by a rounding margin. With ``c = 0`` a positive
+value of the right-hand side is a Farkas certificate of infeasibility; HiGHS's dual ray
+is tried for that, and :func:`.safe_lp.certify_infeasible` (phase 1) is the fallback.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import highspy
+import numpy as np
+import scipy.sparse as sp
+
+from .safe_lp import certify_infeasible
+
+EPS = np.finfo(float).eps
+INF = highspy.kHighsInf
+
+
+def row_dual_bound(c, A, rl, ru, lb, ub, y) -> float:
+    """Rigorous lower bound of ``min c'z, rl <= Az <= ru, lb <= z <= ub`` from multipliers ``y``.
+
+    Parameters
+    ----------
+    c : ndarray, shape (n,)
+    A : scipy.sparse matrix, shape (m, n)
+    rl, ru : ndarray, shape (m,)
+        Row bounds (``-inf`` / ``+inf`` allowed).
+    lb, ub : ndarray, shape (n,)
+        Finite column bounds.
+    y : ndarray, shape (m,)
+        Any multipliers (e.g. HiGHS row duals, or a dual ray with ``c = 0``).
+
+    Returns
+    -------
+    float
+        A lower bound of the exact LP value (``-inf`` if none can be certified).
+    """
+    y = np.asarray(y, dtype=float)
+    if y.shape != (A.shape[0],) or not np.all(np.isfinite(y)):
+        return -np.inf
+    fin_l = np.isfinite(rl)
+    fin_u = np.isfinite(ru)
+    yp = np.where(fin_l, np.maximum(y, 0.0), 0.0)
+    yn = np.where(fin_u, np.minimum(y, 0.0), 0.0)
+    yy = yp + yn
+    r = np.asarray(c, dtype=float) - A.T @ yy
+    t_l = np.where(yp != 0.0, yp * np.where(fin_l, rl, 0.0), 0.0)
+    t_u = np.where(yn != 0.0, yn * np.where(fin_u, ru, 0.0), 0.0)
+    t_z = np.minimum(r * lb, r * ub)
+    terms = np.concatenate([t_l, t_u, t_z])
+    if not np.all(np.isfinite(terms)):
+        return -np.inf
+    total = float(np.sum(terms))
+    absz = np.maximum(np.abs(lb), np.abs(ub))
+    mag = float(np.sum(np.abs(terms)) + abs(A).T @ np.abs(yy) @ absz + np.abs(c) @ absz)
+    width = A.shape[0] + terms.size
+    return total - 4.0 * width * EPS * (mag + 1e-300) - 1e-300
+
+
+def round_down(v):
+    """Next float towards ``-inf`` (outward rounding of computed lower data)."""
+    return np.nextafter(np.nextafter(v, -np.inf), -np.inf)
+
+
+def round_up(v):
+    """Next float towards ``+inf`` (outward rounding of computed upper data)."""
+    return np.nextafter(np.nextafter(v, np.inf), np.inf)
+
+
+@dataclass
+class LPSolve:
+    """Outcome of :meth:`HighsLP.solve`.
+
+    Attributes
+    ----------
+    status : {"optimal", "infeasible", "cutoff", "failed"}
+        ``"infeasible"`` only with a certificate; ``"cutoff"`` means the dual simplex
+        proved the value exceeds the requested objective bound (``bound`` is rigorous).
+    bound : float
+        Rigorous lower bound of the LP minimum (``+inf`` if certified infeasible).
+    value : float
+        HiGHS objective value (not guaranteed), NaN if none.
+    x : ndarray or None, shape (n,)
+        Primal point (``None`` unless optimal).
+    iterations : int
+    """
+
+    status: str
+    bound: float
+    value: float
+    x: np.ndarray | None
+    iterations: int = 0
+
+
+class HighsLP:
+    """Persistent LP ``min c'z, rl <= A z <= ru, lb <= z <= ub`` on one HiGHS instance.
+
+    Parameters
+    ----------
+    A : scipy.sparse matrix, shape (m, n)
+    rl, ru : ndarray, shape (m,)
+    lb, ub : ndarray, shape (n,)
+        Finite column bounds (required for the rigorous bound).
+    c : ndarray, shape (n,), optional
+    """
+
+    def __init__(self, A, rl, ru, lb, ub, c=None):
+        A = sp.csc_matrix(A, dtype=float)
+        A.sort_indices()
+        self.A = A
+        m, n = A.shape
+        self.rl = np.asarray(rl, dtype=float).copy()
+        self.ru = np.asarray(ru, dtype=float).copy()
+        self.lb = np.asarray(lb, dtype=float).copy()
+        self.ub = np.asarray(ub, dtype=float).copy()
+        self.c = np.zeros(n) if c is None else np.asarray(c, dtype=float).copy()
+        h = highspy.Highs()
+        h.setOptionValue("output_flag", False)
+        h.setOptionValue("threads", 1)
+        lp = highspy.HighsLp()
+        lp.num_col_ = n
+        lp.num_row_ = m
+        lp.col_cost_ = self.c
+        lp.col_lower_ = self.lb
+        lp.col_upper_ = self.ub
+        lp.row_lower_ = np.where(np.isfinite(self.rl), self.rl, -INF)
+        lp.row_upper_ = np.where(np.isfinite(self.ru), self.ru, INF)
+        lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = A.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = A.indices.astype(np.int32)
+        lp.a_matrix_.value_ = A.data
+        h.passModel(lp)
+        self.h = h
+        self._cutoff = None
+
+    # ---- modification ---------------------------------------------------------------
+    def set_cost(self, c):
+        c = np.asarray(c, dtype=float)
+        idx = np.flatnonzero(c != self.c)
+        if idx.size:
+            self.h.changeColsCost(idx.size, idx.astype(np.int32), c[idx])
+            self.c = c.copy()
+
+    def set_col_bounds(self, idx, lo, hi):
+        idx = np.asarray(idx, dtype=np.int32)
+        if idx.size == 0:
+            return
+        self.lb[idx] = lo
+        self.ub[idx] = hi
+        self.h.changeColsBounds(idx.size, idx, self.lb[idx], self.ub[idx])
+
+    def set_row_bounds(self, idx, lo, hi):
+        idx = np.asarray(idx, dtype=np.int32)
+        if idx.size == 0:
+            return
+        self.rl[idx] = lo
+        self.ru[idx] = hi
+        rl = np.where(np.isfinite(self.rl[idx]), self.rl[idx], -INF)
+        ru = np.where(np.isfinite(self.ru[idx]), self.ru[idx], INF)
+        self.h.changeRowsBounds(idx.size, idx, rl, ru)
+
+    def data_positions(self, rows, cols) -> np.ndarray:
+        """Positions in ``A.data`` of the existing entries ``(rows[k], cols[k])``."""
+        A = self.A
+        pos = np.empty(len(rows), dtype=np.int64)
+        for k, (r, c) in enumerate(zip(rows, cols, strict=True)):
+            s, e = A.indptr[c], A.indptr[c + 1]
+            j = s + np.searchsorted(A.indices[s:e], r)
+            if j >= e or A.indices[j] != r:
+                raise KeyError(f"no structural entry at ({r}, {c})")
+            pos[k] = j
+        return pos
+
+    def set_coeffs(self, rows, cols, pos, vals):
+        """Change existing coefficients (``pos`` from :meth:`data_positions`)."""
+        vals = np.asarray(vals, dtype=float)
+        changed = np.flatnonzero(self.A.data[pos] != vals)
+        ch = self.h.changeCoeff
+        for k in changed:
+            ch(int(rows[k]), int(cols[k]), float(vals[k]))
+        self.A.data[pos[changed]] = vals[changed]
+
+    def set_cutoff(self, value):
+        """Let the dual simplex stop once the objective provably exceeds ``value``."""
+        v = INF if value is None or not np.isfinite(value) else float(value)
+        if v != self._cutoff:
+            self.h.setOptionValue("objective_bound", v)
+            self._cutoff = v
+
+    # ---- solve ----------------------------------------------------------------------
+    def bound_from(self, y) -> float:
+        return row_dual_bound(self.c, self.A, self.rl, self.ru, self.lb, self.ub, y)
+
+    def _certify_infeasible(self) -> bool:
+        h = self.h
+        zero = np.zeros_like(self.c)
+        try:
+            has, ray = h.getDualRay()
+        except Exception:  # pragma: no cover - depends on highspy version
+            has, ray = False, None
+        if has and ray is not None:
+            ray = np.asarray(ray, dtype=float)
+            for s in (1.0, -1.0):
+                if row_dual_bound(zero, self.A, self.rl, self.ru, self.lb, self.ub, s * ray) > 0:
+                    return True
+        # fallback: phase-1 LP of safe_lp (rows split into <= and == parts)
+        A = self.A.tocsr()
+        eq = np.isfinite(self.rl) & np.isfinite(self.ru) & (self.rl == self.ru)
+        up = np.isfinite(self.ru) & ~eq
+        lo = np.isfinite(self.rl) & ~eq
+        A_ub = sp.vstack([A[up], -A[lo]]).tocsr()
+        b_ub = np.concatenate([self.ru[up], -self.rl[lo]])
+        return certify_infeasible(A_ub, b_ub, A[eq], self.rl[eq], self.lb, self.ub)
+
+    def solve(self) -> LPSolve:
+        """Solve from the current basis and return a rigorous bound (see module docstring)."""
+        h = self.h
+        if np.any(self.lb > self.ub):
+            return LPSolve("infeasible", np.inf, np.nan, None, 0)
+        h.run()
+        st = h.getModelStatus()
+        it = int(h.getInfo().simplex_iteration_count)
+        MS = highspy.HighsModelStatus
+        if st == MS.kOptimal:
+            sol = h.getSolution()
+            y = np.asarray(sol.row_dual)
+            x = np.asarray(sol.col_value)
+            val = float(h.getInfo().objective_function_value)
+            return LPSolve("optimal", self.bound_from(y), val, x, it)
+        if st == MS.kObjectiveBound:
+            sol = h.getSolution()
+            y = np.asarray(sol.row_dual)
+            b = self.bound_from(y) if sol.dual_valid else -np.inf
+            return LPSolve("cutoff", b, np.nan, None, it)
+        if st == MS.kInfeasible:
+            if self._certify_infeasible():
+                return LPSolve("infeasible", np.inf, np.nan, None, it)
+            return LPSolve("failed", -np.inf, np.nan, None, it)
+        # anything else: whatever duals exist still give a valid (maybe weak) bound
+        try:
+            sol = h.getSolution()
+            b = self.bound_from(np.asarray(sol.row_dual)) if sol.dual_valid else -np.inf
+        except Exception:  # pragma: no cover
+            b = -np.inf
+        return LPSolve("failed", b, np.nan, None, it)

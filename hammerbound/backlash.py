@@ -122,24 +122,25 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"method must be 'polygon' or 'algorithm'; got {self.method!r}."
             )
-        X = _column(X, "X")
+        import scipy.sparse as sp
+        from sklearn.utils.validation import validate_data
+
+        if not sp.issparse(X) and np.ndim(X) == 1:
+            X = np.reshape(np.asarray(X, dtype=object if _is_complex(X) else None), (-1, 1))
         try:
-            y = np.asarray(y, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise DataValidationError("y must be numeric.") from exc
-        if y.ndim == 2 and y.shape[1] == 1:
-            y = y[:, 0]
-        if y.ndim != 1:
-            raise DataValidationError(f"y must be 1-D; got shape {y.shape}.")
-        if y.shape[0] != X.shape[0]:
+            X, y = validate_data(self, X, y, dtype="numeric", y_numeric=True)
+        except ValueError as exc:  # re-raise as our typed error, message kept
             raise DataValidationError(
-                f"X and y have different lengths ({X.shape[0]} vs {y.shape[0]}); pass one "
-                "output per steady-state input."
-            )
-        if not np.all(np.isfinite(y)):
+                f"{exc} (X: signed steady-state inputs of shape (n_samples,) or (n_samples, 1); "
+                "y: outputs of shape (n_samples,))"
+            ) from exc
+        if X.shape[1] != 1:
             raise DataValidationError(
-                f"y contains NaN or inf (first at index {int(np.flatnonzero(~np.isfinite(y))[0])})."
+                f"X must have shape (n_samples,) or (n_samples, 1); got {X.shape}. "
+                "Reshape your data with X.reshape(-1, 1)."
             )
+        X = X[:, 0].astype(float)
+        y = np.asarray(y, dtype=float)
         nb = self.noise_bound
         if isinstance(nb, (str, bytes)) or nb is None:
             raise ParameterValidationError("noise_bound must be a number or an array of numbers > 0.")
@@ -352,7 +353,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         x_lo = self.left_.linear_range(-u_star, 1.0)  # -m_l u* + beta_l
         return InnerSignalBounds(float(u_star), x_hi, x_lo)
 
-    def transform(self, u, u_star: float | None = None):
+    def inner_signal(self, u, u_star: float | None = None):
         """Central inner signal and radius ``(x^c, Delta x)`` for a PRBS ``u`` (22.31)-(22.33)."""
         check_is_fitted(self, "left_")
         u = np.ravel(np.asarray(u, dtype=float))
@@ -366,6 +367,13 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         X = _column(X, "X")
         ml, cl, mr, cr = self.gamma_center_
         return np.where(X > 0, mr * (X - cr), ml * (X + cl))
+
+
+def _is_complex(X):
+    try:
+        return np.iscomplexobj(np.asarray(X))
+    except (TypeError, ValueError):
+        return False
 
 
 def _column(X, name):

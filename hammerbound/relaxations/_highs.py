@@ -201,6 +201,26 @@ class HighsLP:
             self.h.setOptionValue("objective_bound", v)
             self._cutoff = v
 
+    # ---- basis transfer (warm start across processes) ----------------------------------
+    def get_basis(self):
+        """Current simplex basis as ``(col_status (n,), row_status (m,))`` int8 arrays, or None."""
+        b = self.h.getBasis()
+        if not b.valid:
+            return None
+        return (np.fromiter((int(v) for v in b.col_status), np.int8),
+                np.fromiter((int(v) for v in b.row_status), np.int8))
+
+    def set_basis(self, basis) -> bool:
+        """Warm start from a basis returned by :meth:`get_basis` (same model structure)."""
+        if basis is None:
+            return False
+        st = highspy.HighsBasisStatus
+        b = highspy.HighsBasis()
+        b.col_status = [st(int(v)) for v in basis[0]]
+        b.row_status = [st(int(v)) for v in basis[1]]
+        b.valid = True
+        return self.h.setBasis(b) == highspy.HighsStatus.kOk
+
     # ---- solve ----------------------------------------------------------------------
     def bound_from(self, y) -> float:
         return row_dual_bound(self.c, self.A, self.rl, self.ru, self.lb, self.ub, y)
@@ -209,7 +229,8 @@ class HighsLP:
         h = self.h
         zero = np.zeros_like(self.c)
         try:
-            has, ray = h.getDualRay()
+            out = h.getDualRay()
+            has, ray = (out[1], out[2]) if len(out) == 3 else (out[0], out[1])
         except Exception:  # pragma: no cover - depends on highspy version
             has, ray = False, None
         if has and ray is not None:

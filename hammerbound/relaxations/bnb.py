@@ -1,0 +1,493 @@
+"""Tight parameter uncertainty intervals (22.36)-(22.37) by spatial branch-and-bound.
+
+For every parameter ``theta_k`` and both senses the exact extreme value over the EIV set
+(22.34) is bracketed by
+
+* a **guaranteed outer bound**: the minimum, over the open leaves of a branch-and-bound
+  tree on the theta box, of the McCormick LP relaxation (:mod:`.mccormick`), each made
+  rigorous by a dual bound (:mod:`._highs`); the tree starts from the polytopic LP box
+  (:func:`.lp.lp_bounds`) shrunk by optimality-based bound tightening (OBBT);
+* an **inner value**: ``theta_k`` at the best point verified feasible by
+  :func:`.problem.check_theta` (with its witness ``eta``, ``dx``).
+
+The difference is the certified gap. The search stops when the gap is below
+``tol * max(1, |value|)``; node and time limits return the still-valid outer bound with
+status ``"limit"``.
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..exceptions import EmptyFeasibleSetError, UnboundedSetError
+from .lp import lp_bounds, touches_box
+from .mccormick import McCormickRelaxation
+from .problem import EIVProblem, check_theta
+from .result import BoundInfo, IntervalResult
+
+__all__ = ["exact_bounds"]
+
+
+@dataclass
+class _Point:
+    theta: np.ndarray
+    eta: np.ndarray
+    dx: np.ndarray
+
+
+class _Screen:
+    """Fast, *unverified* minimum violation of (22.34) at a fixed theta.
+
+    Same LP as :func:`.problem.check_theta` (``min s`` with ``|M(theta) z - r(theta)| <= s``
+    over the error boxes), kept on one HiGHS instance and warm-started from the previous
+    basis. Only used to screen candidates; acceptance always goes through ``check_theta``.
+    """
+
+    def __init__(self, problem: EIVProblem):
+        import highspy
+
+        pr = problem
+        self.problem = pr
+        n, k, na = pr.N, pr.n_groups, pr.na
+        m = pr.equation_times.size
+        eta_idx, dx_idx = pr.eta_index(), pr.dx_index()
+        self.m, self.nz = m, n + k
+        self.rows = np.concatenate([np.repeat(np.arange(m), na + 1),
+                                    np.repeat(np.arange(m), dx_idx.shape[1])])
+        self.cols = np.concatenate([eta_idx.ravel(), n + dx_idx.ravel()])
+        self.na1, self.nbp = na + 1, dx_idx.shape[1]
+        self.lb = np.concatenate([-pr.deta, -pr.dx_group, [0.0]])
+        self.ub = np.concatenate([pr.deta, pr.dx_group, [highspy.kHighsInf]])
+        self.tol = 1e-9 * (1.0 + float(np.max(np.abs(pr.y))))
+        h = highspy.Highs()
+        h.setOptionValue("output_flag", False)
+        h.setOptionValue("threads", 1)
+        self.h = h
+        self.basis = None
+        self._hs = highspy
+
+    def violation(self, theta) -> float:
+        hs = self._hs
+        theta = np.asarray(theta, dtype=float)
+        pr = self.problem
+        a, b = theta[: pr.na], theta[pr.na :]
+        m, nz = self.m, self.nz
+        vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
+        M = sp.csc_matrix((vals, (self.rows, self.cols)), shape=(m, nz))
+        r = pr.simulate_noise_free(theta)
+        A = sp.vstack([sp.hstack([M, -np.ones((m, 1))]),
+                       sp.hstack([M, np.ones((m, 1))])]).tocsc()
+        lp = hs.HighsLp()
+        lp.num_col_, lp.num_row_ = nz + 1, 2 * m
+        c = np.zeros(nz + 1)
+        c[-1] = 1.0
+        lp.col_cost_ = c
+        lp.col_lower_, lp.col_upper_ = self.lb, self.ub
+        lp.row_lower_ = np.concatenate([np.full(m, -hs.kHighsInf), r])
+        lp.row_upper_ = np.concatenate([r, np.full(m, hs.kHighsInf)])
+        lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = A.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = A.indices.astype(np.int32)
+        lp.a_matrix_.value_ = A.data
+        self.h.passModel(lp)
+        if self.basis is not None:
+            self.h.setBasis(self.basis)
+        self.h.run()
+        if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
+            self.basis = None
+            return np.inf
+        self.basis = self.h.getBasis()
+        return float(self.h.getInfo().objective_function_value)
+
+    def screens(self, theta) -> bool:
+        return self.violation(theta) <= self.tol
+
+
+@dataclass
+class _Pool:
+    """Verified-feasible points found so far (plus the screening LP)."""
+
+    problem: EIVProblem
+    points: list = field(default_factory=list)
+    screen: _Screen | None = None
+    checks: int = 0
+
+    def verify(self, theta) -> _Point | None:
+        """Accept ``theta`` only if :func:`check_theta` says it is feasible."""
+        self.checks += 1
+        chk = check_theta(self.problem, theta)
+        if not chk.feasible:
+            return None
+        pt = _Point(np.array(theta, dtype=float), chk.eta, chk.dx)
+        self.points.append(pt)
+        return pt
+
+    def add(self, theta) -> _Point | None:
+        """Screen, then verify."""
+        if self.screen is None:
+            self.screen = _Screen(self.problem)
+        if not self.screen.screens(theta):
+            return None
+        return self.verify(theta)
+
+    def line_search(self, inside, outside, steps=8) -> _Point | None:
+        """Verified point on the segment ``inside -> outside`` closest to ``outside``.
+
+        ``inside`` must be (verified) feasible; bisection on the screening LP, then
+        verification with :func:`check_theta` (backing off towards ``inside`` if needed).
+        """
+        if self.screen is None:
+            self.screen = _Screen(self.problem)
+        lo, hi = 0.0, 1.0
+        d = outside - inside
+        for _ in range(steps):
+            mid = 0.5 * (lo + hi)
+            if self.screen.screens(inside + mid * d):
+                lo = mid
+            else:
+                hi = mid
+        for _ in range(3):
+            if lo <= 0.0:
+                return None
+            pt = self.verify(inside + lo * d)
+            if pt is not None:
+                return pt
+            lo *= 0.5
+        return None
+
+
+def _obbt_task(problem, box, tasks, bases):
+    """Solve the OBBT LPs ``tasks`` (list of (k, sense)) on one McCormick model.
+
+    Returns a list of ``(bound, theta (p,) or None, x or None, basis)`` where ``bound``
+    is a rigorous lower bound of ``min sense * theta_k`` over the relaxation.
+    """
+    relax = McCormickRelaxation(problem, box)
+    out = []
+    for (k, s), basis in zip(tasks, bases, strict=True):
+        c = np.zeros(relax.ncol)
+        c[k] = s
+        relax.lp.set_cost(c)
+        if basis is not None:
+            relax.lp.set_basis(basis)
+        r = relax.lp.solve()
+        if r.status == "infeasible":
+            out.append((np.inf, None, None, None, r.iterations))
+            continue
+        out.append((r.bound, None if r.x is None else r.x.copy(), relax.lp.get_basis(),
+                    r.iterations))
+    return out
+
+
+def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
+    """Optimality-based bound tightening of the theta box on the McCormick relaxation.
+
+    Each round solves ``min/max theta_k`` (k = 1..p) over the relaxation on the current
+    box (in parallel when ``n_jobs > 1``) and shrinks the box with the rigorous bounds.
+
+    Returns
+    -------
+    box : ndarray, shape (p, 2)
+    roots : dict
+        ``(k, sense) -> (bound, x, basis)`` of the last round (the root nodes of the
+        searches; the bound stays valid on the final, smaller box).
+    thetas : list of ndarray (p,)
+        LP points met on the way (feasibility candidates).
+    """
+    p = problem.p
+    box = np.array(box, dtype=float)
+    tasks = [(k, s) for k in range(p) for s in (1.0, -1.0)]
+    bases = {t: None for t in tasks}
+    thetas = []
+    roots = {}
+    nj = max(1, min(n_jobs, len(tasks)))
+    chunks = [tasks[i::nj] for i in range(nj)]
+    for _ in range(rounds):
+        old = box.copy()
+        if nj == 1:
+            res = _obbt_task(problem, box, tasks, [bases[t] for t in tasks])
+            res = dict(zip(tasks, res, strict=True))
+        else:
+            from joblib import delayed
+
+            outs = parallel(delayed(_obbt_task)(problem, box, ch, [bases[t] for t in ch])
+                            for ch in chunks)
+            res = {t: o for ch, oc in zip(chunks, outs, strict=True)
+                   for t, o in zip(ch, oc, strict=True)}
+        for (k, s), (bnd, x, basis, _) in res.items():
+            if not np.isfinite(bnd) and bnd > 0:
+                raise EmptyFeasibleSetError(
+                    "the McCormick relaxation of (22.34) is certified infeasible inside "
+                    "the LP outer box: no theta explains the data within the error "
+                    "bounds (the polytopic LP set is a strict outer approximation).",
+                    first_index=None)
+            bases[(k, s)] = basis
+            roots[(k, s)] = (bnd, x, basis)
+            if x is not None:
+                thetas.append(x[:p].copy())
+            if s > 0:
+                box[k, 0] = min(max(box[k, 0], bnd), box[k, 1])
+            else:
+                box[k, 1] = max(min(box[k, 1], -bnd), box[k, 0])
+        w_old = old[:, 1] - old[:, 0]
+        w_new = box[:, 1] - box[:, 0]
+        if np.all(w_new >= (1 - rel_improve) * w_old):
+            break
+    return box, roots, thetas
+
+
+@dataclass
+class _Search:
+    bound: float
+    value: float
+    witness: _Point | None
+    nodes: int
+    time: float
+    status: str
+    message: str
+    iterations: int
+    solver_value: float
+
+
+def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, progress,
+            position):
+    """Minimise ``sense * theta_k`` over the EIV set by branch-and-bound (one interval end).
+
+    ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None).
+    """
+    t0 = time.perf_counter()
+    p = problem.p
+    box0 = np.array(box0, dtype=float)
+    relax = McCormickRelaxation(problem, box0)
+    c = np.zeros(relax.ncol)
+    c[k] = sense
+    relax.lp.set_cost(c)
+    pool = _Pool(problem, list(points))
+
+    def val(theta):
+        return sense * float(theta[k])
+
+    inc = min(pool.points, key=lambda q: val(q.theta), default=None)
+    ub = val(inc.theta) if inc is not None else np.inf
+    interior = np.mean([q.theta for q in pool.points], axis=0) if pool.points else None
+    if interior is not None and pool.verify(interior) is None:
+        interior = inc.theta
+    width0 = box0[:, 1] - box0[:, 0]
+    min_w = 1e-12 * np.maximum(1.0, np.abs(box0).max(axis=1))
+    heap = []
+    counter = 0
+    pending = None  # (lb, box, precomputed LPSolve-like (bound, x))
+    if root is not None and root[1] is not None:
+        relax.lp.set_basis(root[2])
+        pending = (max(-np.inf, root[0]), box0, root[1])
+    else:
+        heap.append((-np.inf, counter, box0))
+        counter += 1
+    closed_lb = np.inf  # min bound over leaves closed by bound (not by infeasibility)
+    nodes = 0
+    iters = 0
+    status = "optimal"
+    root_value = np.nan
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=max_nodes, position=position, leave=False,
+                   desc=f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}")
+    while heap or pending is not None:
+        tol_eff = tol * max(1.0, abs(ub)) if np.isfinite(ub) else 0.0
+        if pending is not None:
+            lb, box, x = pending
+            pending = None
+            nodes += 1
+            root_value = sense * float(x[k])
+        else:
+            if heap[0][0] >= ub - tol_eff:
+                break
+            if nodes >= max_nodes or time.perf_counter() - t0 > time_limit:
+                status = "limit"
+                break
+            lb_parent, _, box = heapq.heappop(heap)
+            relax.set_box(box)
+            relax.lp.set_cutoff(ub - tol_eff if np.isfinite(ub) else None)
+            res = relax.lp.solve()
+            nodes += 1
+            iters += res.iterations
+            if res.status == "infeasible":
+                continue
+            lb = max(lb_parent, res.bound)
+            x = res.x if res.status == "optimal" else None
+            if nodes == 1 and x is not None:
+                root_value = res.value
+        if bar is not None:
+            bar.update(1)
+        if lb >= ub - tol_eff:
+            closed_lb = min(closed_lb, lb)
+            continue
+        width = box[:, 1] - box[:, 0]
+        if x is not None:
+            th = np.clip(x[:p], box[:, 0], box[:, 1])
+            if val(th) < ub - tol_eff:
+                pt = pool.add(th)
+                if pt is None and interior is not None:
+                    pt = pool.line_search(interior, th)
+                if pt is not None and val(pt.theta) < ub:
+                    inc, ub = pt, val(pt.theta)
+                    if interior is None:
+                        interior = pt.theta
+                    tol_eff = tol * max(1.0, abs(ub))
+                    if lb >= ub - tol_eff:
+                        closed_lb = min(closed_lb, lb)
+                        continue
+            score = relax.violations(x) * width / np.maximum(width0, 1e-300)
+            if score.max() > 0:
+                i = int(np.argmax(score))
+            else:
+                i = int(np.argmax(width / np.maximum(width0, 1e-300)))
+            split = float(np.clip(x[i], box[i, 0] + 0.2 * width[i], box[i, 1] - 0.2 * width[i]))
+        else:
+            i = int(np.argmax(width / np.maximum(width0, 1e-300)))
+            split = 0.5 * (box[i, 0] + box[i, 1])
+        if width[i] <= min_w[i]:
+            closed_lb = min(closed_lb, lb)  # cannot split further: keep its bound
+            continue
+        for side in (0, 1):
+            child = box.copy()
+            child[i, 1 - side] = split
+            heapq.heappush(heap, (lb, counter, child))
+            counter += 1
+    if bar is not None:
+        bar.close()
+    open_lb = min((h[0] for h in heap), default=np.inf)
+    bound = min(closed_lb, open_lb, ub)
+    gap = ub - bound
+    elapsed = time.perf_counter() - t0
+    if status == "limit":
+        msg = (f"stopped by the {'node' if nodes >= max_nodes else 'time'} limit "
+               f"({nodes} nodes, {elapsed:.1f} s): the bound is a valid outer bound, "
+               f"certified gap {gap:.3g}")
+    elif not np.isfinite(ub):
+        status = "limit"
+        msg = "no verified-feasible point found: only the outer bound is certified"
+    else:
+        msg = f"gap {gap:.3g} <= tol after {nodes} nodes ({pool.checks} check_theta calls)"
+    return _Search(bound, ub, inc, nodes, elapsed, status, msg, iters, root_value)
+
+
+def exact_bounds(
+    problem: EIVProblem,
+    tol: float = 1e-4,
+    max_nodes: int = 20000,
+    time_limit: float = 600.0,
+    n_jobs: int = 1,
+    progress: bool = False,
+    theta_box=None,
+) -> IntervalResult:
+    """Tight parameter uncertainty intervals (22.35)-(22.37) with a certificate.
+
+    Parameters
+    ----------
+    problem : EIVProblem
+        The EIV problem (22.34).
+    tol : float, default 1e-4
+        Stop an interval end when ``value - bound <= tol * max(1, |value|)`` (absolute for
+        small parameters, relative for large ones).
+    max_nodes : int, default 20000
+        Node limit per interval end.
+    time_limit : float, default 600
+        Wall-time limit (s) per interval end.
+    n_jobs : int, default 1
+        The ``2 p`` interval ends are searched in parallel with joblib.
+    progress : bool, default False
+        Show a tqdm progress bar per interval end.
+    theta_box : array_like, shape (p, 2), optional
+        A priori box replacing ``problem.theta_box``.
+
+    Returns
+    -------
+    IntervalResult
+        ``method="exact"``; ``bounds`` (p, 2) are guaranteed outer bounds of (22.36) and
+        (22.37). Every :class:`BoundInfo` carries ``gap`` (bound to best verified value),
+        ``witness`` (verified-feasible theta, shape (p,)), ``nodes``, ``time``, and in
+        ``extra`` the witness ``eta`` (N,), ``dx`` (K,) and the ``value`` theta_k at it.
+        ``extra`` of the result holds the ``lp`` result, the OBBT ``root_box`` (p, 2)
+        and ``inner`` (p, 2), the hull of the witnesses.
+
+    Raises
+    ------
+    EmptyFeasibleSetError
+        The data are inconsistent (from the LP or from the relaxation at the root).
+    UnboundedSetError
+        An exact bound coincides with the a priori box.
+    """
+    t0 = time.perf_counter()
+    if theta_box is not None:
+        problem = problem.with_theta_box(theta_box)
+    lp = lp_bounds(problem, check_box=False)
+    p = problem.p
+    jobs = [(k, s) for k in range(p) for s in (1.0, -1.0)]
+    parallel = None
+    if n_jobs != 1:
+        from joblib import Parallel
+
+        parallel = Parallel(n_jobs=n_jobs)
+        parallel.__enter__()
+    try:
+        box, roots, thetas = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel)
+        pool = _Pool(problem)
+        for th in thetas:
+            pool.add(th)
+        if thetas:
+            pool.add(np.mean(thetas, axis=0))
+        if not pool.points:
+            pool.add(box.mean(axis=1))
+        pts = pool.points
+        args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress)
+        if parallel is None:
+            outs = [_search(problem, box, k, s, pts, roots.get((k, s)), position=i, **args)
+                    for i, (k, s) in enumerate(jobs)]
+        else:
+            from joblib import delayed
+
+            outs = parallel(
+                delayed(_search)(problem, box, k, s, pts, roots.get((k, s)), position=i, **args)
+                for i, (k, s) in enumerate(jobs))
+    finally:
+        if parallel is not None:
+            parallel.__exit__(None, None, None)
+    names = problem.param_names
+    bounds = np.zeros((p, 2))
+    inner = np.full((p, 2), np.nan)
+    infos = []
+    for (k, s), o in zip(jobs, outs, strict=True):
+        e = 0 if s > 0 else 1
+        bounds[k, e] = s * o.bound
+        wit = o.witness
+        if wit is not None:
+            inner[k, e] = wit.theta[k]
+        infos.append(BoundInfo(
+            param=names[k], sense="min" if s > 0 else "max", bound=float(s * o.bound),
+            solver_value=float(s * o.solver_value), status=o.status, certified=True,
+            time=o.time, iterations=o.iterations,
+            gap=float(o.value - o.bound) if np.isfinite(o.value) else None,
+            witness=None if wit is None else wit.theta.copy(), nodes=o.nodes, message=o.message,
+            extra={} if wit is None else {"eta": wit.eta, "dx": wit.dx,
+                                          "value": float(wit.theta[k])},
+        ))
+    touch = touches_box(bounds, problem.theta_box)
+    if np.any(touch):
+        which = [f"{names[k]} {'lower' if e == 0 else 'upper'}"
+                 for k, e in zip(*np.nonzero(touch), strict=True)]
+        raise UnboundedSetError(
+            "the data do not bound " + ", ".join(which) + " inside the a priori theta_box; "
+            "supply more (or more exciting) data or a tighter theta_box.")
+    return IntervalResult(
+        bounds=bounds, infos=tuple(infos), method="exact", param_names=tuple(names),
+        time=time.perf_counter() - t0,
+        extra={"lp": lp, "root_box": box, "inner": inner},
+    )

@@ -1,0 +1,178 @@
+"""McCormick LP relaxation of the EIV set (22.34) over a box of theta.
+
+Variables ``z = [theta (p), eta (N), dx (K), w (P)]`` where every bilinear term of
+(22.34) -- ``a_i eta_{t-i}`` (one per equation and lag) and ``b_j dx_g`` (one per *distinct*
+pair ``(j, g)``; with the two-level inner signal only ``2 n_b`` of them) -- is replaced by
+a product variable ``w = x e`` constrained by its McCormick envelope over
+``x in [xL, xU]`` (a theta box edge) and ``e in [eL, eU]`` (the error box)::
+
+    w >= xL e + eL x - xL eL,     w >= xU e + eU x - xU eU,
+    w <= xU e + eL x - xU eL,     w <= xL e + eU x - xL eU.
+
+Each equation of (22.34) becomes the linear row
+``phi_t . theta - eta_t - sum_i w_(i,t-i) + sum_j w_(j,g(t-j)) = -y_t``; the gain
+equality (22.8) is added as is. The relaxation contains the EIV set and is exact when
+the theta box is a point. Only the ``e`` coefficients and the right-hand sides depend on
+the theta box, so :meth:`McCormickRelaxation.set_box` updates a persistent HiGHS model in
+place (warm start). Right-hand sides and product bounds are rounded outwards, so the
+relaxation is valid in floating point and LP bounds from :mod:`._highs` are guaranteed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ._highs import HighsLP, round_down, round_up
+from .problem import EIVProblem
+
+
+def _prod_bounds(xl, xu, el, eu):
+    c = np.stack([xl * el, xl * eu, xu * el, xu * eu])
+    return round_down(c.min(axis=0)), round_up(c.max(axis=0))
+
+
+class McCormickRelaxation:
+    """Persistent McCormick LP relaxation of (22.34) (see module docstring).
+
+    Parameters
+    ----------
+    problem : EIVProblem
+    box : ndarray, shape (p, 2)
+        Initial theta box (must lie inside ``problem.theta_box`` for the result to be a
+        relaxation of the EIV set restricted to that box).
+    """
+
+    def __init__(self, problem: EIVProblem, box):
+        pr = problem
+        self.problem = pr
+        p, n, k = pr.p, pr.N, pr.n_groups
+        na = pr.na
+        phi, yt = pr.regressors()
+        m = phi.shape[0]
+        eta_idx = pr.eta_index()  # (m, na+1)
+        dx_idx = pr.dx_index()  # (m, nbp)
+        nbp = dx_idx.shape[1]
+        # ---- products ---------------------------------------------------------------
+        # a-products: one per (equation, i)
+        ax = np.repeat(np.arange(na), m)  # theta index
+        ae = p + eta_idx[:, 1:].T.ravel()  # eta column
+        a_eq = np.tile(np.arange(m), na)  # equation using it
+        # b-products: one per distinct (j, g)
+        jj = np.tile(np.arange(nbp), (m, 1))
+        pair = jj * k + dx_idx  # (m, nbp)
+        upairs, inv = np.unique(pair.ravel(), return_inverse=True)
+        inv = inv.reshape(m, nbp)
+        bx = na + upairs // k
+        be = p + n + upairs % k
+        self.px = np.concatenate([ax, bx]).astype(np.int64)
+        self.pe = np.concatenate([ae, be]).astype(np.int64)
+        npa, npb = ax.size, bx.size
+        P = npa + npb
+        w0 = p + n + k
+        self.ncol = w0 + P
+        self.pw = w0 + np.arange(P)
+        # ---- error boxes ------------------------------------------------------------
+        self.e_lo = np.concatenate([-pr.deta, -pr.dx_group])
+        self.e_hi = np.concatenate([pr.deta, pr.dx_group])
+        eL = self.e_lo[self.pe - p]
+        eU = self.e_hi[self.pe - p]
+        self.eL, self.eU = eL, eU
+        # ---- rows ---------------------------------------------------------------------
+        rows, cols, vals = [], [], []
+        eqr = np.arange(m)
+        for q in range(p):  # theta part of the equations
+            rows.append(eqr)
+            cols.append(np.full(m, q))
+            vals.append(phi[:, q])
+        rows.append(eqr)
+        cols.append(p + eta_idx[:, 0])
+        vals.append(-np.ones(m))
+        rows.append(a_eq)
+        cols.append(w0 + np.arange(npa))
+        vals.append(-np.ones(npa))
+        for j in range(nbp):
+            rows.append(eqr)
+            cols.append(w0 + npa + inv[:, j])
+            vals.append(np.ones(m))
+        rl = [-yt]
+        ru = [-yt]
+        nrow = m
+        g = pr.gain_row()
+        if g is not None:
+            rows.append(np.full(p, nrow))
+            cols.append(np.arange(p))
+            vals.append(g[0])
+            rl.append([g[1]])
+            ru.append([g[1]])
+            nrow += 1
+        self.mc0 = nrow
+        qi = np.arange(P)
+        # row r = mc0 + 4 q + s, s = 0..3 ; entries: w (1), e (coef), x (coef)
+        self.mc_rows = self.mc0 + 4 * qi[:, None] + np.arange(4)[None, :]  # (P, 4)
+        for s in range(4):
+            r = self.mc_rows[:, s]
+            rows += [r, r, r]
+            cols += [self.pw, self.pe, self.px]
+            e_coef = np.zeros(P)  # placeholder, set by set_box (structural nonzero kept)
+            x_coef = -(eL if s in (0, 2) else eU)
+            vals += [np.ones(P), e_coef + 1.0, x_coef]
+        nrow += 4 * P
+        rl.append(np.full(4 * P, -np.inf))
+        ru.append(np.full(4 * P, np.inf))
+        A = sp.csc_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+            shape=(nrow, self.ncol),
+        )
+        lb = np.concatenate([np.asarray(box, float)[:, 0], self.e_lo, np.zeros(P)])
+        ub = np.concatenate([np.asarray(box, float)[:, 1], self.e_hi, np.zeros(P)])
+        self.lp = HighsLP(A, np.concatenate(rl), np.concatenate(ru), lb, ub)
+        # positions of the e-coefficients of every McCormick row, grouped by theta index
+        self._by_x = []
+        for q in range(p):
+            sel = np.flatnonzero(self.px == q)
+            r = self.mc_rows[sel].ravel()  # (len(sel)*4,) ordered (prod, s)
+            c = np.repeat(self.pe[sel], 4)
+            pos = self.lp.data_positions(r, c)
+            self._by_x.append((sel, r, c, pos))
+        self.box = np.full((p, 2), np.nan)
+        self.set_box(box)
+
+    @property
+    def p(self) -> int:
+        return self.problem.p
+
+    def set_box(self, box):
+        """Update the relaxation in place to the theta box ``box`` (shape (p, 2))."""
+        box = np.asarray(box, dtype=float)
+        changed = np.flatnonzero(np.any(box != self.box, axis=1))
+        if changed.size == 0:
+            return
+        lp = self.lp
+        lp.set_col_bounds(changed, box[changed, 0], box[changed, 1])
+        for q in changed:
+            sel, r, c, pos = self._by_x[q]
+            xl, xu = box[q, 0], box[q, 1]
+            eL, eU = self.eL[sel], self.eU[sel]
+            # e-coefficients of the 4 rows: -xL, -xU, -xU, -xL
+            ecoef = np.column_stack([np.full(sel.size, -xl), np.full(sel.size, -xu),
+                                     np.full(sel.size, -xu), np.full(sel.size, -xl)]).ravel()
+            lp.set_coeffs(r, c, pos, ecoef)
+            lo = np.column_stack([round_down(-xl * eL), round_down(-xu * eU),
+                                  np.full(sel.size, -np.inf), np.full(sel.size, -np.inf)]).ravel()
+            hi = np.column_stack([np.full(sel.size, np.inf), np.full(sel.size, np.inf),
+                                  round_up(-xu * eL), round_up(-xl * eU)]).ravel()
+            lp.set_row_bounds(r, lo, hi)
+            wl, wu = _prod_bounds(xl, xu, eL, eU)
+            lp.set_col_bounds(self.pw[sel], wl, wu)
+        self.box = box.copy()
+
+    def violations(self, x) -> np.ndarray:
+        """Per-theta sum of ``|w - x e|`` at an LP point ``x`` (shape (p,))."""
+        v = np.abs(x[self.pw] - x[self.px] * x[self.pe])
+        return np.bincount(self.px, weights=v, minlength=self.p)
+
+    def split_eta_dx(self, x):
+        """``(eta (N,), dx (K,))`` part of an LP point."""
+        p, n = self.p, self.problem.N
+        return x[p : p + n], x[p + n : p + n + self.problem.n_groups]

@@ -1,0 +1,476 @@
+"""Sparse Lasserre (moment) relaxations of the EIV parameter bounds (22.36)-(22.37).
+
+The feasible set (22.34) is a basic semi-algebraic set in ``(theta, eta, dx)`` defined by
+bilinear equalities (one per equation ``t``), boxes and the linear gain equality (22.8).
+Its correlative sparsity is exploited as in Lasserre (2006) / Waki et al. (2006) and
+Cerone, Piga & Regruto (reference [5] of the chapter): clique ``I_t`` holds theta and the
+noise variables equation ``t`` touches (``eta_{t-i}``, ``i = 0..na`` and the input-error
+variables ``dx[g(t-j)]``, see :meth:`EIVProblem.dx_index`). At relaxation order ``delta``:
+
+* one moment matrix ``M_delta(y, I_t) >= 0`` per clique;
+* localizing matrices ``M_{delta-1}((1 - v^2) y, I_t) >= 0`` for every (scaled) variable
+  ``v`` of the clique (the boxes on eta, dx and theta);
+* localizing equalities ``L_y(h_t x^alpha) = 0`` for ``|alpha| <= 2 delta - 2`` (``h_t`` is
+  equation ``t``, degree 2);
+* the gain equality (22.8) is removed by *facial reduction*: one coefficient is eliminated
+  (it is affine in the others), its box becomes a degree-2 localizing constraint.
+
+Monomials shared by several cliques are one moment variable. All variables are scaled to
+``[-1, 1]``, so every moment of a feasible point satisfies ``|y_alpha| <= 1``; these a priori
+bounds turn each (possibly inaccurate) dual solution into a *guaranteed* bound through
+:func:`hammerbound.solvers.conic.verified_lower_bound`. A bound that cannot be certified
+falls back to the a priori box end; the solver's objective value is never reported.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from math import comb
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..exceptions import ParameterValidationError, SolverError
+from ..solvers import get_solver
+from ..solvers.conic import EPS, ConicData, extract_conic_data, verified_lower_bound
+from .problem import EIVProblem
+from .result import BoundInfo, IntervalResult
+
+# ---------------------------------------------------------------------------------------
+# polynomials: dict {monomial (sorted tuple of variable indices): coefficient}
+# ---------------------------------------------------------------------------------------
+
+
+def _pmul(p, q):
+    out = {}
+    for m1, c1 in p.items():
+        for m2, c2 in q.items():
+            m = tuple(sorted(m1 + m2))
+            out[m] = out.get(m, 0.0) + c1 * c2
+    return {m: c for m, c in out.items() if c != 0.0}
+
+
+def _padd(*ps):
+    out = {}
+    for p in ps:
+        for m, c in p.items():
+            out[m] = out.get(m, 0.0) + c
+    return {m: c for m, c in out.items() if c != 0.0}
+
+
+def _pscale(p, s):
+    return {m: c * s for m, c in p.items()}
+
+
+def _pdeg(p):
+    return max((len(m) for m in p), default=0)
+
+
+def _monomials(variables, max_deg):
+    """All monomials (sorted tuples) of degree <= max_deg in ``variables``."""
+    variables = sorted(variables)
+    out = [()]
+    for d in range(1, max_deg + 1):
+        out += list(itertools.combinations_with_replacement(variables, d))
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# the polynomial optimisation problem in scaled variables
+# ---------------------------------------------------------------------------------------
+
+
+class _ScaledPOP:
+    """EIV set (22.34) in scaled variables ``v in [-1, 1]^n``.
+
+    ``theta = c0 + T u`` with ``u = v[:q]``; ``eta_s = deta_s * v[eta_var[s]]``,
+    ``dx[k] = dx_group[k] * v[dx_var[k]]`` (``-1`` when ``dx_group[k] == 0``).
+    """
+
+    def __init__(self, problem: EIVProblem, box: np.ndarray):
+        p = problem.p
+        mid = 0.5 * (box[:, 0] + box[:, 1])
+        half = 0.5 * (box[:, 1] - box[:, 0])
+        self.box = box
+        self.extra_ineqs = []  # polynomials g >= 0 (theta-only)
+        fixed = half <= 0
+        g = problem.gain_row()
+        elim = None
+        if g is not None:
+            row, rhs = g
+            score = np.abs(row) * half
+            if np.any(score > 0):
+                elim = int(np.argmax(score))
+        free = [k for k in range(p) if k != elim and not fixed[k]]
+        q = len(free)
+        T = np.zeros((p, q))
+        c0 = mid.copy()
+        for j, k in enumerate(free):
+            T[k, j] = half[k]
+        if elim is not None:
+            row, rhs = g
+            # theta_e = (rhs - sum_{k != e} row_k theta_k) / row_e
+            others = np.array([k for k in range(p) if k != elim])
+            c0[elim] = (rhs - row[others] @ c0[others]) / row[elim]
+            T[elim] = -(row[others] @ T[others]) / row[elim]
+            # box of the eliminated coefficient: half^2 - (theta_e - mid_e)^2 >= 0, scaled
+            lin = {(j,): T[elim, j] / half[elim] for j in range(q) if T[elim, j] != 0}
+            lin[()] = (c0[elim] - mid[elim]) / half[elim]
+            self.extra_ineqs.append(_padd({(): 1.0}, _pscale(_pmul(lin, lin), -1.0)))
+        self.elim = elim
+        self.c0, self.T, self.q = c0, T, q
+        n = q
+        eta_needed = np.unique(problem.eta_index())
+        self.eta_var = -np.ones(problem.N, dtype=int)
+        for s in eta_needed:
+            self.eta_var[s] = n
+            n += 1
+        self.dx_var = -np.ones(problem.n_groups, dtype=int)
+        for k in np.unique(problem.dx_index()):
+            if problem.dx_group[k] > 0:
+                self.dx_var[k] = n
+                n += 1
+        self.n = n
+        # equations
+        phi, yt = problem.regressors()
+        eta_idx = problem.eta_index()
+        dx_idx = problem.dx_index()
+        na = problem.na
+        self.equations = []
+        self.cliques = []
+        theta_lin = [
+            _padd({(): c0[k]}, {(j,): T[k, j] for j in range(q) if T[k, j] != 0})
+            for k in range(p)
+        ]
+        for e in range(yt.size):
+            # r_t(theta) - eta_t - sum a_i eta_{t-i} + sum b_j dx_g = 0
+            r = _padd({(): yt[e]}, *[_pscale(theta_lin[k], phi[e, k]) for k in range(p)])
+            terms = [r]
+            s0 = eta_idx[e, 0]
+            terms.append({(self.eta_var[s0],): -problem.deta[s0]})
+            cvars = set(range(q)) | {self.eta_var[s0]}
+            for i in range(1, na + 1):
+                s = eta_idx[e, i]
+                v = self.eta_var[s]
+                cvars.add(v)
+                terms.append(_pmul(theta_lin[i - 1], {(v,): -problem.deta[s]}))
+            for jj in range(dx_idx.shape[1]):
+                k = dx_idx[e, jj]
+                v = self.dx_var[k]
+                if v < 0:
+                    continue
+                cvars.add(v)
+                terms.append(_pmul(theta_lin[na + jj], {(v,): problem.dx_group[k]}))
+            h = _padd(*terms)
+            scale = max(abs(c) for c in h.values()) if h else 1.0
+            self.equations.append((_pscale(h, 1.0 / scale), frozenset(cvars)))
+        # merge identical clique variable sets
+        by_set = {}
+        for h, cv in self.equations:
+            by_set.setdefault(cv, []).append(h)
+        self.cliques = [(sorted(cv), hs) for cv, hs in by_set.items()]
+
+
+class MomentRelaxation:
+    """Sparse moment relaxation of order ``delta`` of the EIV set, formulated in PICOS.
+
+    Parameters
+    ----------
+    problem : EIVProblem
+    order : int
+        Relaxation order ``delta >= 1`` (moments up to degree ``2 delta``).
+    theta_box : ndarray, shape (p, 2), optional
+        A priori box (default ``problem.theta_box``).
+
+    Attributes
+    ----------
+    picos_problem : picos.Problem
+        The relaxation with a placeholder objective (minimise ``theta_1``).
+    data : ConicData
+        Conic form extracted once from :attr:`picos_problem`.
+    n_moments : int
+    """
+
+    def __init__(self, problem: EIVProblem, order: int = 2, theta_box=None):
+        import picos
+
+        if int(order) != order or order < 1:
+            raise ParameterValidationError(f"order must be an integer >= 1; got {order!r}.")
+        self.order = order = int(order)
+        box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+        if box.shape != (problem.p, 2) or not np.all(np.isfinite(box)) or np.any(
+            box[:, 0] > box[:, 1]
+        ):
+            raise ParameterValidationError(
+                f"theta_box must be a finite ({problem.p}, 2) array with lower <= upper."
+            )
+        self.problem = problem
+        self.box = box
+        pop = _ScaledPOP(problem, box)
+        self.pop = pop
+        # --- enumerate moments --------------------------------------------------------
+        index = {}
+
+        def idx(m):
+            j = index.get(m)
+            if j is None:
+                j = index[m] = len(index)
+            return j
+
+        idx(())  # y_0 = 1, eliminated below
+        for j in range(pop.q):
+            idx((j,))
+        blocks = []  # (rows, cols, vals, const_rows, const_vals, dim) matrices over vec
+        eqs = []  # lists of polynomials (dict mono->coef) == 0
+        q_vars = list(range(pop.q))
+        for cvars, hs in pop.cliques:
+            basis = _monomials(cvars, order)
+            blocks.append(self._loc_matrix({(): 1.0}, basis, idx))
+            lbasis = _monomials(cvars, order - 1)
+            for v in cvars:
+                blocks.append(self._loc_matrix({(): 1.0, (v, v): -1.0}, lbasis, idx))
+            for g in pop.extra_ineqs:
+                blocks.append(self._loc_matrix(g, lbasis, idx))
+            ebasis = _monomials(cvars, 2 * order - 2)
+            for h in hs:
+                for a in ebasis:
+                    eqs.append({tuple(sorted(m + a)): c for m, c in h.items()})
+        if not pop.cliques:  # no equation: only theta-box constraints
+            basis = _monomials(q_vars, order)
+            blocks.append(self._loc_matrix({(): 1.0}, basis, idx))
+        m = len(index) - 1  # moment variables y_alpha, alpha != 0 (column j-1)
+        self.index = index
+        self.n_moments = m
+        y = picos.RealVariable("y", m)
+        P = picos.Problem()
+        for rows, cols, vals, dim in blocks:
+            cols = np.asarray(cols)
+            rows = np.asarray(rows)
+            vals = np.asarray(vals)
+            is_c = cols == 0
+            Acoef = sp.csc_matrix(
+                (vals[~is_c], (rows[~is_c], cols[~is_c] - 1)), shape=(dim * dim, m)
+            )
+            cst = np.zeros(dim * dim)
+            np.add.at(cst, rows[is_c], vals[is_c])
+            expr = (picos.Constant(Acoef) * y + picos.Constant(cst)).reshaped((dim, dim))
+            if dim == 1:
+                P.add_constraint(expr >= 0)
+            else:
+                P.add_constraint(expr >> 0)
+        if eqs:
+            r, c, v, cst = [], [], [], np.zeros(len(eqs))
+            for i, h in enumerate(eqs):
+                for mono, coef in h.items():
+                    j = idx(mono)
+                    if j == 0:
+                        cst[i] += coef
+                    else:
+                        r.append(i)
+                        c.append(j - 1)
+                        v.append(coef)
+            if len(index) - 1 != m:  # pragma: no cover - equalities only use clique moments
+                raise RuntimeError("equality introduced a moment outside the moment matrices")
+            Aeq = sp.csc_matrix((v, (r, c)), shape=(len(eqs), m))
+            P.add_constraint(picos.Constant(Aeq) * y == picos.Constant(-cst))
+        obj = self._objective(0)
+        P.set_objective("min", picos.Constant(obj[0].reshape(1, -1)) * y)
+        self.picos_problem = P
+        self.y = y
+        self.data = extract_conic_data(P)
+        self.xub = np.ones(m)  # |y_alpha| <= 1 for every point of [-1, 1]^n
+
+    @staticmethod
+    def _loc_matrix(g, basis, idx):
+        """Coefficients of ``vec(M(g y))`` (column-major) as COO lists over moment indices."""
+        dim = len(basis)
+        rows, cols, vals = [], [], []
+        for jcol, bj in enumerate(basis):
+            for irow, bi in enumerate(basis):
+                base = bi + bj
+                for mono, coef in g.items():
+                    rows.append(irow + jcol * dim)
+                    cols.append(idx(tuple(sorted(base + mono))))
+                    vals.append(coef)
+        return rows, cols, vals, dim
+
+    def _objective(self, k: int):
+        """``theta_k = c0_k + q . y`` with ``q`` of shape (n_moments,)."""
+        q = np.zeros(self.n_moments)
+        for j in range(self.pop.q):
+            q[self.index[(j,)] - 1] = self.pop.T[k, j]
+        return q, float(self.pop.c0[k])
+
+    def objectives(self):
+        """The ``2 p`` minimisation objectives ``(k, sense, q, q0)``: ``min theta_k`` and
+        ``min -theta_k``."""
+        out = []
+        for k in range(self.problem.p):
+            q, c = self._objective(k)
+            out.append((k, "min", q, c))
+            out.append((k, "max", -q, -c))
+        return out
+
+
+# ---------------------------------------------------------------------------------------
+# solving
+# ---------------------------------------------------------------------------------------
+
+
+def _solve_group(data: ConicData, xub, jobs, solver: str, solver_options: dict | None):
+    """Worker: solve several objectives on one conic data set and certify each."""
+    backend = get_solver(solver)
+    out = []
+    try:
+        inst = backend.conic(data, solver_options)
+    except Exception as exc:  # noqa: BLE001 - reported per bound below
+        return [(j, None, None, f"{type(exc).__name__}: {exc}") for j in jobs]
+    for jid, q, q0 in jobs:
+        try:
+            sol = inst.solve(q, q0)
+        except Exception as exc:  # noqa: BLE001
+            out.append((jid, None, None, f"{type(exc).__name__}: {exc}"))
+            continue
+        vb = None
+        if sol.z is not None:
+            vb = verified_lower_bound(data, q, sol.z, xub, q0)
+        out.append((jid, sol, vb, ""))
+    return out
+
+
+def moment_bounds(
+    problem: EIVProblem,
+    order: int = 2,
+    solver: str = "clarabel",
+    solver_options: dict | None = None,
+    n_jobs: int = 1,
+    theta_box=None,
+    *,
+    on_failure: str = "box",
+) -> IntervalResult:
+    """Guaranteed parameter uncertainty intervals (22.35) from the sparse moment relaxation.
+
+    Solves the ``2 p`` relaxed problems ``min / max theta_k`` over the order-``order`` sparse
+    Lasserre relaxation of (22.34) (see the module docstring) and certifies each bound from
+    the dual solution (:func:`~hammerbound.solvers.conic.verified_lower_bound`).
+
+    Parameters
+    ----------
+    problem : EIVProblem
+        The EIV problem (22.34).
+    order : int, default 2
+        Relaxation order ``delta``.
+    solver : {"clarabel", "cvxopt", "mosek"}
+    solver_options : dict, optional
+        Native solver options (e.g. ``{"max_iter": 50}`` for Clarabel).
+    n_jobs : int, default 1
+        Worker processes (joblib) over the ``2 p`` objectives.
+    theta_box : ndarray, shape (p, 2), optional
+        A priori box (default ``problem.theta_box``), e.g. from the polytopic LP bounds. The
+        reported intervals always lie inside it.
+    on_failure : {"box", "raise"}
+        When no certificate can be computed for a bound: report the box end
+        (``certified=False``) or raise :class:`SolverError`.
+
+    Returns
+    -------
+    IntervalResult
+        ``bounds`` shape ``(p, 2)``; ``infos`` holds ``2 p`` :class:`BoundInfo` (p0 min,
+        p0 max, ...); method ``"moment"``; ``extra`` has the relaxation size and build time.
+
+    Raises
+    ------
+    SolverNotAvailableError, SolverOptionError
+        Unknown/missing solver or options.
+    SolverError
+        With ``on_failure="raise"`` when a bound cannot be certified.
+    """
+    if on_failure not in ("box", "raise"):
+        raise ParameterValidationError("on_failure must be 'box' or 'raise'.")
+    t_start = time.perf_counter()
+    backend = get_solver(solver)
+    opts = backend.check_options(solver_options)
+    relax = MomentRelaxation(problem, order, theta_box)
+    t_build = time.perf_counter() - t_start
+    box = relax.box
+    objs = relax.objectives()
+    jobs = [(i, q, q0) for i, (_, _, q, q0) in enumerate(objs)]
+    data = relax.data.strip_picos()
+    n_jobs = max(1, min(int(n_jobs), len(jobs)))
+    if n_jobs == 1:
+        results = _solve_group(data, relax.xub, jobs, backend.name, opts)
+    else:
+        from joblib import Parallel, delayed
+
+        groups = [jobs[i::n_jobs] for i in range(n_jobs)]
+        parts = Parallel(n_jobs=n_jobs)(
+            delayed(_solve_group)(data, relax.xub, g, backend.name, opts) for g in groups
+        )
+        results = [r for part in parts for r in part]
+    results.sort(key=lambda r: r[0])
+    names = problem.param_names
+    bounds = box.copy()
+    infos = []
+    for (jid, sol, vb, err), (k, sense, _q, _q0) in zip(results, objs, strict=True):
+        assert jid == len(infos)
+        lo_box, hi_box = box[k]
+        if vb is not None and np.isfinite(vb.bound):
+            # vb.bound <= min of (+-theta_k); add a rounding margin for the sign flip
+            lb = vb.bound - 2 * EPS * abs(vb.bound)
+            val = lb if sense == "min" else -lb
+            certified = True
+        else:
+            val = lo_box if sense == "min" else hi_box
+            certified = False
+        if sense == "min":
+            bnd = max(val, lo_box)
+        else:
+            bnd = min(val, hi_box)
+        status = "failed" if sol is None else sol.status
+        if not certified and on_failure == "raise":
+            raise SolverError(
+                f"{backend.name}: could not certify the {sense} of {names[k]} "
+                f"(status {status}{': ' + err if err else ''}); try another solver, "
+                "tighter tolerances or on_failure='box'."
+            )
+        sv = np.nan
+        if sol is not None and np.isfinite(sol.primal_value):
+            sv = sol.primal_value if sense == "min" else -sol.primal_value
+        extra = {}
+        if vb is not None:
+            extra = {
+                "dual_value": vb.dual_value if sense == "min" else -vb.dual_value,
+                "psd_correction": vb.psd_correction,
+                "residual_correction": vb.residual_correction,
+                "cone_correction": vb.cone_correction,
+            }
+        msg = err
+        if sol is not None:
+            msg = f"{backend.name}: {sol.native_status}" + (f"; {err}" if err else "")
+        if not certified:
+            msg += "; no certificate, a priori box end reported"
+        infos.append(
+            BoundInfo(
+                param=names[k], sense=sense, bound=float(bnd), solver_value=float(sv),
+                status=status, certified=certified,
+                time=float(sol.time) if sol is not None else 0.0,
+                iterations=None if sol is None else sol.iterations, message=msg, extra=extra,
+            )
+        )
+        bounds[k, 0 if sense == "min" else 1] = bnd
+    return IntervalResult(
+        bounds=bounds, infos=tuple(infos), method="moment", param_names=tuple(names),
+        time=time.perf_counter() - t_start,
+        extra={
+            "order": relax.order, "solver": backend.name, "n_moments": relax.n_moments,
+            "n_cliques": len(relax.pop.cliques), "build_time": t_build,
+            "eliminated": None if relax.pop.elim is None else names[relax.pop.elim],
+            "n_rows": relax.data.m,
+        },
+    )
+
+
+def relaxation_size(n_vars_clique: int, order: int) -> int:
+    """Side of the moment matrix of one clique: ``binom(n + delta, delta)``."""
+    return comb(n_vars_clique + order, order)

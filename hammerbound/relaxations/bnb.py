@@ -387,6 +387,8 @@ def exact_bounds(
     n_jobs: int = 1,
     progress: bool = False,
     theta_box=None,
+    *,
+    check_box: bool = True,
 ) -> IntervalResult:
     """Tight parameter uncertainty intervals (22.35)-(22.37) with a certificate.
 
@@ -407,6 +409,8 @@ def exact_bounds(
         Show a tqdm progress bar per interval end.
     theta_box : array_like, shape (p, 2), optional
         A priori box replacing ``problem.theta_box``.
+    check_box : bool, default True
+        Raise :class:`UnboundedSetError` when a bound coincides with the a priori box.
 
     Returns
     -------
@@ -480,7 +484,7 @@ def exact_bounds(
                                           "value": float(wit.theta[k])},
         ))
     touch = touches_box(bounds, problem.theta_box)
-    if np.any(touch):
+    if check_box and np.any(touch):
         which = [f"{names[k]} {'lower' if e == 0 else 'upper'}"
                  for k, e in zip(*np.nonzero(touch), strict=True)]
         raise UnboundedSetError(

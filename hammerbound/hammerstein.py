@@ -1,0 +1,216 @@
+"""The two-stage procedure of the chapter: backlash first, then the linear block.
+
+:class:`HammersteinBacklashIdentifier` composes a :class:`~hammerbound.BacklashSetEstimator`
+(stage 1, steady-state square-wave data) and a :class:`~hammerbound.LinearEIVSetEstimator`
+(stage 2, PRBS data):
+
+1. stage 1 bounds ``gamma = (m_l, c_l, m_r, c_r)`` exactly;
+2. the PRBS level ``u*`` is read from the input and checked against Result 1 for *every*
+   feasible backlash (outside the dead zone, before the crossing of the two lines);
+3. the inner signal ``x_t`` is bounded by ``x^c_t +- dx_t`` (22.25)-(22.33);
+4. stage 2 bounds ``theta`` from ``(x^c, dx, y)``, either with independent per-sample input
+   errors as in the chapter (``inner_signal="independent"``) or - what Result 1 actually
+   implies - with *one* unknown value per PRBS level (``inner_signal="two-level"``), which
+   gives much tighter intervals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.utils.validation import check_is_fitted
+
+from .backlash import BacklashSetEstimator
+from .eiv import LinearEIVSetEstimator, _as_signal
+from .exceptions import DataValidationError, ParameterValidationError
+from .systems import Backlash, HammersteinSystem
+
+__all__ = ["HammersteinBacklashIdentifier"]
+
+INNER_SIGNALS = ("independent", "two-level")
+
+
+def _steady_pair(steady_state):
+    """Accept SteadyStateData, a dict with 'u'/'y', or a pair (u, y)."""
+    if steady_state is None:
+        raise DataValidationError(
+            "fit needs the steady-state square-wave data for stage 1: pass "
+            "steady_state=(u_ss, y_ss) (or a dict {'u': ..., 'y': ...} / SteadyStateData)."
+        )
+    if hasattr(steady_state, "u") and hasattr(steady_state, "y"):
+        return steady_state.u, steady_state.y
+    if isinstance(steady_state, dict):
+        try:
+            return steady_state["u"], steady_state["y"]
+        except KeyError as exc:
+            raise DataValidationError(
+                "steady_state dict must have keys 'u' and 'y'."
+            ) from exc
+    try:
+        u, y = steady_state
+    except (TypeError, ValueError) as exc:
+        raise DataValidationError(
+            "steady_state must be a pair (u_ss, y_ss), a dict with 'u' and 'y', or "
+            "SteadyStateData."
+        ) from exc
+    return u, y
+
+
+class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
+    """Guaranteed bounds on a backlash-Hammerstein system (stages 1 and 2 of the chapter).
+
+    Parameters
+    ----------
+    backlash : BacklashSetEstimator or None
+        Stage-1 estimator (default ``BacklashSetEstimator(noise_bound=0.05)``); its
+        ``noise_bound`` is the bound on the steady-state output errors.
+    linear : LinearEIVSetEstimator or None
+        Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``, unit
+        steady-state gain (22.8), order-1 moment relaxation); its ``noise_bound`` bounds
+        the PRBS output errors.
+    inner_signal : {"independent", "two-level"}, default "independent"
+        How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
+        chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
+        ``"two-level"`` uses that under Result 1 the inner signal takes exactly two
+        (unknown) values: one shared error per PRBS level. Both are guaranteed.
+    prbs_level : float or None
+        ``u*``. Default: read from the PRBS input (which must take the two values
+        ``+-u*``).
+
+    Attributes
+    ----------
+    backlash_, linear_ : fitted estimators
+    gamma_bounds_ : ndarray (4, 2)
+        Bounds on ``(m_l, c_l, m_r, c_r)``.
+    theta_bounds_ : ndarray (p, 2)
+        Bounds on ``(a_1.., b_1..)``.
+    bounds_ : ndarray (4 + p, 2)
+        Both, stacked; names in :attr:`param_names_`.
+    u_star_ : float
+    inner_bounds_ : InnerSignalBounds
+    xc_, dx_ : ndarray (N,)
+        Central inner signal and its radius used in stage 2.
+    system_ : HammersteinSystem
+        The central model (centres of all intervals).
+
+    Notes
+    -----
+    ``fit(X, y, steady_state=...)``: ``X`` is the PRBS input ``u`` (shape (N,) or (N, 1)),
+    ``y`` the PRBS output; ``steady_state`` the square-wave steady-state data. Inside
+    ``GridSearchCV`` pass ``steady_state`` as a dict or SteadyStateData so that it is not
+    split with the PRBS samples.
+    """
+
+    def __init__(self, backlash=None, linear=None, *, inner_signal="independent",
+                 prbs_level=None):
+        self.backlash = backlash
+        self.linear = linear
+        self.inner_signal = inner_signal
+        self.prbs_level = prbs_level
+
+    def fit(self, X, y, steady_state=None):
+        """Run stage 1 on ``steady_state``, check Result 1, run stage 2 on ``(X, y)``.
+
+        Raises
+        ------
+        ResultOneViolationError
+            ``u*`` is inside the dead zone or past the crossing of the two backlash lines
+            for some feasible backlash; the message gives the admissible range.
+        DataValidationError
+            ``X`` is not a two-level PRBS, lengths differ, missing steady-state data.
+        EmptyFeasibleSetError, UnboundedSetError, SolverError
+            From either stage.
+        """
+        if self.inner_signal not in INNER_SIGNALS:
+            raise ParameterValidationError(
+                f"inner_signal must be one of {INNER_SIGNALS}; got {self.inner_signal!r}."
+            )
+        bl = BacklashSetEstimator() if self.backlash is None else clone(self.backlash)
+        lin = LinearEIVSetEstimator() if self.linear is None else clone(self.linear)
+        if not isinstance(bl, BacklashSetEstimator) or not isinstance(lin, LinearEIVSetEstimator):
+            raise ParameterValidationError(
+                "backlash must be a BacklashSetEstimator and linear a LinearEIVSetEstimator."
+            )
+        u = _as_signal("X (PRBS input)", X)
+        yy = _as_signal("y (PRBS output)", y)
+        if u.shape != yy.shape:
+            raise DataValidationError(
+                f"X and y must have the same number of samples; got {u.size} and {yy.size}."
+            )
+        u_ss, y_ss = _steady_pair(steady_state)
+        bl.fit(u_ss, y_ss)
+        if self.prbs_level is None:
+            levels = np.unique(u)
+            if levels.size != 2 or not np.isclose(levels[0], -levels[1], rtol=1e-9, atol=0):
+                shown = levels[:5]
+                raise DataValidationError(
+                    "the PRBS input must take exactly two values +-u*; got "
+                    f"{levels.size} distinct value(s) {np.array2string(shown, precision=4)}"
+                    f"{' ...' if levels.size > 5 else ''}. Pass prbs_level=u* for a signal "
+                    "with rounding noise."
+                )
+            u_star = float(levels[1])
+        else:
+            u_star = float(self.prbs_level)
+        inner = bl.inner_signal_bounds(u_star)  # checks Result 1
+        xc, dx = inner.transform(u)
+        groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
+        lin.fit(xc, yy, input_bound=dx, groups=groups)
+        self.backlash_ = bl
+        self.linear_ = lin
+        self.u_star_ = u_star
+        self.inner_bounds_ = inner
+        self.xc_, self.dx_ = xc, dx
+        self.gamma_bounds_ = bl.gamma_bounds_
+        self.theta_bounds_ = lin.bounds_
+        self.bounds_ = np.vstack([bl.gamma_bounds_, lin.bounds_])
+        self.param_names_ = ("ml", "cl", "mr", "cr") + tuple(lin.param_names_)
+        ml, cl, mr, cr = bl.gamma_center_
+        self.system_ = HammersteinSystem(Backlash(ml, cl, mr, cr), (lin.A_, lin.B_))
+        self.n_features_in_ = 1
+        return self
+
+    @property
+    def center_(self):
+        check_is_fitted(self, "bounds_")
+        return self.bounds_.mean(axis=1)
+
+    @property
+    def radius_(self):
+        check_is_fitted(self, "bounds_")
+        return 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
+
+    def contains(self, gamma, theta) -> bool:
+        """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals."""
+        check_is_fitted(self, "bounds_")
+        g = np.asarray(gamma, dtype=float)
+        if g.shape != (4,):
+            raise DataValidationError("gamma must be (m_l, c_l, m_r, c_r).")
+        in_gamma = np.all((g >= self.gamma_bounds_[:, 0]) & (g <= self.gamma_bounds_[:, 1]))
+        return bool(in_gamma) and self.linear_.contains(theta)
+
+    def predict(self, X):
+        """Output of the central model simulated on input ``X`` from rest."""
+        check_is_fitted(self, "bounds_")
+        u = _as_signal("X", X)
+        return self.system_.simulate(u)
+
+    def score(self, X, y, sample_weight=None):
+        """R^2 of the central-model simulation on ``(X, y)`` (higher is better)."""
+        return super().score(X, y, sample_weight=sample_weight)
+
+    def output_envelope(self, X, y):
+        """Guaranteed one-step-ahead band of the noise-free PRBS output.
+
+        Uses the inner-signal bounds of stage 1 for ``X`` and the parameter intervals of
+        stage 2 (see :meth:`LinearEIVSetEstimator.one_step_envelope`).
+        """
+        check_is_fitted(self, "bounds_")
+        u = _as_signal("X", X)
+        xc, dx = self.inner_bounds_.transform(u)
+        return self.linear_.one_step_envelope(xc, y, input_bound=dx)
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.one_d_array = True
+        return tags

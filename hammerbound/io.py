@@ -1,0 +1,88 @@
+"""Reading experiment data from CSV files, with errors that say what to fix."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from .exceptions import DataValidationError
+
+__all__ = ["read_columns", "load_chapter_tables"]
+
+
+def read_columns(path, columns) -> dict[str, np.ndarray]:
+    """Read named numeric columns from a CSV file with a header row.
+
+    Parameters
+    ----------
+    path : str or Path
+    columns : sequence of str
+        Header names to read.
+
+    Returns
+    -------
+    dict name -> float ndarray
+
+    Raises
+    ------
+    DataValidationError
+        Missing file, missing header or column, non-numeric or non-finite value (the
+        message names the row and column), empty file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataValidationError(f"{path}: no such file; check the path.")
+    with path.open(newline="") as fh:
+        reader = csv.reader(fh)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise DataValidationError(f"{path}: the file is empty; expected a header row "
+                                      f"with columns {list(columns)}.") from None
+        missing = [c for c in columns if c not in header]
+        if missing:
+            raise DataValidationError(
+                f"{path}: missing column(s) {missing}; the header has {header}. Rename the "
+                "columns or pass the right names (see --help)."
+            )
+        idx = [header.index(c) for c in columns]
+        out = {c: [] for c in columns}
+        for lineno, row in enumerate(reader, start=2):
+            if not row or all(not f.strip() for f in row):
+                continue
+            for c, i in zip(columns, idx, strict=True):
+                if i >= len(row):
+                    raise DataValidationError(
+                        f"{path}, line {lineno}: the row has {len(row)} field(s), column "
+                        f"{c!r} is missing."
+                    )
+                try:
+                    v = float(row[i])
+                except ValueError:
+                    raise DataValidationError(
+                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not a number."
+                    ) from None
+                if not np.isfinite(v):
+                    raise DataValidationError(
+                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not finite."
+                    )
+                out[c].append(v)
+    if not out[columns[0]]:
+        raise DataValidationError(f"{path}: no data rows after the header.")
+    return {c: np.asarray(v, dtype=float) for c, v in out.items()}
+
+
+def load_chapter_tables(path=None) -> list[dict]:
+    """Rows of the chapter's Tables 22.1-22.3 (CSV with columns table, N, delta_eta,
+    snr_db, param, true, lower, center, upper, half_width)."""
+    if path is None:
+        for cand in (Path(__file__).resolve().parent / "data" / "chapter22_tables.csv",):
+            if cand.is_file():
+                path = cand
+                break
+        else:
+            return []
+    with Path(path).open(newline="") as fh:
+        return list(csv.DictReader(fh))

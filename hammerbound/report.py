@@ -1,0 +1,117 @@
+"""Markdown report (with PNG figures) of a fitted :class:`HammersteinBacklashIdentifier`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .experiments import snr_db
+
+__all__ = ["write_report", "interval_table"]
+
+
+def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
+    """Markdown table of intervals: parameter, lower, centre, upper, half-width (, true, inside)."""
+    head = "| parameter | lower | centre | upper | half-width |"
+    sep = "|---|---:|---:|---:|---:|"
+    if true is not None:
+        head += " true | inside |"
+        sep += "---:|:---:|"
+    rows = [head, sep]
+    for k, name in enumerate(names):
+        lo, hi = bounds[k]
+        r = f"| {name} | {fmt.format(lo)} | {fmt.format(0.5 * (lo + hi))} | {fmt.format(hi)} | {fmt.format(0.5 * (hi - lo))} |"
+        if true is not None:
+            r += f" {fmt.format(true[k])} | {'yes' if lo <= true[k] <= hi else '**NO**'} |"
+        rows.append(r)
+    return "\n".join(rows)
+
+
+def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_true=None,
+                 theta_true=None, title="hammerbound identification report") -> Path:
+    """Write ``report.md`` and figures into ``outdir``; return the path of the report.
+
+    The report lists the experiment (sizes, noise bounds, SNR of the PRBS output against
+    the noise bound), the backlash feasible sets (vertices, orthotope, figure), the
+    inner-signal bounds, the linear-block intervals with per-bound solver information,
+    and the guaranteed one-step output envelope against the data.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .plotting import plot_envelope, plot_feasible_set, plot_intervals
+
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    bl, lin = ident.backlash_, ident.linear_
+    lines = [f"# {title}", ""]
+    deta = np.broadcast_to(np.asarray(lin.noise_bound, float), np.shape(prbs_y))
+    lines += ["## Experiment", "",
+              f"- steady-state points: {np.size(steady_u)} (noise bound {bl.noise_bound!r})",
+              f"- PRBS samples: N = {np.size(prbs_u)}, level u* = {ident.u_star_:g} "
+              f"(admissible range for Result 1: ({bl.admissible_prbs_range()[0]:.4g}, "
+              f"{bl.admissible_prbs_range()[1]:.4g}))",
+              f"- PRBS output noise bound {lin.noise_bound!r}; SNR of the measured output "
+              f"against the bound (22.39): {snr_db(np.asarray(prbs_y) - 0, deta):.1f} dB",
+              f"- stage 2: method `{lin.method}`"
+              + (f", relaxation order {lin.relaxation_order}, solver {lin.solver}"
+                 if lin.method == "moment" else "")
+              + f", inner signal `{ident.inner_signal}`", ""]
+    # stage 1
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, fs, k in ((axes[0], bl.left_, 0), (axes[1], bl.right_, 2)):
+        tp = None if gamma_true is None else gamma_true[k:k + 2]
+        plot_feasible_set(fs, ax, true_params=tp)
+        ax.set_title(f"{fs.side} side")
+    fig.tight_layout()
+    fig.savefig(out / "backlash_sets.png", dpi=120)
+    plt.close(fig)
+    lines += ["## Stage 1: backlash", "", interval_table(
+        ("m_l", "c_l", "m_r", "c_r"), bl.gamma_bounds_, gamma_true), "",
+        "![backlash feasible sets](backlash_sets.png)", ""]
+    for fs in (bl.left_, bl.right_):
+        v = np.asarray(fs.vertices_mb)
+        lines.append(f"- {fs.side} set: {v.shape[0]} vertices in (m, beta = m c)")
+    ib = ident.inner_bounds_
+    lines += ["", "### Inner-signal bounds (22.25)-(22.30)", "",
+              f"- x for u = +u*: [{ib.x_hi[0]:.6f}, {ib.x_hi[1]:.6f}]",
+              f"- x for u = -u*: [{ib.x_lo[0]:.6f}, {ib.x_lo[1]:.6f}]", ""]
+    # stage 2
+    lines += ["## Stage 2: linear block", "",
+              interval_table(lin.param_names_, lin.bounds_, theta_true), ""]
+    if lin.box_limited_:
+        lines += [f"Interval ends set by the a priori stability box (A1): "
+                  f"{', '.join(lin.box_limited_)}.", ""]
+    lines += ["| bound | status | certified | time [s] | iterations/nodes |",
+              "|---|---|:---:|---:|---:|"]
+    for info in lin.bound_info_:
+        it = info.nodes if info.nodes is not None else info.iterations
+        lines.append(f"| {info.sense} {info.param} | {info.status} | "
+                     f"{'yes' if info.certified else 'no'} | {info.time:.2f} | {it} |")
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    plot_intervals(lin.bounds_, list(lin.param_names_), ax, true_values=theta_true,
+                   labels=[lin.method])
+    fig.tight_layout()
+    fig.savefig(out / "intervals.png", dpi=120)
+    plt.close(fig)
+    lo, hi = ident.output_envelope(prbs_u, prbs_y)
+    t = np.arange(np.size(prbs_y))
+    fig, ax = plt.subplots(figsize=(9, 3.5))
+    plot_envelope(t, prbs_y, lo, hi, ax, center=ident.predict(prbs_u))
+    ax.set_title("PRBS output, central model and guaranteed one-step envelope")
+    fig.tight_layout()
+    fig.savefig(out / "envelope.png", dpi=120)
+    plt.close(fig)
+    inside = np.nanmean((np.asarray(prbs_y) >= lo - deta) & (np.asarray(prbs_y) <= hi + deta))
+    lines += ["", "![intervals](intervals.png)", "",
+              "### Output envelope", "",
+              "Every noise-free output consistent with the intervals and the past data lies "
+              "in the one-step band; measurements may deviate from it by at most the noise "
+              f"bound. Fraction of measurements within band +- noise bound: {inside:.3f}.",
+              "", "![envelope](envelope.png)", ""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines))
+    return path

@@ -32,18 +32,22 @@ Workflow (see ``docs/discrepancy.md``)
    of the nonlinear parameter the fit is a linear program in ``(B, offset)``; the
    nonlinear parameter is searched on a grid and refined locally (``delay`` is
    enumerated, ``offset`` is an LP variable). A candidate is *consistent* when its
-   minimax error is ``<= Delta``. Selection: if the original class is consistent the
-   answer is ``None``; otherwise, among consistent candidates the one with the fewest
-   added parameters, then the smallest minimax error, wins; if none is consistent the
-   candidate with the smallest error is reported (``consistent_after=False``).
+   minimax error is ``<= Delta``. Every candidate is always refitted and reported.
+   Selection: if the original class is consistent the answer is ``None`` (nothing is
+   invented; effects below the noise level cannot be confirmed or excluded); otherwise,
+   among consistent candidates the one with the fewest added parameters, then the
+   smallest minimax error, wins; if none is consistent the candidate with the smallest
+   error is named only if it shrinks the gap by ``min_improvement``
+   (``consistent_after=False``), else ``None``.
 3. **Add.** The chosen effect is inserted, the model refitted, and the report carries
    ``gap_before``, ``gap_after``, the :class:`RefinedModel` and :meth:`plot`.
 
 Guarantees. Every reported minimax error is *achieved* by the returned parameters
 (it is recomputed from the residual of the refined model), so "consistent" is a
-certificate. ``gap_before_lower`` is a rigorous lower bound of the original class's gap
-(weak duality, :mod:`hammerbound.relaxations.safe_lp`) over the coefficient box
-``|B_j| <= coef_box``: when it exceeds ``Delta`` the model is *certified* inconsistent.
+certificate. ``report.gap_before_lower`` is a rigorous lower bound of the original
+class's gap (weak duality, :mod:`hammerbound.relaxations.safe_lp`) over a coefficient box
+(each refitted column may contribute at most ``coef_box`` times the output scale): when
+it exceeds ``Delta`` the model is *certified* inconsistent.
 For grid-searched candidates, inconsistency is only established on the grid.
 """
 
@@ -74,6 +78,7 @@ __all__ = [
     "diagnose",
     "diagnose_cli_main",
     "locate",
+    "read_io_csv",
 ]
 
 #: Candidate effects in the order they are tried, with the number of added parameters.
@@ -171,6 +176,10 @@ class RefinedModel:
         Extra unit-gain poles applied to a black-box prediction.
     delay : int
         Extra input delay of a black-box base model.
+    b_free_from : int or None
+        Index of the first coefficient of ``B`` that ``refit="linear"`` may change (the
+        leading zeros before it - the model's input delay - are kept). ``None``: the
+        first non-zero coefficient of ``B``.
     """
 
     effects: tuple = ()
@@ -184,6 +193,13 @@ class RefinedModel:
     gain: float = 1.0
     post_poles: tuple = ()
     delay: int = 0
+    b_free_from: int | None = None
+
+    @property
+    def _j0(self) -> int:
+        if self.b_free_from is not None:
+            return int(self.b_free_from)
+        return int(np.flatnonzero(self.B)[0])
 
     @property
     def offset_free(self) -> bool:
@@ -238,7 +254,11 @@ class RefinedModel:
         """Return a :class:`~hammerbound.systems.HammersteinSystem` when representable.
 
         Possible when the model is linear-structure, has no offset, and its input
-        nonlinearity is a single backlash (added or original, not both).
+        nonlinearity is a single backlash: an added one (unit slopes, state 0), the
+        original one, or both combined. An added play of half-width ``c`` in front of the
+        original ``Backlash(m_l, c_l, m_r, c_r)`` equals ``Backlash(m_l, c_l + c, m_r,
+        c_r + c)`` exactly when the original initial state is a rest state
+        (``-m_r c_r <= x0 <= m_l c_l``).
 
         Raises
         ------
@@ -253,6 +273,12 @@ class RefinedModel:
             )
         if self.inner is not None and not ops:
             return HammersteinSystem(self.inner, (self.A, self.B), x0=self.inner_x0)
+        bl = self.inner
+        if (bl is not None and len(ops) == 1 and ops[0][0] == "backlash"
+                and -bl.mr * bl.cr <= self.inner_x0 <= bl.ml * bl.cl):
+            c = ops[0][1]
+            merged = Backlash(bl.ml, bl.cl + c, bl.mr, bl.cr + c)
+            return HammersteinSystem(merged, (self.A, self.B), x0=self.inner_x0)
         if self.inner is None and len(ops) == 1 and ops[0][0] == "backlash":
             c = ops[0][1]
             return HammersteinSystem(Backlash(1.0, c, 1.0, c), (self.A, self.B))
@@ -289,7 +315,14 @@ def _black_box_predict(model, x: np.ndarray) -> np.ndarray:
 
 
 def _as_structure(model) -> RefinedModel:
-    """Convert the user's model into a :class:`RefinedModel` (no effects added)."""
+    """Convert the user's model into a :class:`RefinedModel` (no effects added).
+
+    Accepted, in this order: a :class:`RefinedModel`; a discrete
+    ``control.TransferFunction``; a :class:`~hammerbound.systems.HammersteinSystem`; a
+    fitted hammerbound estimator exposing its central model as ``system_`` (a
+    ``HammersteinSystem``, e.g. ``HammersteinBacklashIdentifier``); any object with
+    ``.predict(u)`` (black box).
+    """
     try:
         import control
     except ImportError:  # pragma: no cover
@@ -305,17 +338,56 @@ def _as_structure(model) -> RefinedModel:
         A, B = as_polynomials(model)
         _check_linear(A, B)
         return RefinedModel(A=A, B=B)
-    if isinstance(model, HammersteinSystem):
-        A, B = model.A, model.B
+    name = type(model).__name__
+    system = model if isinstance(model, HammersteinSystem) else _fitted_system(model)
+    if system is not None:
+        A, B = np.array(system.A, dtype=float), np.array(system.B, dtype=float)
         _check_linear(A, B)
-        return RefinedModel(A=A, B=B, inner=model.backlash, inner_x0=model.x0)
+        return RefinedModel(A=A, B=B, inner=system.backlash, inner_x0=float(system.x0))
     if callable(getattr(model, "predict", None)):
         return RefinedModel(base=model)
+    if callable(getattr(model, "fit", None)):
+        raise ParameterValidationError(
+            f"{name} has no fitted model: call .fit(...) first (diagnose uses the fitted "
+            "central model in its system_ attribute)."
+        )
     raise ParameterValidationError(
-        f"model of type {type(model).__name__} is not supported: pass a discrete "
-        "control.TransferFunction, a hammerbound.systems.HammersteinSystem, or an object "
-        "with a .predict(u) method."
+        f"model of type {name} is not supported: pass a discrete control.TransferFunction, "
+        "a hammerbound.systems.HammersteinSystem, a fitted hammerbound identifier (with a "
+        "system_ attribute), or an object with a .predict(u) method."
     )
+
+
+def _fitted_system(model):
+    """``model.system_`` when it is a HammersteinSystem; None when absent; else an error.
+
+    Unfitted scikit-learn style estimators raise a clear "call fit first" error.
+    """
+    try:
+        system = getattr(model, "system_", None)
+    except Exception:  # noqa: BLE001 - properties of unfitted estimators may raise
+        system = None
+    if system is None:
+        if callable(getattr(model, "fit", None)) and callable(getattr(model, "get_params", None)):
+            try:
+                from sklearn.exceptions import NotFittedError
+                from sklearn.utils.validation import check_is_fitted
+
+                check_is_fitted(model)
+            except NotFittedError as exc:
+                raise ParameterValidationError(
+                    f"{type(model).__name__} is not fitted: call .fit(...) first (diagnose "
+                    "uses the fitted central model in its system_ attribute)."
+                ) from exc
+            except (ImportError, TypeError):  # pragma: no cover - not an sklearn estimator
+                pass
+        return None
+    if not isinstance(system, HammersteinSystem):
+        raise ParameterValidationError(
+            f"{type(model).__name__}.system_ is a {type(system).__name__}, expected a "
+            "hammerbound.systems.HammersteinSystem (the fitted central model)."
+        )
+    return system
 
 
 def _check_linear(A, B):
@@ -344,8 +416,15 @@ class _Fit:
         return self.f + (self.Phi @ self.z if self.Phi.shape[1] else 0.0)
 
 
-def _minimax(y, f, Phi, skip, coef_box, certify=False) -> _Fit:
-    """min_z max_{t>=skip} |y - f - Phi z| with |z_j| <= coef_box * scale_j."""
+def _minimax(y, f, Phi, skip, coef_box) -> _Fit:
+    """Chebyshev fit ``min_z max_{t>=skip} |y_t - f_t - (Phi z)_t|`` as a linear program.
+
+    The free coefficients are boxed, ``|z_j| max_t |Phi_tj| <= coef_box (max|y - f| + 2)``
+    (a column may contribute at most ``coef_box`` times the output scale), so that
+    :func:`safe_minimize` can return a rigorous lower bound by weak duality. The returned
+    ``error`` is recomputed from the returned ``z`` (it is achieved); ``lower`` is a
+    certified lower bound of the boxed minimum.
+    """
     r0 = (y - f)[skip:]
     k = Phi.shape[1]
     if k == 0:
@@ -395,8 +474,7 @@ def _design(s: RefinedModel, u, refit, *, op=None, pole=None, delay=0, offset=Fa
         x = _shift(x, delay)
         if refit:
             v = lfilter([1.0], A, x)
-            j0 = int(np.flatnonzero(s.B)[0])
-            for j in range(j0, s.B.size):
+            for j in range(s._j0, s.B.size):
                 cols.append(_shift(v, j))
         else:
             B = s.B if pole is None else s.B * (1.0 - pole)
@@ -429,16 +507,16 @@ def _rebuild(s: RefinedModel, refit, fit: _Fit, *, effect=None, value=None, offs
     if effect in _INPUT_OPS:
         kw["input_ops"] = (*s.input_ops, (effect, value))
     if s.base is None:
-        A, B = s.A, s.B
+        A, B, j0 = s.A, s.B, s._j0
         if effect == "extra_pole":
             A = np.convolve(A, [1.0, -value])
             B = B * (1.0 - value)
         if effect == "delay":
             B = np.concatenate([np.zeros(int(value)), B])
+            j0 += int(value)
         if refit:
-            j0 = int(np.flatnonzero(B)[0])
             B = np.concatenate([np.zeros(j0), z])
-        kw.update(A=A, B=B)
+        kw.update(A=A, B=B, b_free_from=j0)
     else:
         if effect == "extra_pole":
             kw["post_poles"] = (*s.post_poles, value)
@@ -563,8 +641,10 @@ class Disagreement:
     mean_shift : float
         Mean minimax-refit residual divided by ``gap`` (near +-1: a constant shift).
     direction_correlation : float
-        Correlation of the localisation residual with the sign of the most recent input
-        movement (near +-1: hysteresis such as backlash).
+        Correlation of the residual of a least-squares refit (with a constant) with the
+        model's linear response to the sign of the most recent input movement. A missing
+        backlash drives it towards -1; wrong dynamics (delay, pole) also correlate
+        moderately, so it is a hint, not a decision.
     best_lag : int
         Shift ``k`` (samples) maximising the correlation of ``y`` with the nominal
         prediction delayed by ``k`` (``> 0``: the data lag the model).
@@ -597,10 +677,12 @@ class DiagnosisReport:
     ----------
     effect : str or None
         Name of the chosen missing effect; ``None`` when the model is already consistent
-        with the data (or no candidate reduces the gap).
+        with the data, or when no candidate shrinks the gap by ``min_improvement``.
     gap_before, gap_after : float
         Minimax error (smallest consistent noise bound) of the original and refined
-        model classes. ``gap_after == gap_before`` when ``effect is None``.
+        model classes. ``gap_after == gap_before`` when ``effect is None``. When an
+        effect is named, ``gap_after <= noise_bound`` unless no candidate is consistent
+        (then ``consistent_after`` is False and the message says so).
     noise_bound : float
     consistent_before, consistent_after : bool
         ``gap <= noise_bound`` before / after.
@@ -610,7 +692,8 @@ class DiagnosisReport:
         The model with the effect added and refitted (the refitted original model when
         ``effect is None``).
     candidates : tuple of CandidateFit
-        Evidence for every candidate that was tried.
+        Evidence for every candidate that was tried (always all requested candidates,
+        also when the original model is already consistent).
     disagreement : Disagreement
         Localisation of the disagreement (step 1).
     message : str
@@ -635,6 +718,16 @@ class DiagnosisReport:
     prediction_before: np.ndarray = field(repr=False, default=None)
     prediction_after: np.ndarray = field(repr=False, default=None)
     skip: int = 0
+
+    @property
+    def gap_before_lower(self) -> float:
+        """Certified lower bound of ``gap_before`` (see :attr:`Disagreement.gap_lower`)."""
+        return self.disagreement.gap_lower
+
+    @property
+    def gap_reduction(self) -> float:
+        """``gap_before / gap_after`` (1 when no effect was added)."""
+        return self.gap_before / self.gap_after if self.gap_after > 0 else float("inf")
 
     def candidate(self, name: str) -> CandidateFit:
         """Evidence of candidate ``name``.
@@ -676,10 +769,10 @@ class DiagnosisReport:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        """JSON-serialisable summary (no signals)."""
+        """JSON-serialisable summary (no signals; NaN and inf become None)."""
         d = self.disagreement
         rm = self.refined_model
-        return {
+        return _json_clean({
             "effect": self.effect,
             "noise_bound": self.noise_bound,
             "gap_before": self.gap_before,
@@ -701,17 +794,23 @@ class DiagnosisReport:
                 "gain": rm.gain,
             },
             "message": self.message,
-        }
+        })
 
-    def plot(self, path=None, *, max_candidates_bar: int = 10):
+    def plot(self, path=None, *, max_samples: int | None = None):
         """Figure: input, output and predictions, residuals with the noise band, candidates.
+
+        Panels: (1) the input; (2) data, the model as given and the refined model;
+        (3) the minimax residual before (original class, refitted) and after adding the
+        effect, with the noise band ``+-noise_bound`` - the gap is the largest excursion;
+        (4) the minimax error of every candidate against the noise bound and the gap
+        before (log scale).
 
         Parameters
         ----------
         path : str or path-like, optional
-            If given, the figure is saved there (PNG recommended).
-        max_candidates_bar : int
-            Unused beyond the number of candidates; kept for forward compatibility.
+            If given, the figure is also saved there (PNG recommended).
+        max_samples : int, optional
+            Show only the first ``max_samples`` samples in the time panels (long records).
 
         Returns
         -------
@@ -719,58 +818,90 @@ class DiagnosisReport:
         """
         import matplotlib.pyplot as plt
 
-        d = self.disagreement
-        t = np.arange(self.y.size)
+        n = self.y.size if max_samples is None else max(1, min(int(max_samples), self.y.size))
+        t = np.arange(n)
+        sl = slice(0, n)
         fig, axes = plt.subplots(
-            4, 1, figsize=(10, 10.5), gridspec_kw={"height_ratios": [1, 1.6, 1.6, 1.3]}
+            4, 1, figsize=(10, 10.5), gridspec_kw={"height_ratios": [1, 1.6, 1.6, 1.4]}
+        )
+        name = self.effect or "none"
+        fig.suptitle(
+            f"Discrepancy diagnosis - missing effect: {name};  gap {self.gap_before:.3g} -> "
+            f"{self.gap_after:.3g}  (noise bound {self.noise_bound:.3g})",
+            fontsize=11,
         )
         ax = axes[0]
-        ax.step(t, self.u, where="post", color="k", lw=0.9)
+        ax.step(t, self.u[sl], where="post", color="k", lw=0.9)
         ax.set_ylabel("input u")
-        ax.set_title(
-            f"Discrepancy diagnosis: effect = {self.effect}   "
-            f"gap {self.gap_before:.3g} -> {self.gap_after:.3g}   "
-            f"(noise bound {self.noise_bound:.3g})"
-        )
         ax = axes[1]
-        ax.plot(t, self.y, ".", ms=2.5, color="0.4", label="data y")
-        ax.plot(t, self.prediction_nominal, color="tab:orange", lw=1.0, label="model as given")
-        ax.plot(t, self.prediction_after, color="tab:blue", lw=1.0,
+        ax.plot(t, self.y[sl], ".", ms=2.5, color="0.35", label="data y")
+        ax.plot(t, self.prediction_nominal[sl], color="tab:orange", lw=1.0,
+                label="model as given")
+        ax.plot(t, self.prediction_after[sl], color="tab:blue", lw=1.0,
                 label=f"refined ({self.effect or 'refit only'})")
-        ax.set_ylabel("output")
-        ax.legend(loc="upper right", fontsize=8, ncol=3)
+        ax.set_ylabel("output y")
+        ax.legend(loc="upper left", fontsize=8, ncol=3, framealpha=0.9)
         ax = axes[2]
-        rb = self.y - self.prediction_before
-        ra = self.y - self.prediction_after
-        ax.axhspan(-self.noise_bound, self.noise_bound, color="tab:green", alpha=0.15,
-                   label=f"noise band +-{self.noise_bound:.3g}")
-        ax.plot(t, rb, color="tab:red", lw=0.8, label=f"before (gap {self.gap_before:.3g})")
-        ax.plot(t, ra, color="tab:blue", lw=0.8, label=f"after (gap {self.gap_after:.3g})")
-        if d.indices.size:
-            ax.plot(d.indices, rb[d.indices], "x", color="tab:red", ms=3,
-                    label=f"outside band before ({100 * self.fraction_outside_before:.0f}%)")
+        rb = (self.y - self.prediction_before)[sl]
+        ra = (self.y - self.prediction_after)[sl]
+        nb = self.noise_bound
+        ax.axhspan(-nb, nb, color="tab:green", alpha=0.2, lw=0,
+                   label=f"noise band +-{nb:.3g}")
+        ax.plot(t, rb, color="tab:red", lw=0.8,
+                label=f"before: gap {self.gap_before:.3g}, "
+                      f"{100 * self.fraction_outside_before:.0f}% outside")
+        ax.plot(t, ra, color="tab:blue", lw=0.8,
+                label=f"after: gap {self.gap_after:.3g}, "
+                      f"{100 * self.fraction_outside_after:.0f}% outside")
         if self.skip:
-            ax.axvspan(0, self.skip, color="0.85", label="not scored (skip)")
-        ax.set_ylabel("residual y - yhat")
+            ax.axvspan(0, min(self.skip, n), color="0.85", label="not scored (skip)")
+        lim = 1.15 * max(np.max(np.abs(rb)), np.max(np.abs(ra)), nb)
+        ax.set_ylim(-lim, 1.6 * lim)  # head-room for the legend
+        ax.set_ylabel("residual y - yhat\n(minimax refit)")
         ax.set_xlabel("sample t")
-        ax.legend(loc="upper right", fontsize=8, ncol=2)
+        ax.legend(loc="upper left", fontsize=8, ncol=3, framealpha=0.9)
+        for a in axes[:3]:
+            a.set_xlim(0, max(n - 1, 1))
         ax = axes[3]
-        names = [c.name for c in self.candidates][:max_candidates_bar]
-        errs = [c.minimax_error for c in self.candidates][:max_candidates_bar]
-        colors = [
-            "tab:blue" if c.name == self.effect else ("tab:green" if c.consistent else "0.6")
-            for c in self.candidates
-        ][:max_candidates_bar]
-        ax.bar(names, errs, color=colors)
-        ax.axhline(self.noise_bound, color="tab:green", ls="--", label="noise bound")
+        if self.candidates:
+            names = [c.name for c in self.candidates]
+            errs = np.array([c.minimax_error for c in self.candidates])
+            colors = ["tab:blue" if c.name == self.effect
+                      else ("tab:green" if c.consistent else "0.6") for c in self.candidates]
+            bars = ax.bar(names, errs, color=colors)
+            for b, e in zip(bars, errs, strict=True):
+                ax.annotate(f"{e:.3g}", (b.get_x() + b.get_width() / 2, e),
+                            xytext=(0, 2), textcoords="offset points", ha="center",
+                            va="bottom", fontsize=8,
+                            bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
+            ax.set_yscale("log")
+            lo = min(errs.min(), nb) / 2
+            hi = max(errs.max(), self.gap_before) * 3
+            ax.set_ylim(lo, hi)
+        ax.axhline(nb, color="tab:green", ls="--", label="noise bound")
         ax.axhline(self.gap_before, color="tab:red", ls=":", label="gap before")
-        ax.set_ylabel("minimax error")
-        ax.set_title("candidate evidence (blue: chosen, green: consistent)", fontsize=9)
-        ax.legend(fontsize=8)
+        ax.set_ylabel("minimax error\nof candidate")
+        ax.set_title("candidate evidence (blue: chosen, green: also consistent, "
+                     "grey: inconsistent)", fontsize=9)
+        ax.legend(fontsize=8, loc="upper right")
         fig.tight_layout()
         if path is not None:
             fig.savefig(path, dpi=110)
         return fig
+
+
+def _json_clean(obj):
+    if isinstance(obj, dict):
+        return {k: _json_clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_clean(v) for v in obj]
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if np.isfinite(obj) else None
+    return obj
 
 
 # --------------------------------------------------------------------------------------
@@ -849,6 +980,8 @@ def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
     Disagreement
     """
     s, u, y, nb, do_refit, skip = _validate(model, u, y, noise_bound, refit, skip)
+    window = _int_param("window", window, 1)
+    max_lag = _int_param("max_lag", max_lag, 0)
     return _locate(s, u, y, nb, do_refit, skip, window, max_lag)[0]
 
 
@@ -867,6 +1000,25 @@ def _corr(a, b):
     if a.size < 3 or np.std(a) == 0 or np.std(b) == 0:
         return 0.0
     return float(np.corrcoef(a, b)[0, 1])
+
+
+def _direction_correlation(s, u, y, f, Phi, skip):
+    """Correlation of a refit residual with the model's response to the movement direction.
+
+    A play (backlash) of half-width ``c`` shifts the signal entering the linear block by
+    ``-c`` after upward and ``+c`` after downward input movements, so the residual of a
+    model without it is about ``-c G(q^-1) dir_t``. The residual used here comes from a
+    least-squares refit that includes a constant (so an offset does not leak into the
+    refitted ``B`` and fake a correlation); ``G`` is the model's linear block (identity
+    for a black box).
+    """
+    direction = _last_direction(u)
+    if s.base is None:
+        direction = lfilter(s.B, s.A, direction)
+    P = np.column_stack([Phi, np.ones(y.size)])
+    z = np.linalg.lstsq(P[skip:], (y - f)[skip:], rcond=None)[0]
+    r = y - f - P @ z
+    return _corr(r[skip:], direction[skip:])
 
 
 def _locate(s, u, y, nb, do_refit, skip, window, max_lag, coef_box=1e3):
@@ -890,7 +1042,7 @@ def _locate(s, u, y, nb, do_refit, skip, window, max_lag, coef_box=1e3):
         worst &= np.abs(lres) >= np.quantile(np.abs(lres[flagged]), 0.8)
     conds = _conditions(u, lres, worst, scored, window)
     ms = float(np.mean(resid[skip:]) / fit.error) if fit.error > 0 else 0.0
-    dc = _corr(lres[skip:], _last_direction(u)[skip:])
+    dc = _direction_correlation(s, u, y, f, Phi, skip)
     lag = _best_lag(y[skip:], nominal[skip:], max_lag)
     hints = []
     if fit.error <= nb * (1 + _REL_TOL):
@@ -1028,6 +1180,18 @@ def _signal(name, a):
     return a
 
 
+def _int_param(name, value, minimum):
+    """``value`` as an int ``>= minimum`` or a ParameterValidationError."""
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    if not ok and isinstance(value, (float, np.floating)) and float(value).is_integer():
+        ok = True
+    if not ok or value < minimum:
+        raise ParameterValidationError(
+            f"{name} must be an integer >= {minimum}; got {value!r}."
+        )
+    return int(value)
+
+
 def _validate(model, u, y, noise_bound, refit, skip):
     u = _signal("u", u)
     y = _signal("y", y)
@@ -1036,6 +1200,8 @@ def _validate(model, u, y, noise_bound, refit, skip):
             f"u has {u.size} samples but y has {y.size}; pass aligned input/output records."
         )
     try:
+        if isinstance(noise_bound, (str, bytes)):
+            raise TypeError
         nb = float(noise_bound)
     except (TypeError, ValueError) as exc:
         raise ParameterValidationError(
@@ -1049,13 +1215,17 @@ def _validate(model, u, y, noise_bound, refit, skip):
         raise ParameterValidationError(
             f"refit must be 'linear' (refit B / output gain) or 'none'; got {refit!r}."
         )
-    if int(skip) != skip or skip < 0:
-        raise ParameterValidationError(f"skip must be an integer >= 0; got {skip!r}.")
-    skip = int(skip)
+    skip = _int_param("skip", skip, 0)
     if u.size - skip < 10:
         raise DataValidationError(
             f"only {u.size - skip} scored samples (length {u.size}, skip {skip}); at least 10 "
             "are needed - record longer data."
+        )
+    if not np.any(u[skip:] != 0):
+        raise DataValidationError(
+            "the input u is identically zero on the scored samples; a simulation model "
+            "cannot be compared with data that were not excited - record data with a "
+            "varying input."
         )
     s = _as_structure(model)
     return s, u, y, nb, refit == "linear", skip
@@ -1139,26 +1309,19 @@ def diagnose(
     'offset'
     """
     s, u, y, nb, do_refit, skip = _validate(model, u, y, noise_bound, refit, skip)
-    if candidates is None:
-        names = tuple(CANDIDATES)
-    else:
-        if isinstance(candidates, str):
-            candidates = (candidates,)
-        names = tuple(candidates)
-        unknown = [c for c in names if c not in CANDIDATES]
-        if unknown or not names:
-            raise ParameterValidationError(
-                f"unknown candidate(s) {unknown}; choose from {list(CANDIDATES)}."
-            )
-    if int(max_delay) != max_delay or max_delay < 1:
-        raise ParameterValidationError(f"max_delay must be an integer >= 1; got {max_delay!r}.")
-    max_delay = int(min(max_delay, u.size - skip - 2))
-    if int(grid_size) != grid_size or grid_size < 3:
-        raise ParameterValidationError(f"grid_size must be an integer >= 3; got {grid_size!r}.")
-    if not (np.isfinite(coef_box) and coef_box > 0):
-        raise ParameterValidationError("coef_box must be a finite number > 0.")
-    if not (np.isfinite(min_improvement) and min_improvement >= 1):
-        raise ParameterValidationError("min_improvement must be a finite number >= 1.")
+    names = _candidate_names(candidates)
+    max_delay = _int_param("max_delay", max_delay, 1)
+    max_delay = min(max_delay, u.size - skip - 2)
+    grid_size = _int_param("grid_size", grid_size, 3)
+    window = _int_param("window", window, 1)
+    if not (isinstance(coef_box, (int, float, np.integer, np.floating))
+            and np.isfinite(coef_box) and coef_box > 0):
+        raise ParameterValidationError(f"coef_box must be a finite number > 0; got {coef_box!r}.")
+    if not (isinstance(min_improvement, (int, float, np.integer, np.floating))
+            and np.isfinite(min_improvement) and min_improvement >= 1):
+        raise ParameterValidationError(
+            f"min_improvement must be a finite number >= 1; got {min_improvement!r}."
+        )
 
     disagreement, base_fit, nominal = _locate(
         s, u, y, nb, do_refit, skip, window, max_delay, coef_box
@@ -1172,57 +1335,71 @@ def diagnose(
     def frac(pred):
         return float(np.mean(np.abs((y - pred)[skip:]) > nb))
 
+    # step 2: refit every candidate (also when the model is already consistent, so that
+    # the report always carries the evidence for each of them)
     fits = []
     cand_models = {}
-    if not consistent_before:
-        for name in names:
-            value, fit, lower, n_ev, exhaustive = _fit_candidate(
-                name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay
+    for name in names:
+        value, fit, lower, n_ev, exhaustive = _fit_candidate(
+            name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay
+        )
+        refined = _rebuild(s, do_refit, fit, effect=name, value=value,
+                           offset=(name == "offset"))
+        # the reported error is the one *achieved* by the returned model
+        pred = refined.predict(u)
+        err = float(np.max(np.abs((y - pred)[skip:])))
+        cand_models[name] = (refined, pred)
+        fits.append(
+            CandidateFit(
+                name=name,
+                n_params=CANDIDATES[name],
+                param_name=_PARAM_NAMES[name],
+                value=float(value),
+                minimax_error=err,
+                lower_bound=min(lower, err),
+                consistent=err <= tol,
+                fraction_outside=frac(pred),
+                improvement=gap_before / err if err > 0 else float("inf"),
+                exhaustive=exhaustive,
+                n_evaluations=n_ev,
             )
-            refined = _rebuild(s, do_refit, fit, effect=name, value=value,
-                               offset=(name == "offset"))
-            # the reported error is the one *achieved* by the returned model
-            pred = refined.predict(u)
-            err = float(np.max(np.abs((y - pred)[skip:])))
-            cand_models[name] = (refined, pred)
-            fits.append(
-                CandidateFit(
-                    name=name,
-                    n_params=CANDIDATES[name],
-                    param_name=_PARAM_NAMES[name],
-                    value=value,
-                    minimax_error=err,
-                    lower_bound=min(lower, err),
-                    consistent=err <= tol,
-                    fraction_outside=frac(pred),
-                    improvement=gap_before / err if err > 0 else float("inf"),
-                    exhaustive=exhaustive,
-                    n_evaluations=n_ev,
-                )
-            )
+        )
 
     pred_before = base_fit.prediction
+    effect = None
     if consistent_before:
-        effect = None
         msg = (
             f"No missing effect: the model (after refitting its parameters) reproduces the "
-            f"data within the noise bound (gap {gap_before:.4g} <= {nb:.4g})."
+            f"data within the noise bound (gap {gap_before:.4g} <= {nb:.4g}), so the data "
+            f"give no evidence for any candidate."
         )
-        refined, pred_after, gap_after = base_model, pred_before, gap_before
+        better = sorted((c for c in fits if c.minimax_error * min_improvement <= gap_before),
+                        key=lambda c: c.minimax_error)
+        if better:
+            c = better[0]
+            msg += (
+                f" An effect whose size is below the noise bound can neither be confirmed nor "
+                f"excluded: e.g. {c.name} ({c.param_name} = {c.value:.4g}) would lower the "
+                f"error to {c.minimax_error:.4g}, which is not required by the data."
+            )
     else:
-        ok = [c for c in fits if c.consistent]
+        ok = sorted((c for c in fits if c.consistent),
+                    key=lambda c: (c.n_params, c.minimax_error))
         if ok:
-            best = min(ok, key=lambda c: (c.n_params, c.minimax_error))
+            best = ok[0]
             effect = best.name
-            others = [c.name for c in ok if c.name != best.name]
             msg = (
                 f"Missing effect: {best.name} ({best.param_name} = {best.value:.4g}); with it "
                 f"the data are consistent with the noise bound (gap {gap_before:.4g} -> "
                 f"{best.minimax_error:.4g} <= {nb:.4g})."
             )
-            if others:
-                msg += f" Also consistent (larger error or more parameters): {others}."
-        else:
+            if len(ok) > 1:
+                others = ", ".join(f"{c.name} ({c.minimax_error:.4g})" for c in ok[1:])
+                msg += (
+                    f" Also consistent, with a larger error or more parameters: {others}; "
+                    f"the data do not exclude them."
+                )
+        elif fits:
             best = min(fits, key=lambda c: c.minimax_error)
             if best.minimax_error * min_improvement <= gap_before:
                 effect = best.name
@@ -1230,23 +1407,23 @@ def diagnose(
                     f"No single candidate makes the data consistent with the noise bound "
                     f"{nb:.4g}; the best is {best.name} ({best.param_name} = "
                     f"{best.value:.4g}), gap {gap_before:.4g} -> {best.minimax_error:.4g}. "
-                    f"Something else (or a combination) is missing - run diagnose on "
-                    f"report.refined_model to look for a second effect."
+                    f"Either the noise bound is too small or something else (or a "
+                    f"combination) is missing - run diagnose on report.refined_model to look "
+                    f"for a second effect."
                 )
             else:
-                effect = None
                 msg = (
                     f"The model is inconsistent with the data (gap {gap_before:.4g} > "
                     f"{nb:.4g}) but no candidate shrinks the gap by the factor "
                     f"min_improvement = {min_improvement:g} (best: {best.name}, "
-                    f"{best.minimax_error:.4g}). Check the noise bound, or the effect is "
-                    f"not in the candidate library."
+                    f"{best.minimax_error:.4g}). Check the noise bound, or the missing effect "
+                    f"is not in the candidate library."
                 )
-        if effect is None:
-            refined, pred_after, gap_after = base_model, pred_before, gap_before
-        else:
-            refined, pred_after = cand_models[effect]
-            gap_after = best.minimax_error
+    if effect is None:
+        refined, pred_after, gap_after = base_model, pred_before, gap_before
+    else:
+        refined, pred_after = cand_models[effect]
+        gap_after = best.minimax_error
     return DiagnosisReport(
         effect=effect,
         gap_before=gap_before,
@@ -1269,11 +1446,145 @@ def diagnose(
     )
 
 
+def _candidate_names(candidates):
+    if candidates is None:
+        return tuple(CANDIDATES)
+    if isinstance(candidates, str):
+        candidates = (candidates,)
+    try:
+        names = tuple(dict.fromkeys(candidates))
+    except TypeError as exc:
+        raise ParameterValidationError(
+            f"candidates must be a sequence of names from {list(CANDIDATES)}; got "
+            f"{candidates!r}."
+        ) from exc
+    unknown = [c for c in names if c not in CANDIDATES]
+    if unknown:
+        raise ParameterValidationError(
+            f"unknown candidate(s) {unknown}; choose from {list(CANDIDATES)}."
+        )
+    if not names:
+        raise ParameterValidationError(
+            f"candidates is empty; pass None (all) or a subset of {list(CANDIDATES)}."
+        )
+    return names
+
+
 # --------------------------------------------------------------------------------------
 # command line
 # --------------------------------------------------------------------------------------
-def _coeffs(text):
-    return np.array([float(v) for v in text.replace(",", " ").split()])
+def _coeffs(text, flag):
+    try:
+        vals = [float(v) for v in text.replace(",", " ").split()]
+    except ValueError as exc:
+        raise ParameterValidationError(
+            f"{flag} must be numbers separated by spaces or commas, e.g. {flag} \"1 -0.5\"; "
+            f"got {text!r}."
+        ) from exc
+    if not vals:
+        raise ParameterValidationError(f"{flag} is empty; give at least one coefficient.")
+    return np.array(vals)
+
+
+def _column_index(spec, header, ncols, which, default, path):
+    """Position of column ``spec`` (a header name or a 0-based index)."""
+    spec = str(spec).strip()
+    cols = None if header is None else [h.strip() for h in header]
+    if cols is not None and spec.lower() in [c.lower() for c in cols]:
+        j = [c.lower() for c in cols].index(spec.lower())
+    elif spec.isdigit():
+        j = int(spec)
+    elif cols is None and spec == which:
+        j = default
+    elif cols is None:
+        raise DataValidationError(
+            f"{path} has no header line, so the {which} column cannot be found by the name "
+            f"{spec!r}; add a header (e.g. 'u,y') or give a 0-based column index."
+        )
+    else:
+        raise DataValidationError(
+            f"column {spec!r} (the {which} column) not found in the header of {path}; columns "
+            f"are {cols}. Rename it or pass --{which}-column NAME."
+        )
+    if j >= ncols:
+        found = f"{ncols} column(s)" + ("" if cols is None else f" {cols}")
+        raise DataValidationError(
+            f"{path} needs an input and an output column (u,y) but the {which} column "
+            f"(index {j}) is missing: found {found}."
+        )
+    return j
+
+
+def read_io_csv(path, u_column="u", y_column="y", delimiter=","):
+    """Read an input/output record from a CSV file.
+
+    The file may start with a header line naming the columns (then ``u_column`` and
+    ``y_column`` are looked up by name, case-insensitively); without a header the
+    columns are taken by 0-based index (default: the first two columns are ``u, y``).
+    Blank lines and lines starting with ``#`` are ignored.
+
+    Returns
+    -------
+    u, y : ndarray
+
+    Raises
+    ------
+    DataValidationError
+        Unreadable file, missing column, non-numeric or incomplete rows (the message lists
+        the offending line numbers), fewer than two columns.
+    """
+    import csv
+
+    try:
+        with open(path, newline="") as fh:
+            rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh, delimiter=delimiter))]
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise DataValidationError(f"cannot read {path}: {exc}") from exc
+    rows = [(ln, r) for ln, r in rows
+            if r and any(f.strip() for f in r) and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise DataValidationError(f"{path} contains no data rows.")
+
+    def numeric(field):
+        try:
+            float(field)
+            return True
+        except ValueError:
+            return False
+
+    header = None
+    if not all(numeric(f) for f in rows[0][1]):
+        header, rows = rows[0][1], rows[1:]
+    ncols = len(header) if header is not None else len(rows[0][1])
+    ju = _column_index(u_column, header, ncols, "u", 0, path)
+    jy = _column_index(y_column, header, ncols, "y", 1, path)
+    if ju == jy:
+        raise DataValidationError(
+            f"the u and y columns of {path} are the same column (index {ju}); pass "
+            "--u-column / --y-column."
+        )
+    if not rows:
+        raise DataValidationError(f"{path} has a header but no data rows.")
+    u, y, bad = [], [], []
+    for ln, r in rows:
+        try:
+            uv, yv = float(r[ju]), float(r[jy])
+        except (IndexError, ValueError):
+            bad.append((ln, delimiter.join(r)))
+            continue
+        if not (np.isfinite(uv) and np.isfinite(yv)):
+            bad.append((ln, delimiter.join(r)))
+            continue
+        u.append(uv)
+        y.append(yv)
+    if bad:
+        shown = "; ".join(f"line {ln}: {text!r}" for ln, text in bad[:5])
+        more = f" (and {len(bad) - 5} more)" if len(bad) > 5 else ""
+        raise DataValidationError(
+            f"{path}: {len(bad)} row(s) without two finite numbers in the u and y columns - "
+            f"{shown}{more}. Fix or remove them (keep u and y aligned)."
+        )
+    return np.array(u), np.array(y)
 
 
 def diagnose_cli_main(argv=None) -> int:
@@ -1283,10 +1594,13 @@ def diagnose_cli_main(argv=None) -> int:
 
         hammerbound diagnose DATA.csv --num "0 0.5" --den "1 -0.5" --noise-bound 0.02
                              [--candidates offset,delay] [--refit linear|none] [--skip K]
-                             [--max-delay D] [--plot out.png] [--json]
+                             [--max-delay D] [--u-column u] [--y-column y]
+                             [--plot out.png] [--json]
 
-    ``DATA.csv`` has two columns ``u, y`` (a header line is allowed); ``--num``/``--den``
-    are the model's coefficients in powers of ``q^-1``.
+    ``DATA.csv`` holds the input and output columns (see :func:`read_io_csv`: with a
+    header they are found by name, default ``u`` and ``y``; without one the first two
+    columns are used). ``--num``/``--den`` are the model's coefficients in powers of
+    ``q^-1``.
 
     Parameters
     ----------
@@ -1297,46 +1611,44 @@ def diagnose_cli_main(argv=None) -> int:
     -------
     int
         0 when the (refined) model is consistent with the data, 1 when it is not,
-        2 on invalid input (message on stderr).
+        2 on invalid input or usage (message on stderr).
     """
     p = argparse.ArgumentParser(
         prog="hammerbound diagnose",
         description="Locate, name and add the effect a linear simulation model misses.",
     )
-    p.add_argument("data", help="CSV file with columns u,y (optional header)")
+    p.add_argument("data", help="CSV file with input and output columns (optional header)")
     p.add_argument("--num", required=True, help="numerator B in powers of q^-1, e.g. '0 0.5'")
     p.add_argument("--den", required=True, help="denominator A in powers of q^-1, e.g. '1 -0.5'")
-    p.add_argument("--noise-bound", required=True, type=float)
-    p.add_argument("--candidates", default=None, help="comma-separated subset of candidates")
+    p.add_argument("--noise-bound", required=True, type=float,
+                   help="bound on the output error |eta_t|")
+    p.add_argument("--candidates", default=None,
+                   help=f"comma-separated subset of {','.join(CANDIDATES)}")
     p.add_argument("--refit", default="linear", choices=["linear", "none"])
-    p.add_argument("--skip", type=int, default=0)
+    p.add_argument("--skip", type=int, default=0, help="initial samples not scored")
     p.add_argument("--max-delay", type=int, default=10)
+    p.add_argument("--u-column", default="u", help="input column: header name or 0-based index")
+    p.add_argument("--y-column", default="y",
+                   help="output column: header name or 0-based index")
+    p.add_argument("--delimiter", default=",")
     p.add_argument("--plot", default=None, help="save the diagnosis figure to this PNG")
     p.add_argument("--json", action="store_true", help="print a JSON report")
-    args = p.parse_args(argv)
     try:
-        try:
-            data = np.genfromtxt(args.data, delimiter=",", skip_header=0)
-            if data.ndim == 2 and not np.all(np.isfinite(data[0])):
-                data = data[1:]
-        except OSError as exc:
-            raise DataValidationError(f"cannot read {args.data}: {exc}") from exc
-        if data.ndim != 2 or data.shape[1] < 2:
-            raise DataValidationError(f"{args.data} must have two columns u,y.")
-        try:
-            num, den = _coeffs(args.num), _coeffs(args.den)
-        except ValueError as exc:
-            raise ParameterValidationError(
-                "--num/--den must be numbers separated by spaces or commas."
-            ) from exc
+        args = p.parse_args(argv)
+    except SystemExit as exc:  # usage errors (already printed) and --help
+        return int(exc.code or 0)
+    try:
+        u, y = read_io_csv(args.data, args.u_column, args.y_column, args.delimiter)
+        num, den = _coeffs(args.num, "--num"), _coeffs(args.den, "--den")
+        A, B = as_polynomials((den, num))
         import control
 
-        n = max(num.size, den.size)
-        G = control.tf(np.r_[num, np.zeros(n - num.size)], np.r_[den, np.zeros(n - den.size)],
-                       True)
-        cands = None if args.candidates is None else [c.strip() for c in
-                                                      args.candidates.split(",")]
-        rep = diagnose(G, data[:, 0], data[:, 1], args.noise_bound, candidates=cands,
+        n = max(A.size, B.size)
+        G = control.tf(np.r_[B, np.zeros(n - B.size)], np.r_[A, np.zeros(n - A.size)], True)
+        cands = None if args.candidates is None else [
+            c.strip() for c in args.candidates.split(",") if c.strip()
+        ]
+        rep = diagnose(G, u, y, args.noise_bound, candidates=cands,
                        refit=args.refit, skip=args.skip, max_delay=args.max_delay)
     except HammerboundError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -1345,6 +1657,13 @@ def diagnose_cli_main(argv=None) -> int:
         import matplotlib
 
         matplotlib.use("Agg")
-        rep.plot(args.plot)
+        import matplotlib.pyplot as plt
+
+        try:
+            fig = rep.plot(args.plot)
+        except OSError as exc:
+            print(f"error: cannot write the figure to {args.plot}: {exc}", file=sys.stderr)
+            return 2
+        plt.close(fig)
     print(json.dumps(rep.to_dict(), indent=2) if args.json else rep.summary())
     return 0 if rep.consistent_after else 1

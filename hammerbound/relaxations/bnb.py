@@ -135,7 +135,7 @@ class _Pool:
             return None
         return self.verify(theta)
 
-    def line_search(self, inside, outside, steps=8) -> _Point | None:
+    def line_search(self, inside, outside, steps=20) -> _Point | None:
         """Verified point on the segment ``inside -> outside`` closest to ``outside``.
 
         ``inside`` must be (verified) feasible; bisection on the screening LP, then
@@ -334,6 +334,11 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             th = np.clip(x[:p], box[:, 0], box[:, 1])
             if val(th) < ub - tol_eff:
                 pt = pool.add(th)
+                if pt is None and inc is not None:
+                    # short segment from the incumbent: fine resolution near the optimum
+                    pt = pool.line_search(inc.theta, th)
+                    if pt is not None and val(pt.theta) >= ub:
+                        pt = None
                 if pt is None and interior is not None:
                     pt = pool.line_search(interior, th)
                 if pt is not None and val(pt.theta) < ub:

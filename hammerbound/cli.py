@@ -30,7 +30,8 @@ def _chapter_rows(table, n=None):
     return rows
 
 
-def _print_table(title, names, results, chapter, file=sys.stdout):
+def _print_table(title, names, results, chapter, file=None):
+    file = sys.stdout if file is None else file
     """results: list of (deta, snr, bounds (p,2), true (p,))."""
     print(f"\n{title}", file=file)
     print("  ours: lower / centre / upper (half-width), chapter's in [ ]; * = true value "

@@ -30,9 +30,10 @@ def _ident(deta, method="lp", inner="independent", **kw):
     )
 
 
+@pytest.mark.parametrize("N", [100, 300])
 @pytest.mark.parametrize("deta", CHAPTER_NOISE_LEVELS)
-def test_chapter_example_all_noise_levels_lp(deta):
-    ex = chapter_example(deta, N=100)
+def test_chapter_example_all_noise_levels_lp(deta, N):
+    ex = chapter_example(deta, N=N)
     ident = _ident(deta).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     assert ident.contains(ex.gamma_true, ex.theta_true)
     assert ident.bounds_.shape == (8, 2)
@@ -53,11 +54,16 @@ def test_chapter_example_exact_two_level_inside_independent(deta):
     assert np.all(two.linear_.radius_ < ind.linear_.radius_)
 
 
-def test_moment_order1_on_chapter_example():
-    ex = chapter_example(0.02, N=60, random_state=2)
-    ident = _ident(0.02, "moment").fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+@pytest.mark.parametrize("deta", [0.02, 0.3])
+def test_moment_order1_on_chapter_example(deta):
+    ex = chapter_example(deta, N=100, random_state=2)
+    ident = _ident(deta, "moment").fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    lp = _ident(deta, "lp").fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     assert ident.contains(ex.gamma_true, ex.theta_true)
     assert all(i.certified for i in ident.linear_.bound_info_)
+    # the LP intervals contain the moment intervals on the same data
+    assert np.all(lp.theta_bounds_[:, 0] <= ident.theta_bounds_[:, 0] + 1e-12)
+    assert np.all(lp.theta_bounds_[:, 1] >= ident.theta_bounds_[:, 1] - 1e-12)
 
 
 def test_nested_params_clone_pickle():

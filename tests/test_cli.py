@@ -97,3 +97,14 @@ def test_benchmark_quick(tmp_path, capsys):
     rows = json.loads(out.read_text())
     assert [r["method"] for r in rows] == ["lp", "moment", "exact", "exact"]
     assert all(r["true_inside"] for r in rows)
+
+
+def test_benchmark_suite_forwarding(monkeypatch, tmp_path, capsys):
+    from pathlib import Path
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["benchmark", "suite", "list"]) == 2
+    assert "repository root" in capsys.readouterr().err
+    monkeypatch.chdir(Path(__file__).resolve().parents[1])
+    assert main(["benchmark", "suite", "list"]) == 0
+    assert "python -m benchmarks stage1" in capsys.readouterr().out

@@ -180,3 +180,13 @@ def test_unexciting_input_is_unbounded():
     y = np.ones(40) + rng.uniform(-0.01, 0.01, 40)
     with pytest.raises(UnboundedSetError, match="b"):
         LinearEIVSetEstimator(noise_bound=0.01, method="lp").fit(x, y, input_bound=0.0)
+
+
+def test_exact_progress_bar_and_limits():
+    x, y, theta, _ = _data(N=40, deta=0.05)
+    est = LinearEIVSetEstimator(noise_bound=0.05, method="exact", progress=True, max_nodes=2)
+    est.fit(x, y, input_bound=0.003)
+    assert est.contains(theta)
+    limited = [i for i in est.bound_info_ if i.status == "limit"]
+    for info in limited:  # a stopped search still reports a valid outer bound and says so
+        assert "limit" in info.message and info.gap is not None and info.gap >= 0

@@ -129,7 +129,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             X = np.reshape(np.asarray(X, dtype=object if _is_complex(X) else None), (-1, 1))
         try:
             X, y = validate_data(self, X, y, dtype="numeric", y_numeric=True)
-        except ValueError as exc:  # re-raise as our typed error, message kept
+        except (TypeError, ValueError) as exc:  # re-raise as our typed error, message kept
             raise DataValidationError(
                 f"{exc} (X: signed steady-state inputs of shape (n_samples,) or (n_samples, 1); "
                 "y: outputs of shape (n_samples,))"
@@ -207,7 +207,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         pairs = [
             (Constraint((ui, sigma), yi + di, int(k), "+"),
              Constraint((-ui, -sigma), -(yi - di), int(k), "-"))
-            for ui, yi, di, k in zip(u, y, nb, idx)
+            for ui, yi, di, k in zip(u, y, nb, idx, strict=True)
         ]
         positivity = [Constraint((-1.0, 0.0), 0.0, None, "m>=0"),
                       Constraint((0.0, -1.0), 0.0, None, "c>=0")]
@@ -312,8 +312,13 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     def check_prbs_level(self, u_star: float) -> None:
         """Raise :class:`ResultOneViolationError` unless ``u*`` satisfies Result 1 for every
         feasible backlash (outside the dead zone, before the line crossing)."""
-        if not np.isfinite(u_star) or u_star <= 0:
+        try:
+            u_val = float(u_star)
+        except (TypeError, ValueError):
+            u_val = np.nan
+        if not np.isfinite(u_val) or u_val <= 0:
             raise ParameterValidationError(f"u_star must be a finite number > 0; got {u_star!r}.")
+        u_star = u_val
         u_lo, u_hi = self.admissible_prbs_range()
         if u_star <= u_lo:
             raise ResultOneViolationError(

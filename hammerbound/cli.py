@@ -59,8 +59,8 @@ def cmd_demo(args) -> int:
 
     levels = CHAPTER_NOISE_LEVELS if args.noise_levels is None else tuple(args.noise_levels)
     print("hammerbound demo: the simulated example of section 22.5 (Cerone, Piga & Regruto)")
-    print(f"  backlash m_l=0.25 c_l=0.0628 m_r=0.26 c_r=0.0489; G = (2.15 q^-1 - 1.09 q^-2) / "
-          f"(1 - 0.76 q^-1 + 0.82 q^-2), normalised to unit gain (22.8)")
+    print("  backlash m_l=0.25 c_l=0.0628 m_r=0.26 c_r=0.0489; G = (2.15 q^-1 - 1.09 q^-2) / "
+          "(1 - 0.76 q^-1 + 0.82 q^-2), normalised to unit gain (22.8)")
     print(f"  M = 50 square-wave amplitudes, PRBS N = {args.N}, stage-2 method {args.method}"
           + (f" (order {args.order}, {args.solver})" if args.method == "moment" else "")
           + f", inner signal {args.inner_signal}")
@@ -176,7 +176,8 @@ def cmd_benchmark(args) -> int:
     print(f"{'method':28s} {'time [s]':>9s}  width / exact width (a1 a2 b1 b2)   true inside")
     for r in rows:
         ratio = " ".join(f"{w / e:5.2f}" for w, e in zip(r["width"], exact_w, strict=True))
-        name = f"{r['method']}{' d=' + str(r['order']) if r['method'] == 'moment' else ''} ({r['inner_signal']})"
+        order = f" d={r['order']}" if r["method"] == "moment" else ""
+        name = f"{r['method']}{order} ({r['inner_signal']})"
         print(f"{name:28s} {r['time_s']:9.2f}  {ratio}              {r['true_inside']}")
     if args.output:
         Path(args.output).write_text(json.dumps(rows, indent=2))

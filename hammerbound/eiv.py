@@ -44,6 +44,10 @@ METHODS = ("moment", "lp", "exact")
 
 def _positive_bound(name, value, n, *, allow_zero=False):
     """Scalar or per-sample bound -> float array of shape (n,), validated."""
+    if value is None:
+        raise ParameterValidationError(
+            f"{name} must be a number or an array of {n} numbers; got None."
+        )
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -74,7 +78,13 @@ def _as_signal(name, v):
     """1-D float signal from a list/array of shape (N,) or (N, 1)."""
     if hasattr(v, "toarray") or hasattr(v, "tocsr"):
         raise DataValidationError(f"{name}: sparse input is not supported; pass a dense array.")
-    arr = np.asarray(v)
+    try:
+        arr = np.asarray(v)
+    except (TypeError, ValueError) as exc:  # ragged nested sequences
+        raise DataValidationError(
+            f"{name} must be a 1-D array of real numbers (shape (N,) or (N, 1)); got a "
+            f"ragged or non-array value ({exc})."
+        ) from exc
     if arr.dtype == object or np.iscomplexobj(arr) or not (
         np.issubdtype(arr.dtype, np.number) or arr.dtype == bool
     ):
@@ -96,6 +106,19 @@ def _as_signal(name, v):
             f"{name} contains NaN or infinity (first at sample {bad}); remove or repair it."
         )
     return arr
+
+
+def _theta_vector(theta, p, names):
+    """``theta`` as a float vector of shape (p,), or a DataValidationError saying the order."""
+    try:
+        th = np.asarray(theta, dtype=float)
+    except (TypeError, ValueError):
+        th = None
+    if th is None or th.shape != (p,):
+        raise DataValidationError(
+            f"theta must be {p} numbers of shape ({p},) in order {names}; got {theta!r}."
+        )
+    return th
 
 
 class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
@@ -201,6 +224,16 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             v = getattr(self, name)
             if not isinstance(v, numbers.Integral) or isinstance(v, bool) or v < 0:
                 raise ParameterValidationError(f"{name} must be an integer >= 0; got {v!r}.")
+        if not isinstance(self.b0, (bool, np.bool_)):
+            raise ParameterValidationError(f"b0 must be True or False; got {self.b0!r}.")
+        mn = self.max_nodes
+        if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
+            raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
+        tl = self.time_limit
+        if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
+            raise ParameterValidationError(
+                f"time_limit must be a number of seconds >= 0; got {tl!r}."
+            )
         if self.nb == 0 and not self.b0:
             raise ParameterValidationError(
                 "B has no coefficient: use nb >= 1 or b0=True."
@@ -360,7 +393,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     # ------------------------------------------------------------------ model
     def _polys(self, theta=None):
         check_is_fitted(self, "bounds_")
-        th = self.center_ if theta is None else np.asarray(theta, dtype=float)
+        th = self.center_ if theta is None else _theta_vector(theta, self.bounds_.shape[0],
+                                                                  self.param_names_)
         na = self.na
         A = np.concatenate([[1.0], th[:na]])
         b = th[na:]
@@ -390,11 +424,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     def contains(self, theta, tol=0.0) -> bool:
         """Whether ``theta`` lies in every reported interval."""
         check_is_fitted(self, "bounds_")
-        th = np.asarray(theta, dtype=float)
-        if th.shape != (self.bounds_.shape[0],):
-            raise DataValidationError(
-                f"theta must have shape ({self.bounds_.shape[0]},) in order {self.param_names_}."
-            )
+        th = _theta_vector(theta, self.bounds_.shape[0], self.param_names_)
         return bool(np.all(th >= self.bounds_[:, 0] - tol) and np.all(th <= self.bounds_[:, 1] + tol))
 
     def predict(self, X):

@@ -290,7 +290,7 @@ def algorithm_22_1(pairs, extra=()) -> np.ndarray:
         tol = 1e-11 * (np.abs(b) + np.hypot(A[:, 0], A[:, 1]))
         P = np.array([v[0] for v in V]) if V else np.zeros((0, 2))
         ok = np.all(P @ A.T - b <= tol, axis=1) if len(V) else np.zeros(0, bool)
-        return [v for v, k in zip(V, ok) if k]
+        return [v for v, k in zip(V, ok, strict=True) if k]
 
     def relabel(V, HL):
         # rebuild H_L: keep boundaries through a vertex (lines 21-27)

@@ -52,7 +52,7 @@ def plot_intervals(bounds, names, ax=None, *, true_values=None, labels=None, nor
     p = len(names)
     ref = np.asarray(true_values, float) if true_values is not None else blist[0].mean(axis=1)
     scale = np.maximum(0.5 * (blist[0][:, 1] - blist[0][:, 0]), 1e-300) if normalise else np.ones(p)
-    for k, (b, lab) in enumerate(zip(blist, labels)):
+    for k, (b, lab) in enumerate(zip(blist, labels, strict=False)):
         off = (k - (len(blist) - 1) / 2) * 0.15
         lo = (b[:, 0] - ref) / scale
         hi = (b[:, 1] - ref) / scale

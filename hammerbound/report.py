@@ -21,7 +21,8 @@ def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
     rows = [head, sep]
     for k, name in enumerate(names):
         lo, hi = bounds[k]
-        r = f"| {name} | {fmt.format(lo)} | {fmt.format(0.5 * (lo + hi))} | {fmt.format(hi)} | {fmt.format(0.5 * (hi - lo))} |"
+        cells = (lo, 0.5 * (lo + hi), hi, 0.5 * (hi - lo))
+        r = f"| {name} | " + " | ".join(fmt.format(c) for c in cells) + " |"
         if true is not None:
             r += f" {fmt.format(true[k])} | {'yes' if lo <= true[k] <= hi else '**NO**'} |"
         rows.append(r)

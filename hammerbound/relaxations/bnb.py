@@ -177,7 +177,7 @@ def _obbt_task(problem, box, tasks, bases):
             relax.lp.set_basis(basis)
         r = relax.lp.solve()
         if r.status == "infeasible":
-            out.append((np.inf, None, None, None, r.iterations))
+            out.append((np.inf, None, None, r.iterations))
             continue
         out.append((r.bound, None if r.x is None else r.x.copy(), relax.lp.get_basis(),
                     r.iterations))
@@ -469,6 +469,13 @@ def exact_bounds(
     finally:
         if parallel is not None:
             parallel.__exit__(None, None, None)
+    if any(o.bound == np.inf for o in outs):
+        # every leaf of a search was certified infeasible and no point was verified: the
+        # set is empty (reporting +inf/-inf bounds with status "limit" would hide that)
+        raise EmptyFeasibleSetError(
+            "the branch-and-bound certified every node of the McCormick relaxation of "
+            "(22.34) infeasible: no theta explains the data within the error bounds (the "
+            "polytopic LP set is a strict outer approximation).", first_index=None)
     names = problem.param_names
     bounds = np.zeros((p, 2))
     inner = np.full((p, 2), np.nan)

@@ -126,11 +126,14 @@ class EIVProblem:
                 "samples that share an input-error group must have equal x and dx."
             )
         p = na + nb + (1 if self.b0 else 0)
-        box = (
-            default_theta_box(na, nb, self.b0)
-            if self.theta_box is None
-            else np.asarray(self.theta_box, dtype=float)
-        )
+        try:
+            box = (
+                default_theta_box(na, nb, self.b0)
+                if self.theta_box is None
+                else np.asarray(self.theta_box, dtype=float)
+            )
+        except (TypeError, ValueError):
+            box = np.full((0,), np.nan)  # reported below
         if box.shape != (p, 2) or not np.all(np.isfinite(box)) or np.any(box[:, 0] > box[:, 1]):
             raise ParameterValidationError(
                 f"theta_box must be a finite array of shape ({p}, 2) with lower <= upper."
@@ -265,10 +268,14 @@ def check_theta(problem: EIVProblem, theta, tol: float = 1e-9) -> FeasibilityChe
         [np.column_stack([-problem.deta, problem.deta]),
          np.column_stack([-problem.dx_group, problem.dx_group]), [[0.0, np.inf]]]
     )
-    res = linprog(c, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    res = linprog(c, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs",
+                  options={"primal_feasibility_tolerance": 1e-10})
     if res.status != 0:  # pragma: no cover - the LP is always feasible and bounded
         raise RuntimeError(f"feasibility LP failed: {res.message}")
-    z = res.x
+    # HiGHS may violate the variable bounds by its feasibility tolerance: clip, so that the
+    # witness satisfies |eta| <= deta and |dx| <= dx_group exactly (the violation below is
+    # recomputed from the clipped witness)
+    z = np.clip(res.x, bounds[:, 0], bounds[:, 1])
     eta, dxv = z[:n], z[n : n + k]
     # recompute the violation exactly from the witness rather than trusting the LP value
     viol = float(np.max(np.abs(M @ z[: n + k] - r))) if m else 0.0

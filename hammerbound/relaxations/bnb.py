@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..exceptions import EmptyFeasibleSetError, UnboundedSetError
+from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
 from .lp import lp_bounds, touches_box
 from .mccormick import McCormickRelaxation
 from .problem import EIVProblem, check_theta
@@ -120,7 +120,10 @@ class _Pool:
     def verify(self, theta) -> _Point | None:
         """Accept ``theta`` only if :func:`check_theta` says it is feasible."""
         self.checks += 1
-        chk = check_theta(self.problem, theta)
+        try:
+            chk = check_theta(self.problem, theta)
+        except SolverError:  # not verified: simply not accepted as a witness
+            return None
         if not chk.feasible:
             return None
         pt = _Point(np.array(theta, dtype=float), chk.eta, chk.dx)

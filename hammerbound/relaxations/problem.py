@@ -270,8 +270,16 @@ def check_theta(problem: EIVProblem, theta, tol: float = 1e-9) -> FeasibilityChe
     )
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs",
                   options={"primal_feasibility_tolerance": 1e-10})
+    for method in ("highs-ds", "highs-ipm"):
+        if res.status == 0:
+            break
+        # the strict tolerance can make HiGHS give up on long records; the default one is
+        # as safe here, because the witness is clipped and its violation recomputed below
+        res = linprog(c, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method=method)
     if res.status != 0:  # pragma: no cover - the LP is always feasible and bounded
-        raise RuntimeError(f"feasibility LP failed: {res.message}")
+        from ..exceptions import SolverError
+
+        raise SolverError(f"HiGHS failed on the feasibility LP at fixed theta: {res.message}")
     # HiGHS may violate the variable bounds by its feasibility tolerance: clip, so that the
     # witness satisfies |eta| <= deta and |dx| <= dx_group exactly (the violation below is
     # recomputed from the clipped witness)

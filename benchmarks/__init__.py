@@ -1,0 +1,1 @@
+"""Benchmark suite of hammerbound (not part of the installed package); see README.md."""

@@ -1,0 +1,346 @@
+"""Generate docs/benchmarks.md from benchmarks/results/ (tables) and docs/figures/ (plots).
+
+    python benchmarks/report.py
+
+The prose that interprets the results lives in benchmarks/report_notes.md (hand-written
+after looking at the results) and is inserted verbatim; every number in the tables below is
+read from a results file.
+"""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+
+try:
+    from benchmarks import _common as C
+except ImportError:  # run as a script
+    import _common as C
+
+OUT = C.ROOT / "docs" / "benchmarks.md"
+NOTES = C.HERE / "report_notes.md"
+
+
+def _csv(name):
+    p = C.RESULTS / name
+    if not p.exists():
+        return None
+    with open(p) as fh:
+        return list(csv.DictReader(fh))
+
+
+def _json(name):
+    p = C.RESULTS / name
+    return C.read_json(p) if p.exists() else None
+
+
+def f(v, nd=4):
+    if v is None or v == "":
+        return "–"
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return str(v)
+    if np.isnan(x):
+        return "–"
+    return f"{x:.{nd}f}"
+
+
+def fs(v):
+    """seconds"""
+    if v is None or v == "":
+        return "–"
+    x = float(v)
+    return f"{x:.3f}" if x < 1 else (f"{x:.2f}" if x < 10 else f"{x:.1f}")
+
+
+def table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def notes_section(key):
+    """Text between '<!-- key -->' and the next '<!-- ' marker of report_notes.md."""
+    if not NOTES.exists():
+        return ""
+    text = NOTES.read_text()
+    marker = f"<!-- {key} -->"
+    if marker not in text:
+        return ""
+    part = text.split(marker, 1)[1]
+    return part.split("<!-- ", 1)[0].strip() + "\n"
+
+
+def env_line(j):
+    if not j or "environment" not in j:
+        return ""
+    e = j["environment"]
+    return (f"_Run {e['date']}, Python {e['python']}, {e['cpu_count']} CPUs, load average at start "
+            f"{e['loadavg_at_start'][0]} (shared machine)._")
+
+
+def section_targets(parts):
+    s1 = _json("stage1_speed.json")
+    ch = _json("chapter_tables.json")
+    d2 = _json("methods_delta2.json")
+    rows = []
+    if s1:
+        t = s1["polygon_1e5_s"]
+        rows.append(["Stage 1 exact polygon, 1e5 points per side", "< 0.5 s", f"{fs(t)} s",
+                     "met" if t is not None and t < 0.5 else f"**missed** ({t / 0.5:.0f}× over)"])
+        sp = s1["speedup_at_1000"]
+        rows.append(["Stage 1 polygon vs Algorithm 22.1 at M = 1000", "≥ 100×", f"{sp:.1f}×",
+                     "met" if sp >= 100 else f"**missed** ({100 / sp:.1f}× short)"])
+    if ch:
+        ex300 = [r for r in ch["runs"] if r.get("method") == "exact" and r.get("N") == 300 and "wall_s" in r]
+        if ex300:
+            worst = max(ex300, key=lambda r: r["wall_s"])
+            n_ok = sum(r["wall_s"] <= 20 for r in ex300)
+            rows.append(["Exact intervals, N = 300, all 8 bounds (per noise level)", "≤ 20 s",
+                         f"{fs(min(r['wall_s'] for r in ex300))}–{fs(worst['wall_s'])} s "
+                         f"(worst Δη = {worst['delta_eta']})",
+                         "met" if n_ok == len(ex300) else f"**missed** at {len(ex300) - n_ok} of "
+                         f"{len(ex300)} levels (worst {worst['wall_s'] / 20:.1f}× over)"])
+        lp300 = [r for r in ch["runs"] if r.get("method") == "lp" and r.get("N") == 300 and "wall_s" in r]
+        if lp300:
+            w = max(r["wall_s"] for r in lp300)
+            rows.append(["LP baseline, N = 300, all 8 bounds", "≤ 1 s", f"≤ {fs(w)} s (all 6 levels)",
+                         "met" if w <= 1 else "**missed**"])
+    if d2:
+        m2 = [r for r in d2["rows"] if r["method"] == "moment2" and "wall_s" in r]
+        if m2:
+            big = max(m2, key=lambda r: r["N"])
+            rows.append(["Moment δ = 2, N = 100, all 8 bounds", "≤ 120 s",
+                         f"not run at N = 100; {fs(big['wall_s'])} s at N = {big['N']}",
+                         "**missed** (see the δ = 2 section)"])
+    if not rows:
+        return ""
+    return table(["target", "goal", "measured", "verdict"], rows) + "\n"
+
+
+def section_chapter():
+    t1 = _csv("chapter_table_22_1.csv")
+    t23 = _csv("chapter_tables_22_2_3.csv")
+    inner = _csv("chapter_inner_signal.csv")
+    ch = _json("chapter_tables.json")
+    out = []
+    if ch:
+        out.append(env_line(ch) + "\n")
+    if t1:
+        rows = []
+        for r in t1:
+            rows.append([r["delta_eta"], f(r["snr_ours_db"], 1), f(r["snr_chapter_db"], 0), r["param"],
+                         f(r["true"]), f(r["lower"]), f(r["upper"]), f(r["half_width"]),
+                         f(r["chapter_lower"]), f(r["chapter_upper"]), f(r["chapter_half_width"]),
+                         "yes" if r["inside"] == "True" else "**NO**"])
+        out.append("### Table 22.1 — backlash parameters (stage 1, exact), M = 50\n")
+        out.append(table(["Δη", "SNR ours (dB)", "SNR ch. (dB)", "γ", "true", "ours min", "ours max",
+                          "ours Δγ", "ch. min", "ch. max", "ch. Δγ", "true inside"], rows))
+        out.append("\n![Table 22.1 half-widths](figures/bench_chapter_table_22_1.png)\n")
+    if t23:
+        methods = []
+        for r in t23:
+            if r["method"] not in methods:
+                methods.append(r["method"])
+        for N, name in (("100", "22.2"), ("300", "22.3")):
+            sel = [r for r in t23 if r["N"] == N]
+            if not sel:
+                continue
+            main_m = methods[0]
+            rows = []
+            for r in sel:
+                if r["method"] != main_m:
+                    continue
+                others = {q["method"]: q for q in sel if q["delta_eta"] == r["delta_eta"]
+                          and q["param"] == r["param"]}
+                inside_all = all(q["inside"] == "True" for q in others.values())
+                rows.append([r["delta_eta"], f(r["snr_ours_db"], 1), f(r["snr_chapter_db"], 0), r["param"],
+                             f(r["true"]), f(r["lower"]), f(r["upper"]), f(r["half_width"])]
+                            + [f(others[m]["half_width"]) if m in others else "–" for m in methods[1:]]
+                            + [f(r["chapter_lower"]), f(r["chapter_upper"]), f(r["chapter_half_width"]),
+                               f(r["half_width_ratio_ours_over_chapter"], 2),
+                               "yes" if inside_all else "**NO**"])
+            out.append(f"### Table {name} — linear block, N = {N}\n")
+            out.append(f"Ours: `{main_m}` intervals (min, max, Δθ = half-width); then the half-widths "
+                       f"of {', '.join('`' + m + '`' for m in methods[1:])} on the same data; then the "
+                       "chapter's δ = 2 values. *ratio* = ours (exact) Δθ / chapter Δθ. "
+                       "*inside*: the true value is inside the intervals of every method.\n")
+            out.append(table(["Δη", "SNR ours", "SNR ch.", "θ", "true", "ours min", "ours max", "ours Δθ"]
+                             + [f"Δθ {m}" for m in methods[1:]]
+                             + ["ch. min", "ch. max", "ch. Δθ", "ratio", "inside"], rows))
+            out.append("")
+        times = [r for r in (ch or {}).get("runs", []) if "wall_s" in r]
+        if times:
+            Ns = sorted({r["N"] for r in times})
+            lv = sorted({r["delta_eta"] for r in times})
+            rows = []
+            for N in Ns:
+                for m in methods:
+                    row = [N, m]
+                    for L in lv:
+                        q = [r for r in times if r["N"] == N and r["method"] == m and r["delta_eta"] == L]
+                        row.append(fs(q[0]["wall_s"]) if q else "–")
+                    rows.append(row)
+            out.append("Wall time (s) of stage 2, all 8 bounds, 2 joblib workers:\n")
+            out.append(table(["N", "method"] + [f"Δη={L}" for L in lv], rows))
+        out.append("\n![Tables 22.2/22.3 half-widths](figures/bench_chapter_tables_22_2_3.png)\n")
+    if inner:
+        rows = [[r["delta_eta"], r["N"], f(r["u_star"], 2), f(r["x_hi_min"], 5), f(r["x_hi_max"], 5),
+                 f(r["x_hi_true"], 5), f(r["x_lo_min"], 5), f(r["x_lo_max"], 5), f(r["x_lo_true"], 5)]
+                for r in inner if r["N"] == inner[0]["N"]]
+        out.append("### Inner-signal bounds (22.25)-(22.26) used by stage 2\n")
+        out.append(table(["Δη", "N", "u*", "x̄* min", "x̄* max", "x̄* true", "x̲* min", "x̲* max",
+                          "x̲* true"], rows))
+    return "\n".join(out)
+
+
+def _method_rows(rows, key=None):
+    out = []
+    for r in rows:
+        if r.get("error"):
+            out.append(([r.get(key)] if key else []) + [r["method"], "error: " + r["error"][:80]]
+                       + ["–"] * 10)
+            continue
+        w = r["theta_width"]
+        ratio = r.get("width_over_exact")
+        out.append(([r.get(key)] if key else []) + [
+            r["method"], fs(r["wall_s"]), fs(r["bound_time_sum_s"]), fs(r["bound_time_max_s"]),
+            f(r.get("loadavg"), 1), " / ".join(f(x) for x in w),
+            " / ".join(f(x, 2) for x in ratio) if ratio else "–",
+            r["iterations_sum"] if r.get("iterations_sum") is not None else "–",
+            r["nodes_sum"] if r.get("nodes_sum") is not None else "–",
+            ", ".join(r["statuses"]), "yes" if r["all_certified"] else "no",
+            "yes" if (r["theta_inside"] and r["gamma_inside"]) else "**NO**"])
+    return out
+
+
+def _methods_json(part, keys):
+    j = _json(f"methods_{part}.json")
+    if j:
+        try:
+            from benchmarks import methods as M
+        except ImportError:
+            import methods as M
+        M.add_ratios(j["rows"], keys)
+    return j
+
+
+def section_methods():
+    out = []
+    hdr = ["method", "wall (s)", "Σ per-bound (s)", "max per-bound (s)", "load",
+           "widths a1 / a2 / b1 / b2", "width / exact width", "solver iter.",
+           "B&B nodes", "statuses", "certified", "true inside"]
+    same = _methods_json("same", ["N"])
+    if same:
+        r0 = same["rows"][0]
+        out.append(f"### Same data: N = {r0['N']}, Δη = {r0['noise']}, seed {r0['seed']} "
+                   f"(transient SNR {r0['snr_prbs_db']:.1f} dB)\n")
+        out.append(env_line(same) + "\n")
+        out.append(table(hdr, _method_rows(same["rows"])))
+        out.append("\nFor the `-2level` rows the ratio is to the *independent-error* exact width; "
+                   "the exact two-level width is the `exact-2level` row.\n")
+    d2 = _methods_json("delta2", ["N"])
+    if d2:
+        out.append(f"### Relaxation order δ = 2 on small N (Δη = {d2['rows'][0]['noise']})\n")
+        out.append(env_line(d2) + "\n")
+        out.append(table(["N"] + hdr, _method_rows(d2["rows"], "N")))
+        out.append("\n![delta=2 cost and conservatism](figures/bench_methods_delta2.png)\n")
+    sc = _methods_json("scaling", ["N"])
+    if sc:
+        out.append(f"### Scaling in N (Δη = {sc['rows'][0]['noise']})\n")
+        out.append(env_line(sc) + "\n")
+        out.append(table(["N"] + hdr, _method_rows(sc["rows"], "N")))
+        out.append("\n![time and width against N](figures/bench_methods_scaling.png)\n")
+    od = _methods_json("order", ["order"])
+    if od:
+        out.append(f"### Scaling in model order (N = 100, Δη = {od['rows'][0]['noise']})\n")
+        out.append(env_line(od) + "\n")
+        out.append("Widths are listed for the first four parameters only (a1, a2 or b1 ...).\n")
+        out.append(table(["n"] + hdr, _method_rows(od["rows"], "order")))
+        out.append("\n![time and width against model order](figures/bench_methods_order.png)\n")
+    return "\n".join(out)
+
+
+def section_stage1():
+    s1 = _json("stage1_speed.json")
+    if not s1:
+        return ""
+    rows = []
+    Ms = sorted({r["M_per_side"] for r in s1["rows"]})
+    for M in Ms:
+        p = [r for r in s1["rows"] if r["M_per_side"] == M and r["method"] == "polygon"]
+        a = [r for r in s1["rows"] if r["M_per_side"] == M and r["method"] == "algorithm"]
+        rows.append([M, fs(p[0]["time_s"]) if p else "–", fs(a[0]["time_s"]) if a else "–",
+                     f"{a[0]['time_s'] / p[0]['time_s']:.1f}×" if (a and p) else "–",
+                     f"{p[0]['n_vertices_left']}/{p[0]['n_vertices_right']}" if p else "–"])
+    out = [env_line(s1) + "\n",
+           table(["M per side", "polygon (s)", "Algorithm 22.1 (s)", "speed-up", "vertices L/R"], rows),
+           f"\nPolygon and Algorithm 22.1 orthotopes agree to "
+           f"{max(s1['max_abs_diff_polygon_vs_algorithm'].values()):.1e} at every common M.\n",
+           "![stage 1 speed](figures/bench_stage1_speed.png)\n"]
+    return "\n".join(out)
+
+
+def section_coverage():
+    out = []
+    for p in sorted(C.RESULTS.glob("coverage_*.json")):
+        j = C.read_json(p)
+        tag = p.stem.removeprefix("coverage_")
+        out.append(f"\n### Run `{tag}` — backend {j['backend']}"
+                   + (f" ({j['dask']['workers']} Dask workers, scheduler {j['dask']['scheduler']})"
+                      if j.get("dask") else "") + "\n")
+        out.append(env_line(j) + "\n")
+        out.append(f"Plan `{j['spec']}` (method:seeds), noise levels {j['levels']}, N = {j['N']}; "
+                   f"{sum(s['runs'] for s in j['summary'])} runs in {j['elapsed_s']:.1f} s on "
+                   f"{j['n_worker_processes']} worker processes.\n")
+        rows = [[s["method"], s["noise"], s["runs"], s["errors"], f"{100 * s['theta_coverage']:.1f} %",
+                 f"{100 * s['gamma_coverage']:.1f} %", f(s["snr_prbs_db_mean"], 1),
+                 f(s["width_a1_median"]), f(s["width_a1_max"]), f(s["width_b1_median"]),
+                 f(s["width_b1_max"]), fs(s["wall_s_median"])] for s in j["summary"]]
+        out.append(table(["method", "Δη", "runs", "errors", "θ coverage", "γ coverage", "mean SNR (dB)",
+                          "a1 width median", "a1 width max", "b1 width median", "b1 width max",
+                          "median wall (s)"], rows))
+        fig = C.FIGURES / f"bench_coverage_{tag}.png"
+        if fig.exists():
+            out.append(f"\n![coverage widths]({fig.relative_to(C.ROOT / 'docs')})\n")
+        else:
+            out.append("")
+        if j["misses"]:
+            out.append(f"\n**{len(j['misses'])} runs with the true parameter outside an interval.**\n")
+    return "\n".join(out)
+
+
+def replot():
+    """Redraw the method figures from the JSON results (also for partial runs)."""
+    try:
+        from benchmarks import methods as M
+    except ImportError:
+        import methods as M
+    for part, fn, keys in (("delta2", M.plot_delta2, ["N"]), ("scaling", M.plot_scaling, ["N"]),
+                           ("order", M.plot_order, ["order"])):
+        j = _json(f"methods_{part}.json")
+        if j:
+            M.add_ratios(j["rows"], keys)
+            fn(j["rows"])
+
+
+def main(argv=None):
+    replot()
+    doc = [notes_section("intro"), "## Performance targets\n", section_targets(None),
+           notes_section("targets"),
+           "## 1. Chapter reproduction (section 22.5)\n", notes_section("chapter-setup"),
+           section_chapter(), notes_section("chapter-findings"),
+           "## 2. Method comparison\n", notes_section("methods-intro"), section_methods(),
+           notes_section("methods-findings"),
+           "## 3. Stage 1 speed\n", section_stage1(), notes_section("stage1-findings"),
+           "## 4. Monte Carlo coverage\n", notes_section("coverage-intro"), section_coverage(),
+           notes_section("coverage-findings"),
+           notes_section("limitations")]
+    OUT.write_text("\n".join(d for d in doc if d) + "\n")
+    C.log(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()

@@ -28,10 +28,10 @@ def csv_files(tmp_path):
 
 
 def test_demo_prints_tables_beside_chapter(capsys):
-    rc = main(["demo", "--noise-levels", "0.005", "0.05", "--method", "lp"])
+    rc = main(["demo", "--noise-levels", "0.005", "0.05", "--method", "lp", "--report", ""])
     out = capsys.readouterr().out
     assert rc == 0
-    assert "Table 22.1" in out and "Table 22.2" in out
+    assert "Table 22.1" in out and "Table 22.2" in out and "Table 22.3" in out
     # our row and the chapter's row for m_l at delta_eta = 0.005
     line = next(s for s in out.splitlines() if s.strip().startswith("ml") and "[0.2500" in s)
     assert "*" in line

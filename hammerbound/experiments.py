@@ -56,7 +56,39 @@ CHAPTER_U_STAR = 1.0
 
 
 def _rng(random_state):
-    return check_random_state(random_state)
+    if isinstance(random_state, np.random.Generator):
+        return random_state
+    try:
+        return check_random_state(random_state)
+    except (TypeError, ValueError) as exc:
+        raise ParameterValidationError(
+            f"random_state must be None, an int seed, a numpy Generator or RandomState; got "
+            f"{random_state!r}."
+        ) from exc
+
+
+def _check_system(system):
+    if not isinstance(system, HammersteinSystem):
+        raise ParameterValidationError(
+            f"system must be a hammerbound.HammersteinSystem; got {type(system).__name__}. "
+            "Build one with HammersteinSystem(Backlash(ml, cl, mr, cr), (A, B))."
+        )
+
+
+def _noise_bounds(noise_bound, n):
+    """Scalar or per-sample noise bound -> float array of shape (n,)."""
+    try:
+        nb = np.asarray(noise_bound, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ParameterValidationError(
+            f"noise_bound must be a number or an array of {n} numbers; got {noise_bound!r}."
+        ) from exc
+    if nb.ndim != 0 and nb.shape != (n,):
+        raise ParameterValidationError(
+            f"noise_bound must be a scalar or have one value per measured sample ({n}); "
+            f"got shape {nb.shape}."
+        )
+    return np.broadcast_to(nb, (n,)).copy()
 
 
 def uniform_noise(n: int, bound, random_state=None) -> np.ndarray:
@@ -135,10 +167,19 @@ def square_wave_experiment(
     half-wave is measured with bounded noise. Returns ``2 M`` samples (right then left
     for each amplitude).
     """
-    amps = np.asarray(amplitudes, dtype=float)
+    _check_system(system)
+    try:
+        amps = np.asarray(amplitudes, dtype=float)
+    except (TypeError, ValueError):
+        amps = np.full((0,), np.nan)  # reported below
     if amps.ndim != 1 or amps.size == 0 or not np.all(np.isfinite(amps)) or np.any(amps <= 0):
         raise DataValidationError("amplitudes must be a non-empty 1-D array of finite values > 0.")
-    settle = settling_time(system) if settle is None else int(settle)
+    try:
+        settle = settling_time(system) if settle is None else int(settle)
+    except (TypeError, ValueError) as exc:
+        raise ParameterValidationError(
+            f"settle must be a positive integer number of samples; got {settle!r}."
+        ) from exc
     if settle < 1:
         raise ParameterValidationError("settle must be >= 1 sample.")
     u_full = np.repeat(np.column_stack([amps, -amps]).ravel(), settle)
@@ -146,15 +187,25 @@ def square_wave_experiment(
     idx = np.arange(1, 2 * amps.size + 1) * settle - 1
     u = u_full[idx]
     w = w_full[idx]
-    nb = np.broadcast_to(np.asarray(noise_bound, dtype=float), u.shape).copy()
+    nb = _noise_bounds(noise_bound, u.size)
     eta = uniform_noise(u.size, nb, random_state)
     return SteadyStateData(u, w + eta, w, eta, nb, settle)
 
 
 def prbs(n: int, u_star: float, *, hold: int = 1, random_state=None) -> np.ndarray:
     """Pseudo-random binary sequence with levels ``+-u*`` held ``hold`` samples per draw."""
-    if int(n) < 1 or int(hold) < 1:
+    try:
+        n, hold = int(n), int(hold)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ParameterValidationError(
+            f"n and hold must be positive integers; got n={n!r}, hold={hold!r}."
+        ) from exc
+    if n < 1 or hold < 1:
         raise ParameterValidationError("n and hold must be positive integers.")
+    try:
+        u_star = float(u_star)
+    except (TypeError, ValueError) as exc:
+        raise ParameterValidationError(f"u_star must be a finite number > 0; got {u_star!r}.") from exc
     if not np.isfinite(u_star) or u_star <= 0:
         raise ParameterValidationError("u_star must be a finite number > 0.")
     draws = _rng(random_state).random(int(np.ceil(n / hold))) < 0.5
@@ -166,11 +217,12 @@ def prbs_experiment(
     random_state=None,
 ) -> PRBSData:
     """PRBS experiment from rest with bounded output noise (section 22.4)."""
+    _check_system(system)
     rng = _rng(random_state)
     u = prbs(n, u_star, hold=hold, random_state=rng)
     x = system.inner(u)
     w = system.simulate(u)
-    nb = np.broadcast_to(np.asarray(noise_bound, dtype=float), u.shape).copy()
+    nb = _noise_bounds(noise_bound, u.size)
     eta = uniform_noise(u.size, nb, rng)
     return PRBSData(u, w + eta, w, x, eta, nb, float(u_star))
 

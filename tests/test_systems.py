@@ -110,3 +110,13 @@ def test_square_wave_steady_state_matches_static_lines():
     static = np.where(d.u > 0, bl.right(d.u), bl.left(d.u))
     np.testing.assert_allclose(d.w, static, atol=1e-10)
     assert np.all(np.abs(d.y - d.w) <= 0.01)
+
+
+def test_numpy_generator_and_seed_are_accepted_and_deterministic():
+    from hammerbound import chapter_example
+
+    a = chapter_example(0.05, N=40, random_state=np.random.default_rng(3))
+    b = chapter_example(0.05, N=40, random_state=np.random.default_rng(3))
+    c = chapter_example(0.05, N=40, random_state=4)
+    np.testing.assert_array_equal(a.prbs.y, b.prbs.y)
+    assert not np.array_equal(a.prbs.y, c.prbs.y)

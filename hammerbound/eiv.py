@@ -33,7 +33,12 @@ from scipy.signal import lfilter
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
-from .exceptions import DataValidationError, ParameterValidationError
+from .exceptions import (
+    DataValidationError,
+    EmptyFeasibleSetError,
+    ParameterValidationError,
+    UnboundedSetError,
+)
 from .feasible_set import FeasibleSet
 from .relaxations.problem import EIVProblem
 
@@ -286,6 +291,19 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                           gain=self.steady_state_gain, groups=groups,
                           theta_box=self.theta_box)
 
+    def _box_hint(self, problem) -> str:
+        """A hint for badly scaled data, whose true b_j may lie outside the default box."""
+        if self.theta_box is not None:
+            return ""
+        sx = float(np.max(np.abs(problem.x))) or 1.0
+        sy = float(np.max(np.abs(problem.y))) or 1.0
+        if 1e-3 <= sy / sx <= 1e3:
+            return ""
+        return (f"The data are badly scaled (max |x| = {sx:.3g}, max |y| = {sy:.3g}): the "
+                "b_j may lie outside the default box |b_j| <= 1e4 or be lost to the solver "
+                "tolerances. Rescale x and y to similar magnitudes (and steady_state_gain "
+                "accordingly) or pass a theta_box.")
+
     def _check_box(self, problem, res):
         """Decide what a bound that coincides with the a priori box means.
 
@@ -349,28 +367,36 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         problem = self._build_problem(X, y, input_bound, groups)
         from .relaxations.lp import lp_bounds
 
-        if self.method == "lp":
-            res = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
-            self._check_box(problem, res)
-        elif self.method == "exact":
-            from .relaxations.bnb import exact_bounds
+        try:
+            if self.method == "lp":
+                res = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
+                self._check_box(problem, res)
+            elif self.method == "exact":
+                from .relaxations.bnb import exact_bounds
 
-            res = exact_bounds(problem, tol=self.tol, max_nodes=self.max_nodes,
-                               time_limit=self.time_limit, n_jobs=self.n_jobs,
-                               progress=self.progress, check_box=False)
-            self._check_box(problem, res)
-        else:
-            from .relaxations.moment import moment_bounds
-            from .solvers import get_solver
+                res = exact_bounds(problem, tol=self.tol, max_nodes=self.max_nodes,
+                                   time_limit=self.time_limit, n_jobs=self.n_jobs,
+                                   progress=self.progress, check_box=False)
+                self._check_box(problem, res)
+            else:
+                from .relaxations.moment import moment_bounds
+                from .solvers import get_solver
 
-            backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
-            backend.check_options(self.solver_options)
-            lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
-            self._check_box(problem, lp)
-            res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
-                                solver_options=self.solver_options, n_jobs=self.n_jobs,
-                                theta_box=lp.bounds, on_failure=self.on_failure)
-            res.extra["lp"] = lp
+                backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
+                backend.check_options(self.solver_options)
+                lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
+                self._check_box(problem, lp)
+                res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
+                                    solver_options=self.solver_options, n_jobs=self.n_jobs,
+                                    theta_box=lp.bounds, on_failure=self.on_failure)
+                res.extra["lp"] = lp
+        except (EmptyFeasibleSetError, UnboundedSetError) as exc:
+            hint = self._box_hint(problem)
+            if not hint:
+                raise
+            kw = {"side": exc.side, "first_index": exc.first_index} \
+                if isinstance(exc, EmptyFeasibleSetError) else {}
+            raise type(exc)(f"{exc} {hint}", **kw) from exc
         self.problem_ = problem
         self.result_ = res
         self.bounds_ = np.array(res.bounds, dtype=float)

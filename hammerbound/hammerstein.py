@@ -56,6 +56,23 @@ def _steady_pair(steady_state):
     return u, y
 
 
+def _central_system(backlash, A, B):
+    """The central model; its A need not be stable (the centre of intervals that contain
+    stable A's may lie outside the stability region): warn instead of failing the fit."""
+    try:
+        return HammersteinSystem(backlash, (A, B))
+    except ParameterValidationError:
+        import warnings
+
+        warnings.warn(
+            "the central model (centre of the parameter intervals) has an unstable A(q^-1); "
+            "the intervals are still guaranteed, but predict()/score() simulate an unstable "
+            "model. Narrow the intervals (more data, method='exact', inner_signal='two-level').",
+            RuntimeWarning, stacklevel=3,
+        )
+        return HammersteinSystem._unchecked(backlash, (A, B))
+
+
 class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     """Guaranteed bounds on a backlash-Hammerstein system (stages 1 and 2 of the chapter).
 
@@ -151,7 +168,13 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 )
             u_star = float(levels[1])
         else:
-            u_star = float(self.prbs_level)
+            try:
+                u_star = float(self.prbs_level)
+            except (TypeError, ValueError) as exc:
+                raise ParameterValidationError(
+                    f"prbs_level must be a number u* > 0 (or None to read it from X); got "
+                    f"{self.prbs_level!r}."
+                ) from exc
         inner = bl.inner_signal_bounds(u_star)  # checks Result 1
         xc, dx = inner.transform(u)
         groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
@@ -166,7 +189,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.bounds_ = np.vstack([bl.gamma_bounds_, lin.bounds_])
         self.param_names_ = ("ml", "cl", "mr", "cr") + tuple(lin.param_names_)
         ml, cl, mr, cr = bl.gamma_center_
-        self.system_ = HammersteinSystem(Backlash(ml, cl, mr, cr), (lin.A_, lin.B_))
+        self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_)
         self.n_features_in_ = 1
         return self
 

@@ -31,9 +31,29 @@ def read_columns(path, columns) -> dict[str, np.ndarray]:
         Missing file, missing header or column, non-numeric or non-finite value (the
         message names the row and column), empty file.
     """
+    try:
+        cols = None if isinstance(columns, (str, bytes)) else list(columns)
+    except TypeError:
+        cols = None
+    if not cols or not all(isinstance(c, str) for c in cols):
+        raise DataValidationError(
+            f"columns must be a non-empty list of header names such as ['u', 'y']; got "
+            f"{columns!r}."
+        )
+    columns = cols
     path = Path(path)
     if not path.is_file():
         raise DataValidationError(f"{path}: no such file; check the path.")
+    try:
+        return _read_columns(path, columns)
+    except UnicodeDecodeError as exc:
+        raise DataValidationError(
+            f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
+            "as plain UTF-8 CSV."
+        ) from None
+
+
+def _read_columns(path, columns):
     with path.open(newline="") as fh:
         reader = csv.reader(fh)
         try:

@@ -186,8 +186,14 @@ def as_polynomials(G) -> tuple[np.ndarray, np.ndarray]:
                 "linear block must be a discrete control.TransferFunction or a pair (A, B) of "
                 "coefficient arrays in powers of q^-1."
             ) from exc
-        A = np.atleast_1d(np.asarray(A, dtype=float))
-        B = np.atleast_1d(np.asarray(B, dtype=float))
+        try:
+            A = np.atleast_1d(np.asarray(A, dtype=float))
+            B = np.atleast_1d(np.asarray(B, dtype=float))
+        except (TypeError, ValueError) as exc:
+            raise ParameterValidationError(
+                "A and B must be 1-D arrays of real coefficients in powers of q^-1; "
+                f"got A={A!r}, B={B!r}."
+            ) from exc
     if A.ndim != 1 or B.ndim != 1 or A.size == 0 or B.size == 0:
         raise ParameterValidationError("A and B must be non-empty 1-D coefficient arrays.")
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
@@ -255,7 +261,22 @@ class HammersteinSystem:
                 "the linear block is not asymptotically stable (assumption A1): A(q^-1) has a "
                 "root on or outside the unit circle."
             )
+        try:
+            self.x0 = float(x0)
+        except (TypeError, ValueError) as exc:
+            raise ParameterValidationError(f"x0 must be a finite number; got {x0!r}.") from exc
+        if not np.isfinite(self.x0):
+            raise ParameterValidationError(f"x0 must be a finite number; got {x0!r}.")
+
+    @classmethod
+    def _unchecked(cls, backlash: Backlash, linear, x0: float = 0.0) -> HammersteinSystem:
+        """Like the constructor but without the stability check (A1). For central models
+        of identified intervals, whose centre need not be stable."""
+        self = cls.__new__(cls)
+        self.backlash = backlash
+        self.A, self.B = as_polynomials(linear)
         self.x0 = float(x0)
+        return self
 
     @property
     def na(self) -> int:

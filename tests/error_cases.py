@@ -1,0 +1,536 @@
+"""Catalogue of malformed inputs across the public API and the typed error each must raise.
+
+Every entry is an :class:`ErrorCase`: an id, a description of the bad input, the call as
+shown in ``docs/errors.md``, a zero-argument callable that must raise, the expected
+exception class and ``hint``, a fragment that the message must contain (case-insensitive):
+the part that tells the user what to change.
+
+Used by ``tests/test_error_table.py`` (runs every case) and ``docs/gen_errors.py`` (writes
+``docs/errors.md`` with the real messages). Data are small and deterministic (the chapter's
+example at ``noise_bound = 0.05``, ``N = 40``, ``random_state = 0``), so the table is
+reproducible.
+"""
+
+from __future__ import annotations
+
+import functools
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from sklearn.exceptions import NotFittedError
+
+import hammerbound as hb
+from hammerbound.exceptions import (
+    DataValidationError,
+    IllPosedBacklashError,
+    NotEnoughAmplitudesError,
+    ParameterValidationError,
+    ResultOneViolationError,
+    SolverNotAvailableError,
+    SolverOptionError,
+)
+
+#: CSV files of the io cases are written here; docs/gen_errors.py shows it as ``<tmp>``.
+CSV_DIR = Path(tempfile.gettempdir()) / "hammerbound-error-cases"
+
+
+@dataclass(frozen=True)
+class ErrorCase:
+    id: str
+    area: str
+    description: str
+    call: str
+    func: Callable[[], object]
+    expected: type
+    hint: str
+
+
+# ------------------------------------------------------------------------------ data
+@functools.cache
+def example():
+    return hb.chapter_example(0.05, N=40, random_state=0)
+
+
+def u_ss():
+    return example().steady.u.copy()
+
+
+def y_ss():
+    return example().steady.y.copy()
+
+
+def u_prbs():
+    return example().prbs.u.copy()
+
+
+def y_prbs():
+    return example().prbs.y.copy()
+
+
+def x_inner():
+    """The true inner signal of the PRBS experiment (stage-2 data without stage 1)."""
+    return example().prbs.x.copy()
+
+
+@functools.cache
+def stage1():
+    return hb.BacklashSetEstimator(0.05).fit(u_ss(), y_ss())
+
+
+@functools.cache
+def stage2():
+    return hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, method="lp").fit(x_inner(), y_prbs())
+
+
+def lin(**kw):
+    kw = {"na": 2, "nb": 2, "noise_bound": 0.05, "method": "lp", **kw}
+    return hb.LinearEIVSetEstimator(**kw)
+
+
+def with_value(a, i, v):
+    a = np.array(a, dtype=float)
+    a[i] = v
+    return a
+
+
+def csv_file(name, text: str | bytes) -> Path:
+    CSV_DIR.mkdir(parents=True, exist_ok=True)
+    p = CSV_DIR / name
+    if isinstance(text, bytes):
+        p.write_bytes(text)
+    else:
+        p.write_text(text)
+    return p
+
+
+def read(name, text, columns=("u", "y")):
+    from hammerbound.io import read_columns
+
+    return read_columns(csv_file(name, text), list(columns))
+
+
+SYS = hb.HammersteinSystem(hb.Backlash(0.25, 0.0628, 0.26, 0.0489),
+                           ([1.0, -0.76, 0.82], [0.0, 2.15, -1.09]))
+
+
+def _diagnose(*args, **kw):
+    from hammerbound.discrepancy import diagnose
+
+    return diagnose(*args, **kw)
+
+
+def _tf(*args):
+    import control
+
+    return control.tf(*args)
+
+
+C = ErrorCase
+CASES: list[ErrorCase] = [
+    # ------------------------------------------------------------- stage 1: backlash
+    C("s1-nan-output", "stage 1", "NaN in the steady-state outputs",
+      "BacklashSetEstimator(0.05).fit(u_ss, y_ss with y_ss[3] = nan)",
+      lambda: hb.BacklashSetEstimator(0.05).fit(u_ss(), with_value(y_ss(), 3, np.nan)),
+      DataValidationError, "NaN"),
+    C("s1-inf-input", "stage 1", "infinite steady-state input",
+      "BacklashSetEstimator(0.05).fit(u_ss with u_ss[0] = inf, y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05).fit(with_value(u_ss(), 0, np.inf), y_ss()),
+      DataValidationError, "infinity"),
+    C("s1-length-mismatch", "stage 1", "inputs and outputs of different lengths",
+      "BacklashSetEstimator(0.05).fit(u_ss, y_ss[:-1])",
+      lambda: hb.BacklashSetEstimator(0.05).fit(u_ss(), y_ss()[:-1]),
+      DataValidationError, "inconsistent numbers of samples"),
+    C("s1-empty", "stage 1", "empty arrays",
+      "BacklashSetEstimator(0.05).fit([], [])",
+      lambda: hb.BacklashSetEstimator(0.05).fit([], []),
+      DataValidationError, "0 sample"),
+    C("s1-two-columns", "stage 1", "inputs with two columns",
+      "BacklashSetEstimator(0.05).fit(np.c_[u_ss, u_ss], y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05).fit(np.c_[u_ss(), u_ss()], y_ss()),
+      DataValidationError, "reshape"),
+    C("s1-complex", "stage 1", "complex-valued inputs (wrong dtype)",
+      "BacklashSetEstimator(0.05).fit(u_ss + 0j, y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05).fit(u_ss() + 1j, y_ss()),
+      DataValidationError, "must be real numbers"),
+    C("s1-strings", "stage 1", "text instead of numbers (wrong dtype)",
+      "BacklashSetEstimator(0.05).fit(['1.0', 'a'], [0.1, 0.2])",
+      lambda: hb.BacklashSetEstimator(0.05).fit(["1.0", "a"], [0.1, 0.2]),
+      DataValidationError, "numeric"),
+    C("s1-noise-zero", "stage 1", "zero noise bound",
+      "BacklashSetEstimator(noise_bound=0).fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator(0.0).fit(u_ss(), y_ss()),
+      ParameterValidationError, "> 0"),
+    C("s1-noise-negative", "stage 1", "negative noise bound",
+      "BacklashSetEstimator(noise_bound=-0.05).fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator(-0.05).fit(u_ss(), y_ss()),
+      ParameterValidationError, "> 0"),
+    C("s1-noise-length", "stage 1", "per-sample noise bound of the wrong length",
+      "BacklashSetEstimator(noise_bound=[0.05] * 3).fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator([0.05] * 3).fit(u_ss(), y_ss()),
+      ParameterValidationError, "one value per sample"),
+    C("s1-noise-text", "stage 1", "noise bound given as text",
+      "BacklashSetEstimator(noise_bound='small').fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator("small").fit(u_ss(), y_ss()),
+      ParameterValidationError, "number"),
+    C("s1-method", "stage 1", "unknown stage-1 method",
+      "BacklashSetEstimator(0.05, method='simplex').fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05, method="simplex").fit(u_ss(), y_ss()),
+      ParameterValidationError, "'polygon' or 'algorithm'"),
+    C("s1-zero-input", "stage 1", "a steady-state input equal to 0 (belongs to no line)",
+      "BacklashSetEstimator(0.05).fit(u_ss with u_ss[4] = 0, y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05).fit(with_value(u_ss(), 4, 0.0), y_ss()),
+      DataValidationError, "non-zero"),
+    C("s1-one-amplitude", "stage 1", "too few amplitudes: one square wave only",
+      "BacklashSetEstimator(0.05).fit(u_ss[:2], y_ss[:2])",
+      lambda: hb.BacklashSetEstimator(0.05).fit(u_ss()[:2], y_ss()[:2]),
+      NotEnoughAmplitudesError, "at least two different amplitudes"),
+    C("s1-one-side", "stage 1", "too few amplitudes: no negative half-waves",
+      "BacklashSetEstimator(0.05).fit(u_ss[u_ss > 0], y_ss[u_ss > 0])",
+      lambda: hb.BacklashSetEstimator(0.05).fit(u_ss()[u_ss() > 0], y_ss()[u_ss() > 0]),
+      NotEnoughAmplitudesError, "left side"),
+    C("s1-not-fitted", "stage 1", "result requested before fit",
+      "BacklashSetEstimator(0.05).suggest_prbs_level()",
+      lambda: hb.BacklashSetEstimator(0.05).suggest_prbs_level(),
+      NotFittedError, "call 'fit'"),
+    C("s1-ustar-dead-zone", "stage 1", "PRBS level u* inside the dead zone (Result 1)",
+      "stage1.check_prbs_level(0.03)",
+      lambda: stage1().check_prbs_level(0.03),
+      ResultOneViolationError, "choose u* in"),
+    C("s1-ustar-crossing", "stage 1", "PRBS level u* past the crossing of the backlash lines",
+      "stage1.check_prbs_level(3.0)",
+      lambda: stage1().check_prbs_level(3.0),
+      ResultOneViolationError, "choose u* in"),
+    C("s1-ustar-nan", "stage 1", "non-finite PRBS level",
+      "stage1.check_prbs_level(nan)",
+      lambda: stage1().check_prbs_level(float("nan")),
+      ParameterValidationError, "finite number > 0"),
+    C("s1-ustar-none", "stage 1", "PRBS level of the wrong type",
+      "stage1.check_prbs_level(None)",
+      lambda: stage1().check_prbs_level(None),
+      ParameterValidationError, "finite number > 0"),
+    C("s1-margin", "stage 1", "margin outside (0, 1)",
+      "stage1.suggest_prbs_level(margin=1.5)",
+      lambda: stage1().suggest_prbs_level(margin=1.5),
+      ParameterValidationError, "(0, 1)"),
+    C("s1-inner-three-levels", "stage 1", "inner signal asked for a non-PRBS input",
+      "stage1.inner_signal(np.r_[u_prbs, 0.5], u_star=1.0)",
+      lambda: stage1().inner_signal(np.r_[u_prbs(), 0.5], u_star=1.0),
+      DataValidationError, "two-level input"),
+    # ------------------------------------------------------------- stage 2: linear EIV
+    C("s2-nan-input", "stage 2", "NaN in the central inner signal",
+      "LinearEIVSetEstimator(...).fit(x with x[5] = nan, y)",
+      lambda: lin().fit(with_value(x_inner(), 5, np.nan), y_prbs()),
+      DataValidationError, "remove or repair"),
+    C("s2-inf-output", "stage 2", "infinite output sample",
+      "LinearEIVSetEstimator(...).fit(x, y with y[7] = -inf)",
+      lambda: lin().fit(x_inner(), with_value(y_prbs(), 7, -np.inf)),
+      DataValidationError, "sample 7"),
+    C("s2-length-mismatch", "stage 2", "input and output of different lengths",
+      "LinearEIVSetEstimator(...).fit(x, y[:-3])",
+      lambda: lin().fit(x_inner(), y_prbs()[:-3]),
+      DataValidationError, "same number of samples"),
+    C("s2-empty", "stage 2", "empty arrays",
+      "LinearEIVSetEstimator(...).fit([], [])",
+      lambda: lin().fit([], []),
+      DataValidationError, "at least one sample"),
+    C("s2-two-columns", "stage 2", "2-D input with two columns",
+      "LinearEIVSetEstimator(...).fit(np.c_[x, x], y)",
+      lambda: lin().fit(np.c_[x_inner(), x_inner()], y_prbs()),
+      DataValidationError, "shape (N,) or (N, 1)"),
+    C("s2-ragged", "stage 2", "ragged nested list",
+      "LinearEIVSetEstimator(...).fit([[1.0], [1.0, 2.0]], [0.1, 0.2])",
+      lambda: lin().fit([[1.0], [1.0, 2.0]], [0.1, 0.2]),
+      DataValidationError, "1-D array of real numbers"),
+    C("s2-text", "stage 2", "text instead of numbers (wrong dtype)",
+      "LinearEIVSetEstimator(...).fit(['a'] * 5, [0.0] * 5)",
+      lambda: lin().fit(["a"] * 5, [0.0] * 5),
+      DataValidationError, "real numbers"),
+    C("s2-too-short", "stage 2", "fewer samples than the model order needs",
+      "LinearEIVSetEstimator(na=2, nb=2, ...).fit(x[:3], y[:3])",
+      lambda: lin().fit(x_inner()[:3], y_prbs()[:3]),
+      DataValidationError, "need more than"),
+    C("s2-noise-zero", "stage 2", "zero output-noise bound",
+      "LinearEIVSetEstimator(noise_bound=0, ...).fit(x, y)",
+      lambda: lin(noise_bound=0.0).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "must be > 0"),
+    C("s2-noise-none", "stage 2", "missing noise bound",
+      "LinearEIVSetEstimator(noise_bound=None, ...).fit(x, y)",
+      lambda: lin(noise_bound=None).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "must be a number"),
+    C("s2-noise-length", "stage 2", "per-sample noise bound of the wrong length",
+      "LinearEIVSetEstimator(noise_bound=[0.05, 0.05], ...).fit(x, y)",
+      lambda: lin(noise_bound=[0.05, 0.05]).fit(x_inner(), y_prbs()),
+      DataValidationError, "one value per sample"),
+    C("s2-input-bound-negative", "stage 2", "negative input bound",
+      "LinearEIVSetEstimator(...).fit(x, y, input_bound=-0.01)",
+      lambda: lin().fit(x_inner(), y_prbs(), input_bound=-0.01),
+      ParameterValidationError, ">= 0"),
+    C("s2-order-negative", "stage 2", "negative model order",
+      "LinearEIVSetEstimator(na=-1, ...).fit(x, y)",
+      lambda: lin(na=-1).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "integer >= 0"),
+    C("s2-order-float", "stage 2", "non-integer model order",
+      "LinearEIVSetEstimator(nb=1.5, ...).fit(x, y)",
+      lambda: lin(nb=1.5).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "integer >= 0"),
+    C("s2-no-b", "stage 2", "wrong-order model: numerator without coefficients",
+      "LinearEIVSetEstimator(nb=0, b0=False, ...).fit(x, y)",
+      lambda: lin(nb=0).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "nb >= 1 or b0=True"),
+    C("s2-b0-text", "stage 2", "b0 given as text",
+      "LinearEIVSetEstimator(b0='no', ...).fit(x, y)",
+      lambda: lin(b0="no").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "True or False"),
+    C("s2-method", "stage 2", "unknown stage-2 method",
+      "LinearEIVSetEstimator(method='sdp', ...).fit(x, y)",
+      lambda: lin(method="sdp").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "one of"),
+    C("s2-relaxation-order", "stage 2", "relaxation order 0",
+      "LinearEIVSetEstimator(method='moment', relaxation_order=0, ...).fit(x, y)",
+      lambda: lin(method="moment", relaxation_order=0).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "integer >= 1"),
+    C("s2-unknown-solver", "stage 2", "unknown solver",
+      "LinearEIVSetEstimator(method='moment', solver='gurobi', ...).fit(x, y)",
+      lambda: lin(method="moment", solver="gurobi").fit(x_inner(), y_prbs()),
+      SolverNotAvailableError, "available solvers"),
+    C("s2-solver-options-type", "stage 2", "solver options not a dict",
+      "LinearEIVSetEstimator(method='moment', solver_options=[('max_iter', 5)], ...)"
+      ".fit(x, y)",
+      lambda: lin(method="moment", solver_options=[("max_iter", 5)]).fit(x_inner(), y_prbs()),
+      SolverOptionError, "must be a dict"),
+    C("s2-solver-option-unknown", "stage 2", "option of another solver",
+      "LinearEIVSetEstimator(method='moment', solver='cvxopt', solver_options={'max_iter': 5},"
+      " ...).fit(x, y)",
+      lambda: lin(method="moment", solver="cvxopt",
+                  solver_options={"max_iter": 5}).fit(x_inner(), y_prbs()),
+      SolverOptionError, "valid:"),
+    C("s2-solver-option-value", "stage 2", "solver option of the wrong type",
+      "LinearEIVSetEstimator(method='moment', solver='cvxopt', "
+      "solver_options={'maxiters': 'ten'}, ...).fit(x, y)",
+      lambda: lin(method="moment", solver="cvxopt",
+                  solver_options={"maxiters": "ten"}).fit(x_inner(), y_prbs()),
+      SolverOptionError, "must be an int"),
+    C("s2-on-failure", "stage 2", "unknown on_failure policy",
+      "LinearEIVSetEstimator(on_failure='ignore', ...).fit(x, y)",
+      lambda: lin(on_failure="ignore").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "'box' or 'raise'"),
+    C("s2-max-nodes", "stage 2", "node limit given as text",
+      "LinearEIVSetEstimator(method='exact', max_nodes='many', ...).fit(x, y)",
+      lambda: lin(method="exact", max_nodes="many").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "integer >= 0"),
+    C("s2-theta-box-shape", "stage 2", "a priori box of the wrong shape",
+      "LinearEIVSetEstimator(theta_box=np.ones((3, 2)), ...).fit(x, y)",
+      lambda: lin(theta_box=np.ones((3, 2))).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "shape (4, 2)"),
+    C("s2-theta-box-text", "stage 2", "a priori box given as text",
+      "LinearEIVSetEstimator(theta_box='wide', ...).fit(x, y)",
+      lambda: lin(theta_box="wide").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "shape (4, 2)"),
+    C("s2-gain-zero", "stage 2", "zero steady-state gain (A2)",
+      "LinearEIVSetEstimator(steady_state_gain=0, ...).fit(x, y)",
+      lambda: lin(steady_state_gain=0).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "non-zero number or None"),
+    C("s2-groups-float", "stage 2", "non-integer input-error groups",
+      "LinearEIVSetEstimator(...).fit(x, y, groups=np.full(N, 0.5))",
+      lambda: lin().fit(x_inner(), y_prbs(), groups=np.full(40, 0.5)),
+      DataValidationError, "integer array of shape (N,)"),
+    C("s2-n-jobs", "stage 2", "n_jobs = 0",
+      "LinearEIVSetEstimator(n_jobs=0, ...).fit(x, y)",
+      lambda: lin(n_jobs=0).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "positive integer or -1"),
+    C("s2-contains-shape", "stage 2", "parameter vector of the wrong length",
+      "stage2.contains([1.0, 2.0])",
+      lambda: stage2().contains([1.0, 2.0]),
+      DataValidationError, "in order"),
+    # ------------------------------------------------------------- both stages
+    C("h-no-steady-state", "identifier", "steady-state data missing",
+      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs)",
+      lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs()),
+      DataValidationError, "pass steady_state="),
+    C("h-steady-state-dict", "identifier", "steady-state dict with wrong keys",
+      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs, steady_state={'x': u_ss})",
+      lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs(),
+                                                     steady_state={"x": u_ss()}),
+      DataValidationError, "keys 'u' and 'y'"),
+    C("h-prbs-three-levels", "identifier", "PRBS input with more than two levels",
+      "HammersteinBacklashIdentifier().fit(u_prbs with u[0] = 0.5, y_prbs, steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier().fit(
+          with_value(u_prbs(), 0, 0.5), y_prbs(), steady_state=(u_ss(), y_ss())),
+      DataValidationError, "prbs_level="),
+    C("h-length-mismatch", "identifier", "PRBS input and output of different lengths",
+      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs[:-1], steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs()[:-1],
+                                                     steady_state=(u_ss(), y_ss())),
+      DataValidationError, "same number of samples"),
+    C("h-ustar-dead-zone", "identifier", "PRBS level u* inside the dead zone",
+      "HammersteinBacklashIdentifier().fit(0.03 * sign(u_prbs), y_prbs, steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier().fit(
+          0.03 * np.sign(u_prbs()), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ResultOneViolationError, "dead zone"),
+    C("h-ustar-crossing", "identifier", "PRBS level u* past the line crossing",
+      "HammersteinBacklashIdentifier(prbs_level=3.0).fit(3 * sign(u_prbs), y_prbs, "
+      "steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier(prbs_level=3.0).fit(
+          3.0 * np.sign(u_prbs()), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ResultOneViolationError, "crossing"),
+    C("h-prbs-level-text", "identifier", "prbs_level given as text",
+      "HammersteinBacklashIdentifier(prbs_level='one').fit(u_prbs, y_prbs, steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier(prbs_level="one").fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "number u* > 0"),
+    C("h-inner-signal", "identifier", "unknown inner-signal model",
+      "HammersteinBacklashIdentifier(inner_signal='three-level').fit(...)",
+      lambda: hb.HammersteinBacklashIdentifier(inner_signal="three-level").fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "one of"),
+    C("h-components", "identifier", "stage estimators swapped",
+      "HammersteinBacklashIdentifier(backlash=LinearEIVSetEstimator()).fit(...)",
+      lambda: hb.HammersteinBacklashIdentifier(backlash=hb.LinearEIVSetEstimator()).fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "backlash must be a BacklashSetEstimator"),
+    # ------------------------------------------------------------- systems
+    C("sys-backlash-negative", "systems", "negative backlash slope",
+      "Backlash(-0.25, 0.06, 0.26, 0.05)",
+      lambda: hb.Backlash(-0.25, 0.06, 0.26, 0.05),
+      ParameterValidationError, "finite number > 0"),
+    C("sys-backlash-nan", "systems", "NaN dead-zone width",
+      "Backlash(0.25, nan, 0.26, 0.05)",
+      lambda: hb.Backlash(0.25, float("nan"), 0.26, 0.05),
+      ParameterValidationError, "finite number > 0"),
+    C("sys-unstable", "systems", "non-stable linear block (A1)",
+      "HammersteinSystem(backlash, ([1, -1.5], [0, 1]))",
+      lambda: hb.HammersteinSystem(SYS.backlash, ([1.0, -1.5], [0.0, 1.0])),
+      ParameterValidationError, "not asymptotically stable"),
+    C("sys-non-finite", "systems", "non-finite transfer-function coefficient",
+      "HammersteinSystem(backlash, ([1, -0.5], [0, inf]))",
+      lambda: hb.HammersteinSystem(SYS.backlash, ([1.0, -0.5], [0.0, np.inf])),
+      ParameterValidationError, "must be finite"),
+    C("sys-continuous", "systems", "continuous-time transfer function",
+      "HammersteinSystem(backlash, control.tf([1], [1, 1]))",
+      lambda: hb.HammersteinSystem(SYS.backlash, _tf([1.0], [1.0, 1.0])),
+      ParameterValidationError, "control.sample_system"),
+    C("sys-improper", "systems", "wrong-order (improper) transfer function",
+      "HammersteinSystem(backlash, control.tf([1, 0, 0], [1, 0.5], True))",
+      lambda: hb.HammersteinSystem(SYS.backlash, _tf([1.0, 0.0, 0.0], [1.0, 0.5], True)),
+      ParameterValidationError, "proper"),
+    C("sys-leading-zero", "systems", "A(q^-1) with a zero leading coefficient",
+      "HammersteinSystem(backlash, ([0, 1], [0, 1]))",
+      lambda: hb.HammersteinSystem(SYS.backlash, ([0.0, 1.0], [0.0, 1.0])),
+      ParameterValidationError, "non-zero leading coefficient"),
+    C("sys-coefficient-text", "systems", "coefficients given as text",
+      "HammersteinSystem(backlash, (['1', 'a'], [0, 1]))",
+      lambda: hb.HammersteinSystem(SYS.backlash, (["1", "a"], [0.0, 1.0])),
+      ParameterValidationError, "real coefficients"),
+    C("sys-not-backlash", "systems", "backlash given as a tuple",
+      "HammersteinSystem((0.25, 0.06, 0.26, 0.05), (A, B))",
+      lambda: hb.HammersteinSystem((0.25, 0.06, 0.26, 0.05), (SYS.A, SYS.B)),
+      ParameterValidationError, "hammerbound.systems.Backlash"),
+    C("sys-input-past-crossing", "systems", "simulation past the line crossing",
+      "system.simulate([1.0, 5.0])",
+      lambda: SYS.simulate([1.0, 5.0]),
+      IllPosedBacklashError, "keep the input inside"),
+    C("sys-gain-zero", "systems", "normalising a zero-gain block (A2)",
+      "normalize_gain([1, -0.5], [0, 0])",
+      lambda: __import__("hammerbound.systems").systems.normalize_gain([1, -0.5], [0, 0]),
+      ParameterValidationError, "assumption A2"),
+    C("sys-gain-negative", "systems", "negative gain moved into the backlash",
+      "normalize_gain([1, -0.5], [0, -1], backlash)",
+      lambda: __import__("hammerbound.systems").systems.normalize_gain(
+          [1, -0.5], [0, -1], SYS.backlash),
+      ParameterValidationError, "slopes must stay > 0"),
+    # ------------------------------------------------------------- experiments
+    C("exp-amplitudes-negative", "experiments", "negative square-wave amplitude",
+      "square_wave_experiment(system, [-1.0, 1.0], 0.05)",
+      lambda: hb.square_wave_experiment(SYS, [-1.0, 1.0], 0.05),
+      DataValidationError, "finite values > 0"),
+    C("exp-amplitudes-crossing", "experiments", "square-wave amplitude past the crossing",
+      "square_wave_experiment(system, [1.0, 5.0], 0.05)",
+      lambda: hb.square_wave_experiment(SYS, [1.0, 5.0], 0.05),
+      IllPosedBacklashError, "keep the input inside"),
+    C("exp-noise-shape", "experiments", "noise bound of the wrong length",
+      "square_wave_experiment(system, [1.0, 2.0], [0.1, 0.2, 0.3])",
+      lambda: hb.square_wave_experiment(SYS, [1.0, 2.0], [0.1, 0.2, 0.3]),
+      ParameterValidationError, "one value per measured sample"),
+    C("exp-noise-negative", "experiments", "negative noise bound",
+      "prbs_experiment(system, 50, 1.0, -0.05)",
+      lambda: hb.prbs_experiment(SYS, 50, 1.0, -0.05),
+      ParameterValidationError, "finite and >= 0"),
+    C("exp-random-state", "experiments", "unusable random_state",
+      "prbs_experiment(system, 50, 1.0, 0.05, random_state='seed')",
+      lambda: hb.prbs_experiment(SYS, 50, 1.0, 0.05, random_state="seed"),
+      ParameterValidationError, "int seed"),
+    C("exp-system-type", "experiments", "system that is not a HammersteinSystem",
+      "square_wave_experiment((A, B), [1.0, 2.0], 0.05)",
+      lambda: hb.square_wave_experiment((SYS.A, SYS.B), [1.0, 2.0], 0.05),
+      ParameterValidationError, "HammersteinSystem(Backlash"),
+    C("exp-prbs-length", "experiments", "PRBS of length 0",
+      "prbs_experiment(system, 0, 1.0, 0.05)",
+      lambda: hb.prbs_experiment(SYS, 0, 1.0, 0.05),
+      ParameterValidationError, "positive integers"),
+    C("exp-prbs-level-text", "experiments", "PRBS level given as text",
+      "prbs_experiment(system, 50, 'high', 0.05)",
+      lambda: hb.prbs_experiment(SYS, 50, "high", 0.05),
+      ParameterValidationError, "finite number > 0"),
+    # ------------------------------------------------------------- CSV input
+    C("csv-missing-column", "io", "CSV without the requested column",
+      "read_columns('<tmp>/missing.csv', ['u', 'y'])  # header u,z",
+      lambda: read("missing.csv", "u,z\n1,2\n"),
+      DataValidationError, "rename the columns"),
+    C("csv-bad-value", "io", "CSV row with a non-numeric value",
+      "read_columns('<tmp>/bad.csv', ['u', 'y'])  # row '1,abc'",
+      lambda: read("bad.csv", "u,y\n1,0.5\n1,abc\n"),
+      DataValidationError, "line 3, column 'y'"),
+    C("csv-short-row", "io", "CSV row with a missing field",
+      "read_columns('<tmp>/short.csv', ['u', 'y'])  # row '1'",
+      lambda: read("short.csv", "u,y\n1\n"),
+      DataValidationError, "line 2"),
+    C("csv-non-finite", "io", "CSV with an infinite value",
+      "read_columns('<tmp>/inf.csv', ['u', 'y'])  # row '1,inf'",
+      lambda: read("inf.csv", "u,y\n1,inf\n"),
+      DataValidationError, "not finite"),
+    C("csv-empty-file", "io", "empty CSV file",
+      "read_columns('<tmp>/empty.csv', ['u', 'y'])",
+      lambda: read("empty.csv", ""),
+      DataValidationError, "expected a header row"),
+    C("csv-no-rows", "io", "CSV with a header only",
+      "read_columns('<tmp>/header.csv', ['u', 'y'])",
+      lambda: read("header.csv", "u,y\n"),
+      DataValidationError, "no data rows"),
+    C("csv-no-file", "io", "CSV path that does not exist",
+      "read_columns('<tmp>/nope.csv', ['u', 'y'])",
+      lambda: __import__("hammerbound.io").io.read_columns(CSV_DIR / "nope.csv", ["u", "y"]),
+      DataValidationError, "check the path"),
+    C("csv-binary", "io", "binary (non-UTF-8) file",
+      "read_columns('<tmp>/binary.csv', ['u', 'y'])",
+      lambda: read("binary.csv", b"u,y\n\xff\xfe,1\n"),
+      DataValidationError, "UTF-8"),
+    C("csv-no-columns", "io", "no column names requested",
+      "read_columns('<tmp>/ok.csv', [])",
+      lambda: read("ok.csv", "u,y\n1,2\n", columns=()),
+      DataValidationError, "non-empty list of header names"),
+    # ------------------------------------------------------------- discrepancy
+    C("diag-continuous", "discrepancy", "continuous-time model",
+      "diagnose(control.tf([1], [1, 1]), u_prbs, y_prbs, 0.05)",
+      lambda: _diagnose(_tf([1.0], [1.0, 1.0]), u_prbs(), y_prbs(), 0.05),
+      ParameterValidationError, "control.sample_system"),
+    C("diag-noise-negative", "discrepancy", "negative noise bound",
+      "diagnose(system, u_prbs, y_prbs, -1)",
+      lambda: _diagnose(SYS, u_prbs(), y_prbs(), -1.0),
+      ParameterValidationError, "finite number > 0"),
+    C("diag-candidate", "discrepancy", "unknown candidate effect",
+      "diagnose(system, u_prbs, y_prbs, 0.05, candidates=['magic'])",
+      lambda: _diagnose(SYS, u_prbs(), y_prbs(), 0.05, candidates=["magic"]),
+      ParameterValidationError, "choose from"),
+]
+
+
+def run_case(case: ErrorCase) -> BaseException | None:
+    """Run one case; return the exception it raised (None if it did not raise)."""
+    try:
+        case.func()
+    except Exception as exc:  # noqa: BLE001 - we report whatever is raised
+        return exc
+    return None

@@ -128,6 +128,20 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     def fit(self, X, y, steady_state=None):
         """Run stage 1 on ``steady_state``, check Result 1, run stage 2 on ``(X, y)``.
 
+        Parameters
+        ----------
+        X : array-like of shape (N,) or (N, 1)
+            PRBS input, taking the two values ``+-u*``.
+        y : array-like of shape (N,)
+            Measured PRBS output.
+        steady_state : SteadyStateData, dict with keys "u" and "y", or pair (u_ss, y_ss)
+            Steady-state square-wave data for stage 1 (input amplitudes of both signs and
+            the measured steady outputs).
+
+        Returns
+        -------
+        self
+
         Raises
         ------
         ResultOneViolationError

@@ -64,6 +64,22 @@ class _Screen:
         self.lb = np.concatenate([-pr.deta, -pr.dx_group, [0.0]])
         self.ub = np.concatenate([pr.deta, pr.dx_group, [highspy.kHighsInf]])
         self.tol = 1e-9 * (1.0 + float(np.max(np.abs(pr.y))))
+        # fixed sparsity of A = [[M, -1], [M, 1]] (column-major, duplicates summed): only the
+        # values depend on theta, gathered from the contributions with one bincount
+        nc = self.rows.size
+        rows2 = np.concatenate([self.rows, self.rows + m, np.arange(m), np.arange(m, 2 * m)])
+        cols2 = np.concatenate([self.cols, self.cols, np.full(2 * m, n + k)])
+        order = np.lexsort((rows2, cols2))
+        r_s, c_s = rows2[order], cols2[order]
+        new = np.ones(order.size, dtype=bool)
+        new[1:] = (r_s[1:] != r_s[:-1]) | (c_s[1:] != c_s[:-1])
+        self._pos = np.cumsum(new) - 1
+        self._order = order
+        self._nnz = int(self._pos[-1]) + 1
+        self._index = r_s[new].astype(np.int32)
+        self._start = np.searchsorted(c_s[new], np.arange(n + k + 2)).astype(np.int32)
+        self._nc = nc
+        self._ones = np.concatenate([-np.ones(m), np.ones(m)])
         h = highspy.Highs()
         h.setOptionValue("output_flag", False)
         h.setOptionValue("threads", 1)
@@ -78,10 +94,9 @@ class _Screen:
         a, b = theta[: pr.na], theta[pr.na :]
         m, nz = self.m, self.nz
         vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
-        M = sp.csc_matrix((vals, (self.rows, self.cols)), shape=(m, nz))
+        contrib = np.concatenate([vals, vals, self._ones])
+        data = np.bincount(self._pos, weights=contrib[self._order], minlength=self._nnz)
         r = pr.simulate_noise_free(theta)
-        A = sp.vstack([sp.hstack([M, -np.ones((m, 1))]),
-                       sp.hstack([M, np.ones((m, 1))])]).tocsc()
         lp = hs.HighsLp()
         lp.num_col_, lp.num_row_ = nz + 1, 2 * m
         c = np.zeros(nz + 1)
@@ -91,9 +106,9 @@ class _Screen:
         lp.row_lower_ = np.concatenate([np.full(m, -hs.kHighsInf), r])
         lp.row_upper_ = np.concatenate([r, np.full(m, hs.kHighsInf)])
         lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = A.indptr.astype(np.int32)
-        lp.a_matrix_.index_ = A.indices.astype(np.int32)
-        lp.a_matrix_.value_ = A.data
+        lp.a_matrix_.start_ = self._start
+        lp.a_matrix_.index_ = self._index
+        lp.a_matrix_.value_ = data
         self.h.passModel(lp)
         if self.basis is not None:
             self.h.setBasis(self.basis)
@@ -138,17 +153,21 @@ class _Pool:
             return None
         return self.verify(theta)
 
-    def line_search(self, inside, outside, steps=20) -> _Point | None:
+    def line_search(self, inside, outside, steps=20, k=None, resolution=0.0) -> _Point | None:
         """Verified point on the segment ``inside -> outside`` closest to ``outside``.
 
         ``inside`` must be (verified) feasible; bisection on the screening LP, then
         verification with :func:`check_theta` (backing off towards ``inside`` if needed).
+        The bisection stops early once the bracket on ``theta_k`` is below ``resolution``.
         """
         if self.screen is None:
             self.screen = _Screen(self.problem)
         lo, hi = 0.0, 1.0
         d = outside - inside
+        span = abs(float(d[k])) if k is not None else np.inf
         for _ in range(steps):
+            if (hi - lo) * span <= resolution:
+                break
             mid = 0.5 * (lo + hi)
             if self.screen.screens(inside + mid * d):
                 lo = mid
@@ -339,11 +358,11 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 pt = pool.add(th)
                 if pt is None and inc is not None:
                     # short segment from the incumbent: fine resolution near the optimum
-                    pt = pool.line_search(inc.theta, th)
+                    pt = pool.line_search(inc.theta, th, k=k, resolution=0.25 * tol_eff)
                     if pt is not None and val(pt.theta) >= ub:
                         pt = None
                 if pt is None and interior is not None:
-                    pt = pool.line_search(interior, th)
+                    pt = pool.line_search(interior, th, k=k, resolution=0.25 * tol_eff)
                 if pt is not None and val(pt.theta) < ub:
                     inc, ub = pt, val(pt.theta)
                     if interior is None:

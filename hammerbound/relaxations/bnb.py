@@ -22,7 +22,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
 from .lp import lp_bounds, touches_box

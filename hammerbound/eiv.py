@@ -314,16 +314,12 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         touching it means the data do not bound that coefficient, which is an error.
         """
         from .exceptions import UnboundedSetError
-        from .relaxations.lp import touches_box
+        from .relaxations.lp import box_limited_ends
 
-        touch = touches_box(res.bounds, problem.theta_box)
-        names = problem.param_names
-        limited = [f"{names[k]} {'lower' if e == 0 else 'upper'}"
-                   for k, e in zip(*np.nonzero(touch), strict=True)]
-        res.extra["box_limited"] = limited
+        ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
+        res.extra["box_limited"] = [lab for _, lab in ends]
         if self.theta_box is None:
-            bad = [f"{names[k]} {'lower' if e == 0 else 'upper'}"
-                   for k, e in zip(*np.nonzero(touch), strict=True) if k >= problem.na]
+            bad = [lab for k, lab in ends if k >= problem.na]
             if bad:
                 raise UnboundedSetError(
                     "the data do not bound " + ", ".join(bad) + ": the bound reached the "

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
-from .lp import lp_bounds, touches_box
+from ..exceptions import EmptyFeasibleSetError, SolverError
+from .lp import lp_bounds, raise_if_box_limited
 from .mccormick import McCormickRelaxation
 from .problem import EIVProblem, check_theta
 from .result import BoundInfo, IntervalResult
@@ -516,13 +516,8 @@ def exact_bounds(
             extra={} if wit is None else {"eta": wit.eta, "dx": wit.dx,
                                           "value": float(wit.theta[k])},
         ))
-    touch = touches_box(bounds, problem.theta_box)
-    if check_box and np.any(touch):
-        which = [f"{names[k]} {'lower' if e == 0 else 'upper'}"
-                 for k, e in zip(*np.nonzero(touch), strict=True)]
-        raise UnboundedSetError(
-            "the data do not bound " + ", ".join(which) + " inside the a priori theta_box; "
-            "supply more (or more exciting) data or a tighter theta_box.")
+    if check_box:
+        raise_if_box_limited(bounds, problem.theta_box, names)
     return IntervalResult(
         bounds=bounds, infos=tuple(infos), method="exact", param_names=tuple(names),
         time=time.perf_counter() - t0,

@@ -153,6 +153,22 @@ def touches_box(bounds, box) -> np.ndarray:
                             bounds[:, 1] >= box[:, 1] - 1e-9 * w])
 
 
+def box_limited_ends(bounds, box, names) -> list[tuple[int, str]]:
+    """Interval ends that coincide with the a priori box: ``(k, "a2 upper")`` pairs."""
+    touch = touches_box(bounds, box)
+    return [(int(k), f"{names[k]} {'lower' if e == 0 else 'upper'}")
+            for k, e in zip(*np.nonzero(touch), strict=True)]
+
+
+def raise_if_box_limited(bounds, box, names) -> None:
+    """Raise :class:`UnboundedSetError` when some interval end coincides with the box."""
+    ends = box_limited_ends(bounds, box, names)
+    if ends:
+        raise UnboundedSetError(
+            "the data do not bound " + ", ".join(lab for _, lab in ends) + " inside the a "
+            "priori theta_box; supply more (or more exciting) data or a tighter theta_box.")
+
+
 def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -> IntervalResult:
     """Guaranteed polytopic outer parameter uncertainty intervals (22.35) of (22.34).
 
@@ -236,13 +252,7 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
         b = np.concatenate([b_ub, b_eq, -b_eq, box[:, 1], -box[:, 0]])
         polys.append({"signs": s, "A": A, "b": b})
     if check_box:
-        touch = touches_box(bounds, problem.theta_box)
-        if np.any(touch):
-            which = [f"{names[k]} {'lower' if e == 0 else 'upper'}"
-                     for k, e in zip(*np.nonzero(touch), strict=True)]
-            raise UnboundedSetError(
-                "the data do not bound " + ", ".join(which) + " inside the a priori theta_box; "
-                "supply more (or more exciting) data or a tighter theta_box.")
+        raise_if_box_limited(bounds, problem.theta_box, names)
     return IntervalResult(
         bounds=bounds, infos=tuple(infos), method="lp", param_names=tuple(names), time=elapsed,
         extra={"polytopes": polys, "n_orthants": len(orthants), "n_feasible_orthants": len(feas)},

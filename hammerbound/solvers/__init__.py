@@ -68,9 +68,18 @@ class Backend:
     """
 
     name = "?"
+    #: Python module whose import makes the backend usable.
+    module = None
 
-    def available(self) -> bool:  # pragma: no cover - overridden
-        raise NotImplementedError
+    def available(self) -> bool:
+        """Whether the backend's Python package can be imported."""
+        import importlib
+
+        try:
+            importlib.import_module(self.module)
+        except ImportError:
+            return False
+        return True
 
     def check_options(self, options: dict | None) -> dict:
         """Validate solver options; raise :class:`SolverOptionError` for unknown ones."""
@@ -90,13 +99,7 @@ class Backend:
 
 class ClarabelBackend(Backend):
     name = "clarabel"
-
-    def available(self) -> bool:
-        try:
-            import clarabel  # noqa: F401
-        except ImportError:
-            return False
-        return True
+    module = "clarabel"
 
     def check_options(self, options):
         opts = dict(options or {})
@@ -220,13 +223,7 @@ class _CvxoptConic:
 
 class CvxoptBackend(Backend):
     name = "cvxopt"
-
-    def available(self) -> bool:
-        try:
-            import cvxopt  # noqa: F401
-        except ImportError:
-            return False
-        return True
+    module = "cvxopt"
 
     def check_options(self, options):
         opts = dict(options or {})

@@ -298,3 +298,87 @@ def test_property_true_theta_inside_lp_and_exact(system):
     for info in ex.infos:
         if info.witness is not None:
             assert check_theta(pr, info.witness).feasible
+
+
+# ---- the pieces that keep the search small (cap, reduced costs, seek, node options) -----
+
+@pytest.mark.parametrize("k,sense", [(0, 1.0), (2, -1.0), (3, 1.0)])
+def test_reduced_cost_tightening_cuts_only_parts_above_the_target(k, sense):
+    from hammerbound.relaxations.bnb import _reduced_cost_tightening
+    from hammerbound.relaxations.mccormick import McCormickRelaxation
+
+    pr, _ = make_eiv_problem(N=30, deta=0.1, seed=4)
+    box = lp_bounds(pr).bounds
+    relax = McCormickRelaxation(pr, box)
+    c = np.zeros(relax.ncol)
+    c[k] = sense
+    relax.lp.set_cost(c)
+    lo = relax.lp.solve().x[k]
+    relax.lp.set_cost(-c)
+    hi = relax.lp.solve().x[k]
+    relax.lp.set_cost(c)
+    # a node box that excludes the relaxation's optimum in theta_k: theta_k sits at the
+    # box edge with a nonzero reduced cost (inside the box every reduced cost is zero)
+    box[k, 0 if sense > 0 else 1] = lo + 0.2 * (hi - lo)
+    relax.set_box(box)
+    res = relax.lp.solve()
+    assert res.status == "optimal"
+    target = res.bound + 0.05 * (box[k, 1] - box[k, 0])
+    new, cut = _reduced_cost_tightening(box, res.reduced[: pr.p], res.bound, target)
+    assert cut, "the test needs a case where something is cut"
+    assert np.all(new[:, 0] >= box[:, 0]) and np.all(new[:, 1] <= box[:, 1])
+    for j in range(pr.p):
+        for side, removed in ((1, (new[j, 1], box[j, 1])), (0, (box[j, 0], new[j, 0]))):
+            if removed[1] - removed[0] <= 1e-12:
+                continue
+            part = box.copy()
+            part[j] = removed
+            relax.set_box(part)
+            r = relax.lp.solve()
+            # the removed part cannot hold anything below the target
+            assert r.status in ("infeasible", "cutoff") or r.value >= target - 1e-9, (j, side)
+    relax.set_box(box)
+
+
+def test_cap_keeps_only_the_part_below_the_incumbent():
+    from hammerbound.relaxations.bnb import _cap
+
+    box = np.array([[0.0, 1.0], [-2.0, 2.0]])
+    np.testing.assert_array_equal(_cap(box, 1, 1.0, 0.5), [[0.0, 1.0], [-2.0, 0.5]])
+    np.testing.assert_array_equal(_cap(box, 1, -1.0, 0.5), [[0.0, 1.0], [-0.5, 2.0]])
+    assert _cap(box, 0, 1.0, -0.1) is None
+    assert _cap(box, 0, -1.0, -1.5) is None
+    assert _cap(box, 0, 1.0, 3.0) is box  # nothing to cap: no copy
+
+
+def test_seek_finds_a_verified_point_from_an_infeasible_start():
+    from hammerbound.relaxations.bnb import _Pool
+
+    pr, theta = make_eiv_problem(N=60, deta=0.1, two_level=True, seed=2)
+    box = lp_bounds(pr).bounds
+    start = box[:, 0] + 0.8 * (box[:, 1] - box[:, 0])
+    pool = _Pool(pr)
+    assert pool.add(start) is None  # neither feasible nor on the gain plane
+    pt = pool.seek([start], box)
+    assert pt is not None
+    chk = check_theta(pr, pt.theta)
+    assert chk.feasible and chk.gain_residual <= 1e-9
+    assert np.all(pt.theta >= box[:, 0]) and np.all(pt.theta <= box[:, 1])
+
+
+def test_node_lp_options_keep_scaling_for_badly_scaled_data():
+    from hammerbound.relaxations._highs import HighsLP
+    from hammerbound.relaxations.mccormick import McCormickRelaxation
+
+    pr, _ = make_eiv_problem(N=20, deta=0.05, seed=1)
+    box = lp_bounds(pr).bounds
+    def opts(problem, name):
+        return McCormickRelaxation(problem, box).lp.h.getOptionValue(name)[1]
+
+    assert opts(pr, "simplex_scale_strategy") == 0
+    assert opts(pr, "simplex_dual_edge_weight_strategy") == 1
+    big = EIVProblem(pr.y * 1e5, pr.x * 1e5, pr.dx * 1e5, pr.deta * 1e5, na=2, nb=2,
+                     b0=False, gain=1.0)
+    assert opts(big, "simplex_scale_strategy") != 0
+    with pytest.raises(ValueError, match="no_such_option"):
+        HighsLP(np.eye(1), [0.0], [1.0], [0.0], [1.0], options={"no_such_option": 1})

@@ -30,7 +30,7 @@ EPS = np.finfo(float).eps
 INF = highspy.kHighsInf
 
 
-def row_dual_bound(c, A, rl, ru, lb, ub, y) -> float:
+def row_dual_bound(c, A, rl, ru, lb, ub, y, *, with_reduced=False):
     """Rigorous lower bound of ``min c'z, rl <= Az <= ru, lb <= z <= ub`` from multipliers ``y``.
 
     Parameters
@@ -44,14 +44,20 @@ def row_dual_bound(c, A, rl, ru, lb, ub, y) -> float:
     y : ndarray, shape (m,)
         Any multipliers (e.g. HiGHS row duals, or a dual ray with ``c = 0``).
 
+    with_reduced : bool, default False
+        Also return the reduced costs ``r = c - A'(y+ + y-)`` behind the bound.
+
     Returns
     -------
-    float
-        A lower bound of the exact LP value (``-inf`` if none can be certified).
+    float or (float, ndarray or None)
+        A lower bound of the exact LP value (``-inf`` if none can be certified); with
+        ``with_reduced`` also ``r`` (shape (n,)). The bound depends on the column bounds
+        only through ``sum_j min(r_j l_j, r_j u_j)``, so it stays valid, with that term
+        updated, for any other column box (reduced-cost bound tightening).
     """
     y = np.asarray(y, dtype=float)
     if y.shape != (A.shape[0],) or not np.all(np.isfinite(y)):
-        return -np.inf
+        return (-np.inf, None) if with_reduced else -np.inf
     fin_l = np.isfinite(rl)
     fin_u = np.isfinite(ru)
     yp = np.where(fin_l, np.maximum(y, 0.0), 0.0)
@@ -63,12 +69,13 @@ def row_dual_bound(c, A, rl, ru, lb, ub, y) -> float:
     t_z = np.minimum(r * lb, r * ub)
     terms = np.concatenate([t_l, t_u, t_z])
     if not np.all(np.isfinite(terms)):
-        return -np.inf
+        return (-np.inf, None) if with_reduced else -np.inf
     total = float(np.sum(terms))
     absz = np.maximum(np.abs(lb), np.abs(ub))
     mag = float(np.sum(np.abs(terms)) + abs(A).T @ np.abs(yy) @ absz + np.abs(c) @ absz)
     width = A.shape[0] + terms.size
-    return total - 4.0 * width * EPS * (mag + 1e-300) - 1e-300
+    bound = total - 4.0 * width * EPS * (mag + 1e-300) - 1e-300
+    return (bound, r) if with_reduced else bound
 
 
 def round_down(v):
@@ -97,6 +104,8 @@ class LPSolve:
     x : ndarray or None, shape (n,)
         Primal point (``None`` unless optimal).
     iterations : int
+    reduced : ndarray or None, shape (n,)
+        Reduced costs behind ``bound`` (see :func:`row_dual_bound`), when optimal.
     """
 
     status: str
@@ -104,6 +113,7 @@ class LPSolve:
     value: float
     x: np.ndarray | None
     iterations: int = 0
+    reduced: np.ndarray | None = None
 
 
 class HighsLP:
@@ -116,9 +126,11 @@ class HighsLP:
     lb, ub : ndarray, shape (n,)
         Finite column bounds (required for the rigorous bound).
     c : ndarray, shape (n,), optional
+    options : dict, optional
+        Extra HiGHS options (name -> value), e.g. simplex pricing for repeated warm starts.
     """
 
-    def __init__(self, A, rl, ru, lb, ub, c=None):
+    def __init__(self, A, rl, ru, lb, ub, c=None, options=None):
         A = sp.csc_matrix(A, dtype=float)
         A.sort_indices()
         self.A = A
@@ -131,6 +143,9 @@ class HighsLP:
         h = highspy.Highs()
         h.setOptionValue("output_flag", False)
         h.setOptionValue("threads", 1)
+        for name, value in (options or {}).items():
+            if h.setOptionValue(name, value) != highspy.HighsStatus.kOk:
+                raise ValueError(f"HiGHS rejected option {name}={value!r}")
         lp = highspy.HighsLp()
         lp.num_col_ = n
         lp.num_row_ = m
@@ -261,7 +276,9 @@ class HighsLP:
             y = np.asarray(sol.row_dual)
             x = np.asarray(sol.col_value)
             val = float(h.getInfo().objective_function_value)
-            return LPSolve("optimal", self.bound_from(y), val, x, it)
+            bound, r = row_dual_bound(self.c, self.A, self.rl, self.ru, self.lb, self.ub, y,
+                                      with_reduced=True)
+            return LPSolve("optimal", bound, val, x, it, r)
         if st == MS.kObjectiveBound:
             sol = h.getSolution()
             y = np.asarray(sol.row_dual)

@@ -13,6 +13,20 @@ For every parameter ``theta_k`` and both senses the exact extreme value over the
 The difference is the certified gap. The search stops when the gap is below
 ``tol * max(1, |value|)``; node and time limits return the still-valid outer bound with
 status ``"limit"``.
+
+What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3: 1266 -> about 800
+nodes and 55 s -> 18 s for the 8 bounds on 2 cores; ``python -m benchmarks.exact_idle``):
+
+* every node box is **capped at the incumbent** (``sense * theta_k <= value``): nothing
+  above it can hold the minimum, and the cap tightens every envelope involving theta_k;
+* **reduced-cost bound tightening** removes the part of a node box whose rigorous LP bound
+  already exceeds the incumbent (:func:`_reduced_cost_tightening`);
+* line searches towards the LP point (the primal heuristic) back off geometrically while
+  they do not improve the incumbent;
+* node LPs use devex dual pricing and, for well-scaled data, no scaling
+  (:func:`.mccormick._node_options`);
+* when no relaxation point is feasible (thin sets), a Nelder-Mead search on the screening
+  violation supplies the first verified point (:meth:`_Pool.seek`).
 """
 
 from __future__ import annotations
@@ -30,6 +44,10 @@ from .problem import EIVProblem, check_theta
 from .result import BoundInfo, IntervalResult
 
 __all__ = ["exact_bounds"]
+# branch at the LP point, kept this fraction of the width away from the box edges
+_SPLIT_CLIP = 0.05
+# after a line search that does not improve the incumbent, wait up to this many nodes
+_MAX_SEARCH_GAP = 16
 
 
 @dataclass
@@ -152,6 +170,52 @@ class _Pool:
             return None
         return self.verify(theta)
 
+    def seek(self, starts, box, max_evals=800) -> _Point | None:
+        """Look for a first verified point when none of the LP points is feasible.
+
+        Thin feasible sets (the two-level inner signal, high noise) may contain none of the
+        relaxation's points. Starting from ``starts`` (projected onto the gain equality
+        (22.8), if any), Nelder-Mead minimises the screening violation (zero on the set)
+        plus the distance outside ``box``, in the coordinates of the gain hyperplane; the
+        first screened point that :func:`check_theta` accepts is returned.
+        """
+        from scipy.optimize import minimize
+
+        if self.screen is None:
+            self.screen = _Screen(self.problem)
+        pr = self.problem
+        g = pr.gain_row()
+        p = pr.p
+        if g is None:
+            basis = np.eye(p)
+        else:
+            # orthonormal basis of {d : g . d = 0}
+            basis = np.linalg.svd(g[0][None, :])[2][1:].T
+
+        class _Found(Exception):
+            pass
+
+        for start in starts:
+            th0 = _on_gain_plane(pr, start)
+
+            def f(z, th0=th0):
+                th = th0 + basis @ z
+                out = np.maximum(box[:, 0] - th, 0.0) + np.maximum(th - box[:, 1], 0.0)
+                if out.any():
+                    return float(np.sum(out)) + 1.0
+                v = self.screen.violation(th)
+                if v <= self.screen.tol and self.verify(th) is not None:
+                    raise _Found
+                return v
+
+            try:
+                minimize(f, np.zeros(basis.shape[1]), method="Nelder-Mead",
+                         options={"maxfev": max_evals, "xatol": 1e-12, "fatol": 0.0,
+                                  "initial_simplex": None})
+            except _Found:
+                return self.points[-1]
+        return None
+
     def line_search(self, inside, outside, steps=20, k=None, resolution=0.0) -> _Point | None:
         """Verified point on the segment ``inside -> outside`` closest to ``outside``.
 
@@ -180,6 +244,15 @@ class _Pool:
                 return pt
             lo *= 0.5
         return None
+
+
+def _on_gain_plane(problem, theta):
+    """Orthogonal projection of ``theta`` onto the gain equality (22.8), if there is one."""
+    theta = np.asarray(theta, dtype=float)
+    g = problem.gain_row()
+    if g is None:
+        return theta
+    return theta + g[0] * (g[1] - g[0] @ theta) / float(g[0] @ g[0])
 
 
 def _obbt_task(problem, box, tasks, bases):
@@ -262,6 +335,54 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
     return box, roots, thetas
 
 
+def _cap(box, k, sense, ub):
+    """``box`` restricted to ``sense * theta_k <= ub`` (None if that leaves nothing)."""
+    if sense > 0:
+        if box[k, 0] > ub:
+            return None
+        if box[k, 1] > ub:
+            box = box.copy()
+            box[k, 1] = ub
+    else:
+        if box[k, 1] < -ub:
+            return None
+        if box[k, 0] < -ub:
+            box = box.copy()
+            box[k, 0] = -ub
+    return box
+
+
+def _reduced_cost_tightening(box, r, bound, target):
+    """Shrink a node's theta box by reduced-cost bound tightening.
+
+    ``bound`` is the rigorous LP bound of the node and ``r`` (p,) the reduced costs of the
+    theta columns behind it (:func:`._highs.row_dual_bound`). That bound holds, with the
+    term ``min(r_j l_j, r_j u_j)`` updated, for any sub-box; the McCormick relaxation of
+    a sub-box is tighter still. So the part ``theta_j > l_j + (target - bound) / r_j``
+    (``r_j > 0``; mirrored for ``r_j < 0``) has relaxed value ``>= target`` and is cut off.
+    The cut is widened by a relative 1e-9 to stay on the safe side of rounding.
+
+    Returns ``(new_box, cut)`` where ``cut`` says whether anything was removed.
+    """
+    slack = target - bound
+    if not (np.isfinite(slack) and slack > 0):
+        return box, False
+    box = box.copy()
+    cut = False
+    with np.errstate(divide="ignore"):
+        d = slack / np.abs(r) * (1.0 + 1e-9)
+    d = d + 1e-12 * np.maximum(1.0, np.abs(box).max(axis=1))
+    for j in np.flatnonzero(r > 0):
+        hi = box[j, 0] + d[j]
+        if hi < box[j, 1]:
+            box[j, 1], cut = hi, True
+    for j in np.flatnonzero(r < 0):
+        lo = box[j, 1] - d[j]
+        if lo > box[j, 0]:
+            box[j, 0], cut = lo, True
+    return box, cut
+
+
 @dataclass
 class _Search:
     bound: float
@@ -310,6 +431,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         heap.append((-np.inf, counter, box0))
         counter += 1
     closed_lb = np.inf  # min bound over leaves closed by bound (not by infeasibility)
+    last_try, try_gap = -1, 1
     nodes = 0
     iters = 0
     status = "optimal"
@@ -322,6 +444,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                    desc=f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}")
     while heap or pending is not None:
         tol_eff = tol * max(1.0, abs(ub)) if np.isfinite(ub) else 0.0
+        rc = None
         if pending is not None:
             lb, box, x = pending
             pending = None
@@ -334,6 +457,12 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 status = "limit"
                 break
             lb_parent, _, box = heapq.heappop(heap)
+            if np.isfinite(ub):
+                # only sense * theta_k <= ub can hold the minimum: cap the box there,
+                # which also tightens every McCormick envelope that involves theta_k
+                box = _cap(box, k, sense, ub)
+                if box is None:
+                    continue
             relax.set_box(box)
             relax.lp.set_cutoff(ub - tol_eff if np.isfinite(ub) else None)
             res = relax.lp.solve()
@@ -343,6 +472,8 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 continue
             lb = max(lb_parent, res.bound)
             x = res.x if res.status == "optimal" else None
+            if x is not None:
+                rc_bound, rc = res.bound, res.reduced[:p]
             if nodes == 1 and x is not None:
                 root_value = res.value
         if bar is not None:
@@ -355,13 +486,21 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             th = np.clip(x[:p], box[:, 0], box[:, 1])
             if val(th) < ub - tol_eff:
                 pt = pool.add(th)
-                if pt is None and inc is not None:
+                # line searches cost ~10 LPs each: run them while they pay off, then back
+                # off geometrically (the lower-bound proof needs no incumbent updates)
+                searching = pt is None and nodes - last_try >= try_gap
+                if searching:
+                    last_try = nodes
+                if searching and inc is not None:
                     # short segment from the incumbent: fine resolution near the optimum
                     pt = pool.line_search(inc.theta, th, k=k, resolution=0.25 * tol_eff)
                     if pt is not None and val(pt.theta) >= ub:
                         pt = None
-                if pt is None and interior is not None:
+                if searching and pt is None and interior is not None:
                     pt = pool.line_search(interior, th, k=k, resolution=0.25 * tol_eff)
+                if searching:
+                    useful = pt is not None and val(pt.theta) < ub
+                    try_gap = 1 if useful else min(2 * try_gap, _MAX_SEARCH_GAP)
                 if pt is not None and val(pt.theta) < ub:
                     inc, ub = pt, val(pt.theta)
                     if interior is None:
@@ -370,12 +509,18 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                     if lb >= ub - tol_eff:
                         closed_lb = min(closed_lb, lb)
                         continue
+            if rc is not None and np.isfinite(ub):
+                box, cut = _reduced_cost_tightening(box, rc, rc_bound, ub - tol_eff)
+                if cut:
+                    closed_lb = min(closed_lb, ub - tol_eff)
+                    width = box[:, 1] - box[:, 0]
             score = relax.violations(x) * width / np.maximum(width0, 1e-300)
             if score.max() > 0:
                 i = int(np.argmax(score))
             else:
                 i = int(np.argmax(width / np.maximum(width0, 1e-300)))
-            split = float(np.clip(x[i], box[i, 0] + 0.2 * width[i], box[i, 1] - 0.2 * width[i]))
+            margin = _SPLIT_CLIP * width[i]
+            split = float(np.clip(x[i], box[i, 0] + margin, box[i, 1] - margin))
         else:
             i = int(np.argmax(width / np.maximum(width0, 1e-300)))
             split = 0.5 * (box[i, 0] + box[i, 1])
@@ -472,10 +617,11 @@ def exact_bounds(
         pool = _Pool(problem)
         for th in thetas:
             pool.add(th)
-        if thetas:
-            pool.add(np.mean(thetas, axis=0))
+        starts = ([np.mean(thetas, axis=0)] if thetas else []) + [box.mean(axis=1)]
+        for th in starts:
+            pool.add(_on_gain_plane(problem, th))
         if not pool.points:
-            pool.add(box.mean(axis=1))
+            pool.seek(starts, box)
         pts = pool.points
         args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress)
         if parallel is None:

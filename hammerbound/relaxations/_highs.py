@@ -204,9 +204,13 @@ class HighsLP:
         """Change existing coefficients (``pos`` from :meth:`data_positions`)."""
         vals = np.asarray(vals, dtype=float)
         changed = np.flatnonzero(self.A.data[pos] != vals)
+        if changed.size == 0:
+            return
         ch = self.h.changeCoeff
-        for k in changed:
-            ch(int(rows[k]), int(cols[k]), float(vals[k]))
+        # one HiGHS call per entry (highspy has no batch call): plain lists keep it cheap
+        for r, c, v in zip(np.asarray(rows)[changed].tolist(), np.asarray(cols)[changed].tolist(),
+                           vals[changed].tolist(), strict=True):
+            ch(r, c, v)
         self.A.data[pos[changed]] = vals[changed]
 
     def set_cutoff(self, value):

@@ -93,9 +93,22 @@ def section_targets(parts):
         sp = s1["speedup_at_1000"]
         rows.append(["Stage 1 polygon vs Algorithm 22.1 at M = 1000", "≥ 100×", f"{sp:.1f}×",
                      "met" if sp >= 100 else f"**missed** ({100 / sp:.1f}× short)"])
+    idle = _json("exact_idle_N300.json")
+    idle_ind = [r for r in (idle or {}).get("rows", []) if r["inner_signal"] == "independent"]
+    if idle_ind:
+        # the idle-machine measurement is the one the target is judged on
+        worst = max(idle_ind, key=lambda r: r["wall_s"])
+        n_ok = sum(r["wall_s"] <= 20 for r in idle_ind)
+        rows.append(["Exact intervals, N = 300, all 8 bounds (per noise level, idle machine)",
+                     "≤ 20 s",
+                     f"{fs(min(r['wall_s'] for r in idle_ind))}–{fs(worst['wall_s'])} s "
+                     f"(worst Δη = {worst['delta_eta']})",
+                     "met at all levels" if n_ok == len(idle_ind) else
+                     f"**missed** at {len(idle_ind) - n_ok} of {len(idle_ind)} levels "
+                     f"(worst {worst['wall_s'] / 20:.1f}× over)"])
     if ch:
         ex300 = [r for r in ch["runs"] if r.get("method") == "exact" and r.get("N") == 300 and "wall_s" in r]
-        if ex300:
+        if ex300 and not idle_ind:
             worst = max(ex300, key=lambda r: r["wall_s"])
             n_ok = sum(r["wall_s"] <= 20 for r in ex300)
             rows.append(["Exact intervals, N = 300, all 8 bounds (per noise level)", "≤ 20 s",
@@ -117,7 +130,23 @@ def section_targets(parts):
                          "**missed** (see the δ = 2 section)"])
     if not rows:
         return ""
-    return table(["target", "goal", "measured", "verdict"], rows) + "\n"
+    out = table(["target", "goal", "measured", "verdict"], rows) + "\n"
+    if idle and idle.get("rows"):
+        levels = sorted({r["delta_eta"] for r in idle["rows"]})
+        by = {(r["inner_signal"], r["delta_eta"]): r for r in idle["rows"]}
+        trows = []
+        for inner in ("independent", "two-level"):
+            trows.append([inner] + [
+                f"{fs(by[(inner, d)]['wall_s'])} s ({by[(inner, d)]['nodes']})"
+                if (inner, d) in by else "" for d in levels])
+        out += ("\nExact method at N = 300 on the idle machine (`python -m benchmarks.exact_idle "
+                "--N 300`, 2 jobs; wall time of the whole identifier fit, B&B nodes over the 8 "
+                "ends in brackets; every end `optimal`: "
+                f"{all(r['statuses'] == ['optimal'] for r in idle['rows'])}, true parameters "
+                f"inside: {all(r['true_inside'] for r in idle['rows'])}):\n\n")
+        out += table(["inner signal"] + [f"Δη = {d:g}" for d in levels], trows) + "\n\n"
+        out += env_line(idle).replace(" (shared machine)", "") + "\n"
+    return out
 
 
 def section_chapter():

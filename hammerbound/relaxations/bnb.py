@@ -14,8 +14,8 @@ The difference is the certified gap. The search stops when the gap is below
 ``tol * max(1, |value|)``; node and time limits return the still-valid outer bound with
 status ``"limit"``.
 
-What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3: 1266 -> about 800
-nodes and 55 s -> 18 s for the 8 bounds on 2 cores; ``python -m benchmarks.exact_idle``):
+What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3: 1266 -> 767
+nodes and 55 s -> 17 s for the 8 bounds on 2 cores; ``python -m benchmarks.exact_idle``):
 
 * every node box is **capped at the incumbent** (``sense * theta_k <= value``): nothing
   above it can hold the minimum, and the cap tightens every envelope involving theta_k;

@@ -377,8 +377,9 @@ def test_node_lp_options_keep_scaling_for_badly_scaled_data():
 
     assert opts(pr, "simplex_scale_strategy") == 0
     assert opts(pr, "simplex_dual_edge_weight_strategy") == 1
-    big = EIVProblem(pr.y * 1e5, pr.x * 1e5, pr.dx * 1e5, pr.deta * 1e5, na=2, nb=2,
-                     b0=False, gain=1.0)
-    assert opts(big, "simplex_scale_strategy") != 0
+    for f in (1e5, 1e-4):  # the gain row's unit coefficients must not hide the data scale
+        other = EIVProblem(pr.y * f, pr.x * f, pr.dx * f, pr.deta * f, na=2, nb=2,
+                           b0=False, gain=1.0)
+        assert opts(other, "simplex_scale_strategy") != 0
     with pytest.raises(ValueError, match="no_such_option"):
         HighsLP(np.eye(1), [0.0], [1.0], [0.0], [1.0], options={"no_such_option": 1})

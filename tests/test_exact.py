@@ -383,3 +383,28 @@ def test_node_lp_options_keep_scaling_for_badly_scaled_data():
         assert opts(other, "simplex_scale_strategy") != 0
     with pytest.raises(ValueError, match="no_such_option"):
         HighsLP(np.eye(1), [0.0], [1.0], [0.0], [1.0], options={"no_such_option": 1})
+
+
+def test_unscaled_node_lp_turns_scaling_on_when_its_bound_trails(monkeypatch):
+    from hammerbound.relaxations import _highs
+    from hammerbound.relaxations.mccormick import McCormickRelaxation
+
+    pr, _ = make_eiv_problem(N=20, deta=0.05, seed=1)
+    relax = McCormickRelaxation(pr, lp_bounds(pr).bounds)
+    assert relax.lp.h.getOptionValue("simplex_scale_strategy")[1] == 0
+    c = np.zeros(relax.ncol)
+    c[0] = 1.0
+    relax.lp.set_cost(c)
+    real = _highs.row_dual_bound
+    calls = []
+
+    def trailing(*args, **kw):  # first certificate 0.01 weaker than it should be
+        b, r = real(*args, **kw)
+        calls.append(b)
+        return (b - 0.01 if len(calls) == 1 else b), r
+
+    monkeypatch.setattr(_highs, "row_dual_bound", trailing)
+    res = relax.lp.solve()
+    assert relax.lp.rescaled and len(calls) == 2
+    assert relax.lp.h.getOptionValue("simplex_scale_strategy")[1] != 0
+    assert res.bound == calls[1] and res.value - res.bound <= 1e-9

@@ -146,6 +146,10 @@ class HighsLP:
         for name, value in (options or {}).items():
             if h.setOptionValue(name, value) != highspy.HighsStatus.kOk:
                 raise ValueError(f"HiGHS rejected option {name}={value!r}")
+        # unscaled solves are faster on well-scaled data, but if the certified bound then
+        # trails HiGHS's own value, the duals are inaccurate: scaling goes back on for good
+        self._unscaled = (options or {}).get("simplex_scale_strategy") == 0
+        self.rescaled = False
         lp = highspy.HighsLp()
         lp.num_col_ = n
         lp.num_row_ = m
@@ -282,6 +286,10 @@ class HighsLP:
             val = float(h.getInfo().objective_function_value)
             bound, r = row_dual_bound(self.c, self.A, self.rl, self.ru, self.lb, self.ub, y,
                                       with_reduced=True)
+            if self._unscaled and not val - bound <= 1e-5 * (1.0 + abs(val)):
+                self._unscaled, self.rescaled = False, True
+                h.setOptionValue("simplex_scale_strategy", 2)  # HiGHS's default
+                return self.solve()
             return LPSolve("optimal", bound, val, x, it, r)
         if st == MS.kObjectiveBound:
             sol = h.getSolution()

@@ -485,11 +485,13 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         if x is not None:
             th = np.clip(x[:p], box[:, 0], box[:, 1])
             if val(th) < ub - tol_eff:
-                pt = pool.add(th)
-                # line searches cost ~10 LPs each: run them while they pay off, then back
-                # off geometrically (the lower-bound proof needs no incumbent updates)
-                searching = pt is None and nodes - last_try >= try_gap
-                if searching:
+                # the primal heuristic (screening the LP point, then line searches of ~10
+                # LPs each) runs while it pays off, then backs off geometrically: the
+                # lower-bound proof needs no incumbent updates
+                due = nodes - last_try >= try_gap
+                pt = pool.add(th) if due else None
+                searching = pt is None and due
+                if due:
                     last_try = nodes
                 if searching and inc is not None:
                     # short segment from the incumbent: fine resolution near the optimum
@@ -498,7 +500,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                         pt = None
                 if searching and pt is None and interior is not None:
                     pt = pool.line_search(interior, th, k=k, resolution=0.25 * tol_eff)
-                if searching:
+                if due:
                     useful = pt is not None and val(pt.theta) < ub
                     try_gap = 1 if useful else min(2 * try_gap, _MAX_SEARCH_GAP)
                 if pt is not None and val(pt.theta) < ub:

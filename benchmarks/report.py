@@ -96,16 +96,21 @@ def section_targets(parts):
     idle = _json("exact_idle_N300.json")
     idle_ind = [r for r in (idle or {}).get("rows", []) if r["inner_signal"] == "independent"]
     if idle_ind:
-        # the idle-machine measurement is the one the target is judged on
-        worst = max(idle_ind, key=lambda r: r["wall_s"])
-        n_ok = sum(r["wall_s"] <= 20 for r in idle_ind)
+        # the idle-machine measurement is the one the target is judged on, and on the
+        # slowest of the repeated fits (not the median)
+        def slowest(r):
+            return max(r.get("wall_all_s") or [r["wall_s"]])
+
+        worst = max(idle_ind, key=slowest)
+        n_ok = sum(slowest(r) <= 20 for r in idle_ind)
+        reps = len(worst.get("wall_all_s") or [1])
         rows.append(["Exact intervals, N = 300, all 8 bounds (per noise level, idle machine)",
                      "≤ 20 s",
-                     f"{fs(min(r['wall_s'] for r in idle_ind))}–{fs(worst['wall_s'])} s "
-                     f"(worst Δη = {worst['delta_eta']})",
+                     f"{fs(min(slowest(r) for r in idle_ind))}–{fs(slowest(worst))} s "
+                     f"(slowest of {reps} fits per level; worst Δη = {worst['delta_eta']})",
                      "met at all levels" if n_ok == len(idle_ind) else
                      f"**missed** at {len(idle_ind) - n_ok} of {len(idle_ind)} levels "
-                     f"(worst {worst['wall_s'] / 20:.1f}× over)"])
+                     f"(worst {slowest(worst) / 20:.1f}× over)"])
     if ch:
         ex300 = [r for r in ch["runs"] if r.get("method") == "exact" and r.get("N") == 300 and "wall_s" in r]
         if ex300 and not idle_ind:
@@ -135,13 +140,17 @@ def section_targets(parts):
         levels = sorted({r["delta_eta"] for r in idle["rows"]})
         by = {(r["inner_signal"], r["delta_eta"]): r for r in idle["rows"]}
         trows = []
+        def cell(r):
+            walls = r.get("wall_all_s") or [r["wall_s"]]
+            spread = f"–{fs(max(walls))}" if len(walls) > 1 else ""
+            return f"{fs(min(walls))}{spread} s ({r['nodes']})"
+
         for inner in ("independent", "two-level"):
-            trows.append([inner] + [
-                f"{fs(by[(inner, d)]['wall_s'])} s ({by[(inner, d)]['nodes']})"
-                if (inner, d) in by else "" for d in levels])
+            trows.append([inner] + [cell(by[(inner, d)]) if (inner, d) in by else ""
+                                    for d in levels])
         out += ("\nExact method at N = 300 on the idle machine (`python -m benchmarks.exact_idle "
-                "--N 300`, 2 jobs; wall time of the whole identifier fit, B&B nodes over the 8 "
-                "ends in brackets; every end `optimal`: "
+                "--N 300`, 2 jobs; wall time of the whole identifier fit, fastest–slowest of the "
+                "repeated fits, B&B nodes over the 8 ends in brackets; every end `optimal`: "
                 f"{all(r['statuses'] == ['optimal'] for r in idle['rows'])}, true parameters "
                 f"inside: {all(r['true_inside'] for r in idle['rows'])}):\n\n")
         out += table(["inner signal"] + [f"Δη = {d:g}" for d in levels], trows) + "\n\n"

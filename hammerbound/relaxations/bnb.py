@@ -162,10 +162,13 @@ class _Pool:
         self.points.append(pt)
         return pt
 
-    def add(self, theta) -> _Point | None:
-        """Screen, then verify."""
+    def _ensure_screen(self):
         if self.screen is None:
             self.screen = _Screen(self.problem)
+
+    def add(self, theta) -> _Point | None:
+        """Screen, then verify."""
+        self._ensure_screen()
         if not self.screen.screens(theta):
             return None
         return self.verify(theta)
@@ -181,8 +184,7 @@ class _Pool:
         """
         from scipy.optimize import minimize
 
-        if self.screen is None:
-            self.screen = _Screen(self.problem)
+        self._ensure_screen()
         pr = self.problem
         g = pr.gain_row()
         p = pr.p
@@ -223,8 +225,7 @@ class _Pool:
         verification with :func:`check_theta` (backing off towards ``inside`` if needed).
         The bisection stops early once the bracket on ``theta_k`` is below ``resolution``.
         """
-        if self.screen is None:
-            self.screen = _Screen(self.problem)
+        self._ensure_screen()
         lo, hi = 0.0, 1.0
         d = outside - inside
         span = abs(float(d[k])) if k is not None else np.inf

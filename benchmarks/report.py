@@ -279,25 +279,25 @@ def section_methods():
         out.append(table(hdr, _method_rows(same["rows"])))
         out.append("\nFor the `-2level` rows the ratio is to the *independent-error* exact width; "
                    "the exact two-level width is the `exact-2level` row.\n")
-    d2 = _methods_json("delta2", ["N"])
-    if d2:
-        out.append(f"### Relaxation order δ = 2 on small N (Δη = {d2['rows'][0]['noise']})\n")
-        out.append(env_line(d2) + "\n")
-        out.append(table(["N"] + hdr, _method_rows(d2["rows"], "N")))
-        out.append("\n![delta=2 cost and conservatism](figures/bench_methods_delta2.png)\n")
-    sc = _methods_json("scaling", ["N"])
-    if sc:
-        out.append(f"### Scaling in N (Δη = {sc['rows'][0]['noise']})\n")
-        out.append(env_line(sc) + "\n")
-        out.append(table(["N"] + hdr, _method_rows(sc["rows"], "N")))
-        out.append("\n![time and width against N](figures/bench_methods_scaling.png)\n")
-    od = _methods_json("order", ["order"])
-    if od:
-        out.append(f"### Scaling in model order (N = 100, Δη = {od['rows'][0]['noise']})\n")
-        out.append(env_line(od) + "\n")
-        out.append("Widths are listed for the first four parameters only (a1, a2 or b1 ...).\n")
-        out.append(table(["n"] + hdr, _method_rows(od["rows"], "order")))
-        out.append("\n![time and width against model order](figures/bench_methods_order.png)\n")
+    # part, table key, its column title, section title, note, figure caption
+    parts = [
+        ("delta2", "N", "N", "Relaxation order δ = 2 on small N ({noise})", None,
+         "delta=2 cost and conservatism"),
+        ("scaling", "N", "N", "Scaling in N ({noise})", None, "time and width against N"),
+        ("order", "order", "n", "Scaling in model order (N = 100, {noise})",
+         "Widths are listed for the first four parameters only (a1, a2 or b1 ...).\n",
+         "time and width against model order"),
+    ]
+    for part, key, col, title, note, caption in parts:
+        res = _methods_json(part, [key])
+        if not res:
+            continue
+        out.append("### " + title.format(noise=f"Δη = {res['rows'][0]['noise']}") + "\n")
+        out.append(env_line(res) + "\n")
+        if note:
+            out.append(note)
+        out.append(table([col] + hdr, _method_rows(res["rows"], key)))
+        out.append(f"\n![{caption}](figures/bench_methods_{part}.png)\n")
     return "\n".join(out)
 
 

@@ -1,0 +1,34 @@
+"""The tolerance policy in one place (see ``docs/tolerances.md``).
+
+Every decision of the form "is this within the bound?" is made in floating point. The
+policy: a bound ``|e| <= D`` is tested as ``|e| <= D + feasibility_tol(...)`` where the
+tolerance is *relative to the magnitudes of the terms* that make up ``e`` and ``D``. A
+tolerance only ever relaxes a feasibility test (it widens a set, never shrinks it); a set
+is declared empty, or data inconsistent, only when the violation is certified to exceed it.
+
+``FEASIBILITY_RTOL`` is far above the rounding error of evaluating a constraint in double
+precision (``~1e-16`` per term) and far below any noise bound a user can mean, so a
+relaxed set differs from the exact one only in digits that carry no information.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["FEASIBILITY_RTOL", "feasibility_tol"]
+
+#: Relative outward tolerance of every feasibility decision.
+FEASIBILITY_RTOL = 1e-9
+
+
+def feasibility_tol(*magnitudes) -> float | np.ndarray:
+    """Outward tolerance for a constraint whose terms have the given magnitudes.
+
+    ``feasibility_tol(|y|, |m u|, |beta|, D)`` is ``FEASIBILITY_RTOL * (|y| + |m u| + |beta| + D)``
+    (element-wise for arrays). Pass every term that enters the constraint, including the
+    bound itself, so the tolerance follows the data's scale.
+    """
+    total = 0.0
+    for m in magnitudes:
+        total = total + np.abs(m)
+    return FEASIBILITY_RTOL * total

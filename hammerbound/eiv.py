@@ -132,15 +132,24 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     Parameters
     ----------
     na, nb : int, default 2
-        Orders of ``A`` (``1 + a_1 q^-1 + ... + a_na q^-na``) and ``B``.
+        Orders of ``A`` (``1 + a_1 q^-1 + ... + a_na q^-na``) and ``B`` (``nb``
+        coefficients ``b_1 .. b_nb`` as in the chapter, plus ``b_0`` when ``nk = 0``).
+    nk : int or None, default None
+        Input delay (first lag of ``B``, MATLAB's ``nk`` in ``[na nb nk]``): ``nk = 1`` is
+        the chapter's ``B = b_1 q^-1 + ... + b_nb q^-nb``; ``nk = 0`` adds the direct term
+        ``b_0`` (same as ``b0=True``); ``nk > 1`` delays further, ``B = b_nk q^-nk + ... +
+        b_{nk+nb-1} q^-(nk+nb-1)``. ``None``: ``0`` if ``b0`` else ``1``. (MATLAB's
+        ``[na nb nk]`` maps unchanged for ``nk >= 1``; MATLAB's ``nk = 0`` with ``nb``
+        coefficients is ``nb - 1`` here.)
     b0 : bool, default False
-        Whether ``B`` has a direct term ``b_0`` (the chapter has none: ``B = b_1 q^-1 +
-        ... + b_nb q^-nb``).
+        Whether ``B`` has a direct term ``b_0``; shorthand for ``nk=0``.
     noise_bound : float or array of shape (N,), default 0.05
         Output error bound ``deta`` (22.5).
-    steady_state_gain : float or None, default 1.0
-        Imposes ``B(1) / A(1) = steady_state_gain`` (22.8) as a linear equality; ``None``
-        for a plain EIV problem.
+    steady_state_gain : float or None, default None
+        Imposes ``B(1) / A(1) = steady_state_gain`` (22.8) as a linear equality. ``None``
+        (default): a plain EIV problem, no gain constraint. Inside
+        :class:`HammersteinBacklashIdentifier` stage 2 always uses the normalisation
+        ``steady_state_gain=1`` (22.8) that stage 1 assumes.
     method : {"moment", "lp", "exact"}, default "moment"
         See the module docstring.
     relaxation_order : int, default 1
@@ -202,12 +211,14 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     True
     """
 
-    def __init__(self, na=2, nb=2, *, b0=False, noise_bound=0.05, steady_state_gain=1.0,
+    def __init__(self, na=2, nb=2, *, nk=None, b0=False, noise_bound=0.05,
+                 steady_state_gain=None,
                  method="moment", relaxation_order=1, solver="clarabel", solver_options=None,
                  theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
                  on_failure="raise", n_jobs=1, progress=False):
         self.na = na
         self.nb = nb
+        self.nk = nk
         self.b0 = b0
         self.noise_bound = noise_bound
         self.steady_state_gain = steady_state_gain
@@ -231,6 +242,14 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 raise ParameterValidationError(f"{name} must be an integer >= 0; got {v!r}.")
         if not isinstance(self.b0, (bool, np.bool_)):
             raise ParameterValidationError(f"b0 must be True or False; got {self.b0!r}.")
+        nk = self.nk
+        if nk is not None and (not isinstance(nk, numbers.Integral) or isinstance(nk, bool)
+                               or nk < 0):
+            raise ParameterValidationError(
+                f"nk (input delay) must be an integer >= 0 or None; got {nk!r}.")
+        if nk is not None and self.b0 and nk != 0:
+            raise ParameterValidationError(
+                f"b0=True means a direct term (nk=0) but nk={nk}: pass only nk.")
         mn = self.max_nodes
         if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
             raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
@@ -239,9 +258,9 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"time_limit must be a number of seconds >= 0; got {tl!r}."
             )
-        if self.nb == 0 and not self.b0:
+        if self.nb == 0 and self._nk() != 0:
             raise ParameterValidationError(
-                "B has no coefficient: use nb >= 1 or b0=True."
+                "B has no coefficient: use nb >= 1 or b0=True (nk=0)."
             )
         if self.method not in METHODS:
             raise ParameterValidationError(
@@ -283,13 +302,45 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         n = x.size
         deta = _positive_bound("noise_bound", self.noise_bound, n)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
-        if n <= max(self.na, self.nb) + 1:
+        n0 = max(self.na, int(self._lags()[-1]))
+        if n <= n0 + 1:
             raise DataValidationError(
-                f"need more than max(na, nb) + 1 = {max(self.na, self.nb) + 1} samples; got {n}."
+                f"need more than max(na, last input lag) + 1 = {n0 + 1} samples; got {n}."
             )
-        return EIVProblem(yy, x, dx, deta, na=self.na, nb=self.nb, b0=self.b0,
+        return EIVProblem(yy, x, dx, deta, na=self.na, nb=self.nb, nk=self._nk(),
                           gain=self.steady_state_gain, groups=groups,
                           theta_box=self.theta_box)
+
+    def _nk(self) -> int:
+        """The input delay: ``nk``, or ``0``/``1`` from ``b0``."""
+        return int(self.nk) if self.nk is not None else (0 if self.b0 else 1)
+
+    def _lags(self) -> np.ndarray:
+        from .relaxations.problem import b_lags_of
+
+        return b_lags_of(self.nb, self._nk())
+
+    def _assumptions(self, problem) -> str:
+        """One sentence naming every assumption that shaped the feasible set."""
+        lags = problem.b_lags
+        b_terms = " + ".join(f"b{j}" + (f" q^-{j}" if j else "") for j in lags)
+        a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
+        g = self.steady_state_gain
+        gain = ("no steady-state gain constraint" if g is None else
+                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8; pass "
+                "steady_state_gain=None for a plain EIV problem)")
+
+        def rng(v):
+            lo, hi = float(np.min(v)), float(np.max(v))
+            return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"
+
+        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
+               if self.theta_box is None else "user theta_box")
+        shared = "" if problem.n_groups == problem.N else             f"; input errors shared by {problem.n_groups} sample groups"
+        return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
+                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); {gain}; output error "
+                f"bound |eta_t| <= {rng(problem.deta)}; input error bound |dx_t| <= "
+                f"{rng(problem.dx)}{shared}; {box}.")
 
     def _box_hint(self, problem) -> str:
         """A hint for badly scaled data, whose true b_j may lie outside the default box."""
@@ -387,9 +438,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                                     theta_box=lp.bounds, on_failure=self.on_failure)
                 res.extra["lp"] = lp
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
-            hint = self._box_hint(problem)
-            if not hint:
-                raise
+            hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))
+                            if h)
             kw = {"side": exc.side, "first_index": exc.first_index} \
                 if isinstance(exc, EmptyFeasibleSetError) else {}
             raise type(exc)(f"{exc} {hint}", **kw) from exc
@@ -419,8 +469,9 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                                                                   self.param_names_)
         na = self.na
         A = np.concatenate([[1.0], th[:na]])
-        b = th[na:]
-        B = b.copy() if self.b0 else np.concatenate([[0.0], b])
+        lags = self._lags()
+        B = np.zeros(int(lags[-1]) + 1)
+        B[lags] = th[na:]
         return A, B
 
     @property
@@ -430,7 +481,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
     @property
     def B_(self):
-        """Central numerator ``[b_0, b_1, ..., b_nb]`` (``b_0 = 0`` unless ``b0=True``)."""
+        """Central numerator ``[b_0, b_1, ...]`` up to the last lag (zeros before ``nk``)."""
         return self._polys()[1]
 
     def to_transfer_function(self, dt=1.0, theta=None):
@@ -467,7 +518,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     def one_step_envelope(self, X, y, input_bound=0.0):
         """Guaranteed one-step-ahead band of the noise-free output ``w_t``.
 
-        For every ``t >= max(na, nb)`` and every ``theta`` in :attr:`bounds_`, every past
+        For every ``t >= max(na, last input lag)`` and every ``theta`` in :attr:`bounds_`, every past
         ``w_{t-i}`` in ``y_{t-i} +- deta`` and input ``x_{t-j}`` in ``X +- input_bound``,
         ``w_t = -sum a_i w_{t-i} + sum b_j x_{t-j}`` lies in ``[lower_t, upper_t]``
         (interval arithmetic, hence an outer bound). Earlier samples are NaN.
@@ -485,10 +536,10 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         deta = _positive_bound("noise_bound", self.noise_bound, n)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
         na = self.na
-        lags = list(range(0 if self.b0 else 1, self.nb + 1))
+        lags = [int(j) for j in self._lags()]
         lo = np.full(n, np.nan)
         hi = np.full(n, np.nan)
-        n0 = max(na, self.nb)
+        n0 = max(na, lags[-1])
         t = np.arange(n0, n)
         acc_lo = np.zeros(t.size)
         acc_hi = np.zeros(t.size)

@@ -82,9 +82,12 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         Stage-1 estimator (default ``BacklashSetEstimator(noise_bound=0.05)``); its
         ``noise_bound`` is the bound on the steady-state output errors.
     linear : LinearEIVSetEstimator or None
-        Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``, unit
-        steady-state gain (22.8), order-1 moment relaxation); its ``noise_bound`` bounds
-        the PRBS output errors.
+        Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``,
+        order-1 moment relaxation); its ``noise_bound`` bounds the PRBS output errors.
+        Stage 2 always imposes the unit steady-state gain (22.8) that makes the
+        backlash/linear split identifiable (stage 1 measures ``G(1) m``, read as ``m``):
+        a ``linear`` estimator with ``steady_state_gain=None`` (its default) is cloned
+        with ``steady_state_gain=1``; any other gain raises ``ParameterValidationError``.
     inner_signal : {"independent", "two-level"}, default "independent"
         How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
         chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
@@ -161,6 +164,15 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if not isinstance(bl, BacklashSetEstimator) or not isinstance(lin, LinearEIVSetEstimator):
             raise ParameterValidationError(
                 "backlash must be a BacklashSetEstimator and linear a LinearEIVSetEstimator."
+            )
+        g = lin.steady_state_gain
+        if g is None:
+            lin.set_params(steady_state_gain=1.0)  # (22.8), explicitly on the clone
+        elif not (isinstance(g, (int, float, np.number)) and float(g) == 1.0):
+            raise ParameterValidationError(
+                f"the identifier normalises the linear block to unit steady-state gain (22.8) "
+                f"and lets the backlash slopes carry the gain; got linear steady_state_gain="
+                f"{g!r}. Use steady_state_gain=None (or 1.0) on the stage-2 estimator."
             )
         u = _as_signal("X (PRBS input)", X)
         yy = _as_signal("y (PRBS output)", y)

@@ -3,8 +3,12 @@
 Every stage-2 method (polytopic LP, sparse moment relaxation, exact branch-and-bound)
 works on one :class:`EIVProblem`. Conventions (0-based samples ``t = 0 .. N-1``):
 
-* parameters ``theta = [a_1 .. a_na, b_j0 .. b_nb]`` with ``j0 = 0`` if ``b0`` else ``1``;
-* for every ``t`` in :attr:`EIVProblem.equation_times` (``t >= n0 = max(na, nb)``)::
+* parameters ``theta = [a_1 .. a_na, b_j for j in b_lags]``; the input delay ``nk`` (the
+  first lag of ``B``, MATLAB's ``nk``) defaults to ``0`` if ``b0`` else ``1``. ``nb`` counts
+  the chapter's coefficients ``b_1 .. b_nb``: ``nk = 1`` gives lags ``1 .. nb`` (the
+  chapter), ``nk = 0`` adds the direct term (lags ``0 .. nb``, as ``b0=True``) and
+  ``nk > 1`` delays them (lags ``nk .. nk + nb - 1``, MATLAB's ``[na nb nk]``);
+* for every ``t`` in :attr:`EIVProblem.equation_times` (``t >= n0 = max(na, last lag)``)::
 
       (y_t - eta_t) + sum_i a_i (y_{t-i} - eta_{t-i})
           = sum_j b_j (x_t-j - dx_var[g(t-j)])                 (22.34)
@@ -61,10 +65,21 @@ def _as_1d(name, v, n=None, *, positive=False, nonneg=False):
     return a
 
 
-def default_theta_box(na: int, nb: int, b0: bool, b_bound: float = DEFAULT_B_BOUND) -> np.ndarray:
+def b_lags_of(nb: int, nk: int) -> np.ndarray:
+    """Lags ``j`` of the coefficients ``b_j`` of ``B`` for orders ``nb`` and delay ``nk``.
+
+    ``nk = 0``: ``0 .. nb`` (direct term plus the chapter's ``b_1 .. b_nb``); ``nk >= 1``:
+    ``nk .. nk + nb - 1`` (``nb`` coefficients after a delay of ``nk`` samples).
+    """
+    nb, nk = int(nb), int(nk)
+    return np.arange(nk, (nb + 1) if nk == 0 else (nk + nb))
+
+
+def default_theta_box(na: int, nb: int, b0: bool, b_bound: float = DEFAULT_B_BOUND,
+                      nk: int | None = None) -> np.ndarray:
     """A priori box: ``|a_i| <= binom(na, i)`` (stable A, A1) and ``|b_j| <= b_bound``."""
     rows = [(-comb(na, i), comb(na, i)) for i in range(1, na + 1)]
-    nbp = nb + 1 if b0 else nb
+    nbp = b_lags_of(nb, (0 if b0 else 1) if nk is None else nk).size
     rows += [(-b_bound, b_bound)] * nbp
     return np.asarray(rows, dtype=float).reshape(-1, 2)
 
@@ -83,6 +98,7 @@ class EIVProblem:
     gain: float | None = 1.0
     groups: np.ndarray | None = None
     theta_box: np.ndarray | None = None
+    nk: int | None = None
     # derived (filled in __post_init__)
     n_groups: int = field(init=False)
     dx_group: np.ndarray = field(init=False)
@@ -94,15 +110,22 @@ class EIVProblem:
         dx = _as_1d("dx (input bound)", self.dx, n, nonneg=True)
         deta = _as_1d("deta (noise bound)", self.deta, n, positive=True)
         na, nb = int(self.na), int(self.nb)
-        if na < 0 or nb < 0 or (nb == 0 and not self.b0):
+        nk = (0 if self.b0 else 1) if self.nk is None else int(self.nk)
+        if self.nk is not None and self.b0 and nk != 0:
             raise ParameterValidationError(
-                f"orders must satisfy na >= 0, nb >= 0 and B must have a coefficient; "
-                f"got na={na}, nb={nb}, b0={self.b0}."
+                f"b0=True means nk=0 (a direct term); got nk={nk}. Pass only nk."
             )
-        n0 = max(na, nb)
+        lags = b_lags_of(max(nb, 0), max(nk, 0))
+        if na < 0 or nb < 0 or nk < 0 or lags.size == 0:
+            raise ParameterValidationError(
+                f"orders must satisfy na >= 0, nb >= 0, nk >= 0 and B must have a coefficient; "
+                f"got na={na}, nb={nb}, nk={nk}."
+            )
+        n0 = max(na, int(lags[-1]))
         if n - n0 < 1:
             raise DataValidationError(
-                f"need more than max(na, nb) = {n0} samples to write one equation; got {n}."
+                f"need more than max(na, last input lag) = {n0} samples to write one "
+                f"equation; got {n}."
             )
         if self.groups is None:
             groups = np.arange(n)
@@ -125,10 +148,10 @@ class EIVProblem:
             raise DataValidationError(
                 "samples that share an input-error group must have equal x and dx."
             )
-        p = na + nb + (1 if self.b0 else 0)
+        p = na + lags.size
         try:
             box = (
-                default_theta_box(na, nb, self.b0)
+                default_theta_box(na, nb, nk == 0, nk=nk)
                 if self.theta_box is None
                 else np.asarray(self.theta_box, dtype=float)
             )
@@ -146,7 +169,8 @@ class EIVProblem:
             object.__setattr__(self, name, val)
         object.__setattr__(self, "na", na)
         object.__setattr__(self, "nb", nb)
-        object.__setattr__(self, "b0", bool(self.b0))
+        object.__setattr__(self, "nk", nk)
+        object.__setattr__(self, "b0", nk == 0)
         object.__setattr__(self, "theta_box", box)
         object.__setattr__(self, "n_groups", k)
         object.__setattr__(self, "dx_group", dx_group)
@@ -158,19 +182,20 @@ class EIVProblem:
 
     @property
     def p(self) -> int:
-        return self.na + self.nb + (1 if self.b0 else 0)
+        return self.na + self.b_lags.size
 
     @property
     def j0(self) -> int:
-        return 0 if self.b0 else 1
+        """First lag of ``B`` (the input delay ``nk``)."""
+        return self.nk
 
     @property
     def b_lags(self) -> np.ndarray:
-        return np.arange(self.j0, self.nb + 1)
+        return b_lags_of(self.nb, self.nk)
 
     @property
     def n0(self) -> int:
-        return max(self.na, self.nb)
+        return max(self.na, int(self.b_lags[-1]))
 
     @property
     def equation_times(self) -> np.ndarray:
@@ -208,7 +233,7 @@ class EIVProblem:
         """Copy of the problem with another a priori box."""
         return EIVProblem(
             self.y, self.x, self.dx, self.deta, self.na, self.nb, self.b0, self.gain,
-            self.groups, np.asarray(box, dtype=float),
+            self.groups, np.asarray(box, dtype=float), self.nk,
         )
 
     def simulate_noise_free(self, theta) -> np.ndarray:

@@ -1,0 +1,139 @@
+"""Plain EIV problems on the user's own data (issue 14): gain default, input delay nk,
+errors naming the assumptions, the third-party LRIC data set."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+from scipy.signal import lfilter
+
+import hammerbound as hb
+from hammerbound import EmptyFeasibleSetError, LinearEIVSetEstimator, ParameterValidationError
+
+LRIC = Path(__file__).resolve().parents[1] / "hammerbound" / "data" / "eiv_first_order_2017.csv"
+# the exact answer (section "your own data" of the docs; exact method, tol 1e-4)
+LRIC_EXACT = np.array([[-0.9217, -0.8830], [0.7195, 0.7935], [-0.3227, -0.2428]])
+
+
+def lric():
+    d = np.genfromtxt(LRIC, delimiter=",", names=True)
+    return d["u"], d["y"]
+
+
+def _delayed(nk, N=60, seed=3, deta=0.02, dx=0.01):
+    """y = B/A x with B = 0.6 q^-nk + 0.3 q^-(nk+1), A = 1 - 0.5 q^-1; noise at +-bound."""
+    rng = np.random.default_rng(seed)
+    x0 = np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    B = np.zeros(nk + 2)
+    B[nk], B[nk + 1] = 0.6, 0.3
+    w = lfilter(B, [1.0, -0.5], x0)
+    xm = x0 + dx * np.where(rng.random(N) < 0.5, 1.0, -1.0)     # input errors at +-dx
+    y = w + deta * np.where(rng.random(N) < 0.5, 1.0, -1.0)     # output errors at +-deta
+    return xm, y, np.array([-0.5, 0.6, 0.3])
+
+
+def test_plain_eiv_default_has_no_gain_constraint():
+    assert LinearEIVSetEstimator().steady_state_gain is None
+    u, y = lric()
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, noise_bound=0.05, method="lp")
+    est.fit(u, y, input_bound=0.05)
+    assert est.param_names_ == ("a1", "b0", "b1")
+    # same problem as the b0 spelling
+    est2 = LinearEIVSetEstimator(na=1, nb=1, b0=True, noise_bound=0.05, method="lp")
+    np.testing.assert_array_equal(est2.fit(u, y, input_bound=0.05).bounds_, est.bounds_)
+
+
+def test_gain_constraint_named_in_empty_set_error():
+    u, y = lric()
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, noise_bound=0.05, steady_state_gain=1.0,
+                                method="lp")
+    with pytest.raises(EmptyFeasibleSetError) as info:
+        est.fit(u, y, input_bound=0.05)
+    msg = str(info.value)
+    for part in ("na=1", "nb=1", "nk=0", "B(1)/A(1) = 1", "steady_state_gain=None",
+                 "|eta_t| <= 0.05", "|dx_t| <= 0.05", "a priori box"):
+        assert part in msg, part
+
+
+def test_lric_exact_answer_and_independent_lp_check():
+    u, y = lric()
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, noise_bound=0.05, method="exact")
+    est.fit(u, y, input_bound=0.05)
+    np.testing.assert_allclose(est.bounds_, LRIC_EXACT, atol=2e-4)
+    # every verified witness is feasible by an independent LP at fixed theta
+    for info in est.bound_info_:
+        th = info.witness
+        assert th is not None and _feasible_lp(u, y, th, 0.05, 0.05)
+
+
+def _feasible_lp(u, y, theta, dx, deta):
+    """Own check: exists |eta|<=deta, |e|<=dx with (y_t-eta_t) + a (y_{t-1}-eta_{t-1})
+    = b0 (u_t - e_t) + b1 (u_{t-1} - e_{t-1}) for t >= 1 (scipy linprog, margin 1e-7)."""
+    a, b0, b1 = theta
+    N = u.size
+    rows, rhs = [], []
+    for t in range(1, N):
+        r = np.zeros(2 * N)
+        r[t], r[t - 1] = 1.0, a            # eta coefficients
+        r[N + t], r[N + t - 1] = -b0, -b1  # e coefficients
+        rows.append(r)
+        rhs.append(y[t] + a * y[t - 1] - b0 * u[t] - b1 * u[t - 1])
+    A = np.array(rows)
+    rhs = np.array(rhs)
+    bounds = [(-deta, deta)] * N + [(-dx, dx)] * N
+    res = linprog(np.zeros(2 * N), A_ub=np.vstack([A, -A]),
+                  b_ub=np.concatenate([rhs + 1e-7, -rhs + 1e-7]), bounds=bounds,
+                  method="highs")
+    return res.status == 0
+
+
+@pytest.mark.parametrize("method", ["lp", "moment", "exact"])
+@pytest.mark.parametrize("nk", [1, 2, 3])
+def test_input_delay_nk(method, nk):
+    x, y, theta = _delayed(nk)
+    est = LinearEIVSetEstimator(na=1, nb=2, nk=nk, noise_bound=0.02, method=method)
+    est.fit(x, y, input_bound=0.01)
+    assert est.param_names_ == ("a1", f"b{nk}", f"b{nk + 1}")
+    assert est.contains(theta), (est.bounds_, theta)
+    assert np.all(est.radius_ < 0.2)
+    B = est.B_
+    assert B.size == nk + 2 and np.all(B[:nk] == 0)
+    tf = est.to_transfer_function()
+    # the delay shows up as nk poles at z = 0 beyond those of A
+    assert np.sum(np.isclose(tf.poles(), 0.0)) >= nk
+
+
+def test_nk_wrong_delay_is_not_silently_accepted():
+    # data with delay 3 fitted with delay 1: the true theta is not in that model class;
+    # the set must be empty or not contain the (mis-aligned) truth
+    x, y, theta = _delayed(3, deta=0.005, dx=0.0)
+    est = LinearEIVSetEstimator(na=1, nb=2, nk=1, noise_bound=0.005, method="lp")
+    with pytest.raises(EmptyFeasibleSetError, match="nk=1"):
+        est.fit(x, y, input_bound=0.0)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(nk=-1), "nk"), (dict(nk=1.5), "nk"), (dict(nk=2, b0=True), "b0=True"),
+    (dict(nb=0, nk=1), "nb >= 1"),
+])
+def test_nk_bad_params(kw, match):
+    x, y, _ = _delayed(1)
+    with pytest.raises(ParameterValidationError, match=match):
+        LinearEIVSetEstimator(method="lp", **kw).fit(x, y)
+
+
+def test_identifier_imposes_unit_gain_explicitly():
+    ex = hb.chapter_example(0.05, N=100, random_state=0)
+    lin = LinearEIVSetEstimator(noise_bound=0.05, method="lp")
+    ident = hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05), lin)
+    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    assert lin.steady_state_gain is None               # the user's object is untouched
+    assert ident.linear_.steady_state_gain == 1.0
+    assert ident.linear_.problem_.gain == 1.0
+    bad = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(0.05), lin.set_params(steady_state_gain=2.0))
+    with pytest.raises(ParameterValidationError, match="unit steady-state gain"):
+        bad.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)

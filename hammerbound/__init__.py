@@ -24,11 +24,17 @@ from .exceptions import (
 from .experiments import chapter_example, prbs_experiment, square_wave_experiment
 from .feasible_set import FeasibleSet, PolygonFeasibleSet
 from .hammerstein import HammersteinBacklashIdentifier
+from .iodata import IOData
 from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
 from .systems import Backlash, HammersteinSystem, simulate_backlash
 
-__version__ = "0.1.0"
+try:
+    from importlib.metadata import PackageNotFoundError, version
+
+    __version__ = version("hammerbound")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree, not installed
+    __version__ = "0+unknown"
 
 __all__ = [
     "Backlash",
@@ -40,6 +46,7 @@ __all__ = [
     "HammerboundError",
     "HammersteinBacklashIdentifier",
     "HammersteinSystem",
+    "IOData",
     "IllPosedBacklashError",
     "InnerSignalBounds",
     "LinearEIVSetEstimator",

@@ -481,7 +481,7 @@ def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons) -> PolygonFeasible
             "larger amplitudes or reduce the noise bound."
         )
     orth = np.array([[m.min(), m.max()], [c.min(), c.max()]])
-    names = ("m_l", "c_l") if side == "left" else ("m_r", "c_r")
+    names = ("ml", "cl") if side == "left" else ("mr", "cr")
     return PolygonFeasibleSet(
         param_names=names, orthotope=orth, exact=True, vertices=np.column_stack([m, c]),
         edges=edges, side=side, sigma=sigma, vertices_mb=np.asarray(verts_mb),

@@ -1,4 +1,4 @@
-"""The ``hammerbound`` command: ``demo``, ``identify``, ``benchmark``, ``diagnose``."""
+"""The ``hammerbound`` command: ``demo``, ``identify``, ``eiv``, ``benchmark``, ``diagnose``."""
 
 from __future__ import annotations
 
@@ -156,6 +156,107 @@ def cmd_identify(args) -> int:
     return 0
 
 
+def cmd_eiv(args) -> int:
+    """Bound a linear model B/A from one CSV record with bounded input and output errors."""
+    from . import LinearEIVSetEstimator
+    from .iodata import IOData
+    from .tables import interval_records
+
+    data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
+                           dt=args.dt)
+    est = LinearEIVSetEstimator(
+        na=args.na, nb=args.nb, nk=args.nk, noise_bound=args.output_noise,
+        steady_state_gain=args.gain, method=args.method, relaxation_order=args.order,
+        solver=args.solver, n_jobs=args.n_jobs, progress=args.progress and not args.json)
+    est.fit(data, input_bound=args.input_noise)
+    tf = est.to_transfer_function()
+    num = np.ravel(tf.num[0][0]).tolist()
+    den = np.ravel(tf.den[0][0]).tolist()
+    recs = interval_records(est.param_names_, est.bounds_, est._status())
+    if args.json:
+        out = {
+            "parameters": list(est.param_names_),
+            "lower": est.bounds_[:, 0].tolist(), "upper": est.bounds_[:, 1].tolist(),
+            "intervals": recs,
+            "model": {"na": args.na, "nb": args.nb, "nk": est.problem_.nk,
+                      "steady_state_gain": args.gain, "method": args.method},
+            "data": {"file": str(args.data), "N": data.N, "dt": data.dt,
+                     "input": data.input_name, "output": data.output_name,
+                     "input_noise": args.input_noise, "output_noise": args.output_noise},
+            "transfer_function": {"num": num, "den": den, "dt": data.dt,
+                                  "variable": "z"},
+        }
+        print(json.dumps(out, indent=2))
+        return 0
+    print(f"{args.data}: N = {data.N}, dt = "
+          f"{'not given' if data.dt is None else f'{data.dt:g}'}, input {data.input_name!r} "
+          f"(|error| <= {args.input_noise:g}), output {data.output_name!r} "
+          f"(|error| <= {args.output_noise:g})")
+    print(est.summary())
+    dt = "not given" if data.dt is None else f"{data.dt:g}"
+    print(f"central model: G(z) = ({_poly_z(num)}) / ({_poly_z(den)}), dt = {dt}")
+    return 0
+
+
+def _poly_z(coefs) -> str:
+    """``[0.75, -0.28]`` -> ``"0.75 z - 0.28"`` (descending powers of z)."""
+    c = np.trim_zeros(np.asarray(coefs, dtype=float), "f")
+    if c.size == 0:
+        return "0"
+    terms = []
+    for k, v in enumerate(c):
+        p = c.size - 1 - k
+        if v == 0:
+            continue
+        mag = abs(v)
+        num = "" if (mag == 1 and p > 0) else f"{mag:.4g}"
+        zp = "" if p == 0 else ("z" if p == 1 else f"z^{p}")
+        term = " ".join(t for t in (num, zp) if t)
+        sign = "-" if v < 0 else "+"
+        terms.append(term if not terms and v > 0 else f"{sign} {term}" if terms
+                     else f"-{term}")
+    return " ".join(terms)
+
+
+def _add_eiv_parser(sub):
+    p = sub.add_parser(
+        "eiv", help="bound a linear model from one CSV record (errors in variables)",
+        description="Guaranteed intervals of A(q^-1) y = B(q^-1) u from a CSV record whose "
+                    "input and output errors are bounded: |u_t - u0_t| <= input noise, "
+                    "|y_t - y0_t| <= output noise. B = b_nk q^-nk + ... (nk=0: direct term "
+                    "b0 plus b1..b_nb; nk>=1: nb coefficients from lag nk). A column 't' "
+                    "(if present) is the time base.")
+    p.add_argument("data", help="CSV file with a header row")
+    p.add_argument("--na", type=int, required=True, help="order of A")
+    p.add_argument("--nb", type=int, required=True,
+                   help="number of B coefficients after the direct term (b1..b_nb)")
+    p.add_argument("--nk", type=int, default=1,
+                   help="input delay: 0 adds b0, 1 = chapter (default), >1 more delay")
+    p.add_argument("--input-noise", type=float, default=0.0,
+                   help="bound on the input errors (default 0: exact input)")
+    p.add_argument("--output-noise", type=float, required=True,
+                   help="bound on the output errors")
+    p.add_argument("--gain", type=float, default=None,
+                   help="impose the steady-state gain B(1)/A(1) = G (default: none)")
+    p.add_argument("--dt", type=float, default=None,
+                   help="sampling time (default: from the t column, else not given)")
+    p.add_argument("--u-col", default="u", help="input column name (default u)")
+    p.add_argument("--y-col", default="y", help="output column name (default y)")
+    p.add_argument("--t-col", default="t",
+                   help="time column name, used when present (default t; '' to ignore)")
+    p.add_argument("--method", default="moment", choices=["lp", "moment", "exact"],
+                   help="bounding method (default moment; exact gives the tight intervals)")
+    p.add_argument("--order", type=int, default=1, help="moment relaxation order (default 1)")
+    p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
+    p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
+    p.add_argument("--progress", action="store_true",
+                   help="progress bars on stderr (exact method; ignored with --json)")
+    p.add_argument("--json", action="store_true",
+                   help="write the result as JSON to stdout (and nothing else)")
+    p.set_defaults(func=cmd_eiv)
+    return p
+
+
 def cmd_benchmark(args) -> int:
     """Quick method comparison on the chapter example (the full suite is in benchmarks/)."""
     from . import HammersteinBacklashIdentifier, LinearEIVSetEstimator
@@ -239,6 +340,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--progress", action="store_true", help="progress bars (exact method)")
     _add_stage2_options(p)
     p.set_defaults(func=cmd_identify)
+
+    _add_eiv_parser(sub)
 
     p = sub.add_parser("benchmark", help="quick method comparison (or the full suite)",
                        description="LP vs moment vs exact (independent and two-level) on the "

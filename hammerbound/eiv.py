@@ -126,6 +126,17 @@ def _theta_vector(theta, p, names):
     return th
 
 
+def _is_vector_like(theta) -> bool:
+    """A flat sequence of numbers (not a TransferFunction nor an (A, B) pair)."""
+    if hasattr(theta, "num") and hasattr(theta, "den"):
+        return False
+    try:
+        arr = np.asarray(theta, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return arr.ndim == 1
+
+
 class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     """Guaranteed parameter intervals of ``G(q^-1) = B/A`` from bounded-error EIV data.
 
@@ -336,7 +347,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
         box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
                if self.theta_box is None else "user theta_box")
-        shared = "" if problem.n_groups == problem.N else             f"; input errors shared by {problem.n_groups} sample groups"
+        shared = ("" if problem.n_groups == problem.N else
+                  f"; input errors shared by {problem.n_groups} sample groups")
         return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
                 f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); {gain}; output error "
                 f"bound |eta_t| <= {rng(problem.deta)}; input error bound |dx_t| <= "
@@ -379,21 +391,25 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 )
 
     # ------------------------------------------------------------------ fit
-    def fit(self, X, y, input_bound=0.0, groups=None):
+    def fit(self, X, y=None, input_bound=0.0, input_groups=None, *, groups=None):
         """Bound the linear block from central input ``X`` and measured output ``y``.
 
         Parameters
         ----------
-        X : array of shape (N,) or (N, 1)
-            Central input ``x^c`` (e.g. the inner signal from stage 1).
-        y : array of shape (N,)
-            Measured output.
+        X : array of shape (N,) or (N, 1), or IOData
+            Central input ``x^c`` (e.g. the inner signal from stage 1), or an
+            :class:`~hammerbound.IOData` holding input, output and sampling time (then
+            ``y`` is None and ``dt`` flows into :meth:`to_transfer_function`).
+        y : array of shape (N,) or None
+            Measured output (None with an IOData).
         input_bound : float or array of shape (N,), default 0.0
             ``dx``: the true input is within ``x^c +- dx`` (22.31).
-        groups : int array of shape (N,), optional
+        input_groups : int array of shape (N,), optional
             Samples with the same label share *one* unknown input error (e.g. the two
             levels of a PRBS inner signal under Result 1: label ``u < 0``). Default:
             independent per-sample errors, as in the chapter.
+        groups : deprecated
+            Old name of ``input_groups`` (it collided with scikit-learn's CV ``groups``).
 
         Returns
         -------
@@ -402,14 +418,27 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         Raises
         ------
         DataValidationError, ParameterValidationError
-            Malformed data or settings.
+            Malformed data or settings; a non-contiguous subset of an IOData (KFold).
         EmptyFeasibleSetError
-            No ``theta`` explains the data within the bounds (names the first equation).
+            No ``theta`` explains the data within the bounds (names the first equation and
+            the active assumptions: orders, delay, gain constraint, bounds, box).
         UnboundedSetError
-            The data do not bound some parameter inside ``theta_box``.
+            The data do not bound some parameter inside ``theta_box`` (names the same).
         SolverError, SolverNotAvailableError, SolverOptionError
             Moment-method backend problems.
         """
+        from .iodata import unpack
+
+        if groups is not None:
+            import warnings
+
+            warnings.warn("fit(groups=...) is deprecated: use input_groups=... (scikit-learn "
+                          "reserves 'groups' for the CV splitter).", FutureWarning,
+                          stacklevel=2)
+            if input_groups is None:
+                input_groups = groups
+        groups = input_groups
+        X, y, data = unpack(X, y)
         self._check_params()
         problem = self._build_problem(X, y, input_bound, groups)
         from .relaxations.lp import lp_bounds
@@ -460,7 +489,41 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.feasible_set_ = FeasibleSet(self.param_names_, self.bounds_.copy(), exact=False,
                                          polytopes=polys, extra=extra)
         self.n_features_in_ = 1
+        self.dt_ = None if data is None else data.dt
+        self.signal_names_ = ("u", "y") if data is None else (data.input_name,
+                                                             data.output_name)
+        self.n_samples_ = problem.N
         return self
+
+    # ------------------------------------------------------------------ tables
+    def _status(self):
+        from .tables import bound_status
+
+        return bound_status(self.param_names_, self.bound_info_, self.box_limited_)
+
+    def to_frame(self):
+        """The intervals as a table: parameter, lower, centre, upper, half_width, status.
+
+        A pandas DataFrame when pandas is installed, else a numpy structured array with
+        the same fields. ``status`` is ``"optimal"`` or says which end is set by the a
+        priori box or by a solver/time limit (still guaranteed).
+        """
+        check_is_fitted(self, "bounds_")
+        from .tables import interval_frame
+
+        return interval_frame(self.param_names_, self.bounds_, self._status())
+
+    def summary(self) -> str:
+        """Text summary: model structure, assumptions, data and the interval table."""
+        check_is_fitted(self, "bounds_")
+        from .tables import interval_text
+
+        pr = self.problem_
+        g = self.steady_state_gain
+        head = (f"LinearEIVSetEstimator: method {self.method}, na={pr.na} nb={pr.nb} "
+                f"nk={pr.nk}, N = {pr.N}, dt = {'not given' if self.dt_ is None else f'{self.dt_:g}'}, "
+                + ("no gain constraint" if g is None else f"gain B(1)/A(1) = {g:g}"))
+        return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     # ------------------------------------------------------------------ model
     def _polys(self, theta=None):
@@ -484,19 +547,71 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         """Central numerator ``[b_0, b_1, ...]`` up to the last lag (zeros before ``nk``)."""
         return self._polys()[1]
 
-    def to_transfer_function(self, dt=1.0, theta=None):
-        """The central (or given ``theta``) model as a discrete ``control.TransferFunction``."""
+    def to_transfer_function(self, dt=None, theta=None):
+        """The central (or given ``theta``) model as a discrete ``control.TransferFunction``.
+
+        ``dt`` defaults to the sampling time of the fitted data (an :class:`IOData`), or
+        ``True`` (discrete, sampling time not given) as in python-control.
+        """
         import control
+
+        if dt is None:
+            dt = getattr(self, "dt_", None)
+            dt = True if dt is None else dt
 
         A, B = self._polys(theta)
         n = max(A.size, B.size)
         A = np.concatenate([A, np.zeros(n - A.size)])
         B = np.concatenate([B, np.zeros(n - B.size)])
-        return control.tf(B, A, dt)
+        names = getattr(self, "signal_names_", None)
+        if names is None or names == ("u", "y"):
+            return control.tf(B, A, dt)
+        return control.tf(B, A, dt, inputs=names[0], outputs=names[1])
+
+    def theta_of(self, G):
+        """``theta`` in :attr:`param_names_` order of a model ``G``: a discrete
+        ``control.TransferFunction`` or a pair ``(A, B)`` in powers of ``q^-1``.
+
+        Raises ParameterValidationError if ``G`` has a coefficient outside this model
+        structure (a higher order, another delay).
+        """
+        check_is_fitted(self, "bounds_")
+        from .systems import as_polynomials
+
+        G_dt = getattr(G, "dt", None)
+        dt = getattr(self, "dt_", None)
+        if dt is not None and isinstance(G_dt, numbers.Real) and not isinstance(G_dt, bool) \
+                and not np.isclose(float(G_dt), dt, rtol=1e-9, atol=0):
+            raise ParameterValidationError(
+                f"the transfer function has dt={G_dt:g} but the data were sampled with "
+                f"dt={dt:g}; discretise it at dt={dt:g} first.")
+        A, B = as_polynomials(G)
+        lags = self._lags()
+        na = self.na
+        a = np.zeros(na)
+        a[:min(na, A.size - 1)] = A[1:na + 1]
+        extra_a = A[na + 1:]
+        b = np.zeros(lags.size)
+        keep = lags[lags < B.size]
+        b[:keep.size] = B[keep]
+        mask = np.ones(B.size, bool)
+        mask[keep] = False
+        if np.any(extra_a != 0) or np.any(B[mask] != 0):
+            raise ParameterValidationError(
+                f"the model has coefficients outside this structure (na={na}, nb={self.nb}, "
+                f"nk={self._nk()}: A = {A.tolist()}, B = {B.tolist()}); pass theta in order "
+                f"{self.param_names_} instead.")
+        return np.concatenate([a, b])
 
     def contains(self, theta, tol=0.0) -> bool:
-        """Whether ``theta`` lies in every reported interval."""
+        """Whether ``theta`` lies in every reported interval.
+
+        ``theta`` is a vector in :attr:`param_names_` order, a discrete
+        ``control.TransferFunction`` or a pair ``(A, B)`` (see :meth:`theta_of`).
+        """
         check_is_fitted(self, "bounds_")
+        if not _is_vector_like(theta):
+            theta = self.theta_of(theta)
         th = _theta_vector(theta, self.bounds_.shape[0], self.param_names_)
         return bool(np.all(th >= self.bounds_[:, 0] - tol) and np.all(th <= self.bounds_[:, 1] + tol))
 

@@ -92,6 +92,14 @@ class FeasibleSet:
         """Uncertainty bound Delta gamma (22.23)."""
         return 0.5 * (self.orthotope[:, 1] - self.orthotope[:, 0])
 
+    def _intervals_repr(self) -> str:
+        return ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]"
+                         for n, (lo, hi) in zip(self.param_names, self.orthotope, strict=False))
+
+    def __repr__(self) -> str:
+        extra = f", {len(self.polytopes)} outer polytope(s)" if self.polytopes else ""
+        return (f"FeasibleSet({self._intervals_repr()}; exact={self.exact}{extra})")
+
     def contains(self, params, tol: float = 0.0) -> bool:
         """Whether ``params`` lies in the orthotope (exact sets override this)."""
         p = np.asarray(params, dtype=float)
@@ -112,6 +120,11 @@ class PolygonFeasibleSet(FeasibleSet):
     sigma: float = -1.0
     vertices_mb: np.ndarray | None = None
     constraints: tuple = ()
+
+    def __repr__(self) -> str:
+        nv = 0 if self.vertices is None else len(self.vertices)
+        return (f"PolygonFeasibleSet(side={self.side!r}, {self._intervals_repr()}; "
+                f"{nv} vertices, {len(self.edges)} edges)")
 
     def contains(self, params, tol: float = 1e-12) -> bool:
         """Exact membership of ``(m, c)`` in the set (not just in the orthotope)."""

@@ -56,11 +56,11 @@ def _steady_pair(steady_state):
     return u, y
 
 
-def _central_system(backlash, A, B):
+def _central_system(backlash, A, B, dt=None):
     """The central model; its A need not be stable (the centre of intervals that contain
     stable A's may lie outside the stability region): warn instead of failing the fit."""
     try:
-        return HammersteinSystem(backlash, (A, B))
+        return HammersteinSystem(backlash, (A, B), dt=dt)
     except ParameterValidationError:
         import warnings
 
@@ -70,7 +70,7 @@ def _central_system(backlash, A, B):
             "model. Narrow the intervals (more data, method='exact', inner_signal='two-level').",
             RuntimeWarning, stacklevel=3,
         )
-        return HammersteinSystem._unchecked(backlash, (A, B))
+        return HammersteinSystem._unchecked(backlash, (A, B), dt=dt)
 
 
 class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
@@ -128,15 +128,16 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.inner_signal = inner_signal
         self.prbs_level = prbs_level
 
-    def fit(self, X, y, steady_state=None):
+    def fit(self, X, y=None, steady_state=None):
         """Run stage 1 on ``steady_state``, check Result 1, run stage 2 on ``(X, y)``.
 
         Parameters
         ----------
-        X : array-like of shape (N,) or (N, 1)
-            PRBS input, taking the two values ``+-u*``.
-        y : array-like of shape (N,)
-            Measured PRBS output.
+        X : array-like of shape (N,) or (N, 1), or IOData
+            PRBS input, taking the two values ``+-u*``; or an :class:`~hammerbound.IOData`
+            with the PRBS input and output (its ``dt`` flows into :attr:`system_`).
+        y : array-like of shape (N,) or None
+            Measured PRBS output (None with an IOData).
         steady_state : SteadyStateData, dict with keys "u" and "y", or pair (u_ss, y_ss)
             Steady-state square-wave data for stage 1 (input amplitudes of both signs and
             the measured steady outputs).
@@ -174,6 +175,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 f"and lets the backlash slopes carry the gain; got linear steady_state_gain="
                 f"{g!r}. Use steady_state_gain=None (or 1.0) on the stage-2 estimator."
             )
+        from .iodata import unpack
+
+        X, y, data = unpack(X, y)
         u = _as_signal("X (PRBS input)", X)
         yy = _as_signal("y (PRBS output)", y)
         if u.shape != yy.shape:
@@ -204,7 +208,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         inner = bl.inner_signal_bounds(u_star)  # checks Result 1
         xc, dx = inner.transform(u)
         groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
-        lin.fit(xc, yy, input_bound=dx, groups=groups)
+        lin.fit(xc, yy, input_bound=dx, input_groups=groups)
+        dt = None if data is None else data.dt
+        lin.dt_ = dt
         self.backlash_ = bl
         self.linear_ = lin
         self.u_star_ = u_star
@@ -215,9 +221,35 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.bounds_ = np.vstack([bl.gamma_bounds_, lin.bounds_])
         self.param_names_ = ("ml", "cl", "mr", "cr") + tuple(lin.param_names_)
         ml, cl, mr, cr = bl.gamma_center_
-        self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_)
+        self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, dt)
+        self.dt_ = dt
         self.n_features_in_ = 1
         return self
+
+    def _status(self):
+        return ["optimal"] * 4 + list(self.linear_._status())
+
+    def to_frame(self):
+        """All intervals (backlash, then linear block) as a table: parameter, lower,
+        centre, upper, half_width, status. A pandas DataFrame when pandas is installed,
+        else a numpy structured array with the same fields."""
+        check_is_fitted(self, "bounds_")
+        from .tables import interval_frame
+
+        return interval_frame(self.param_names_, self.bounds_, self._status())
+
+    def summary(self) -> str:
+        """Text summary: PRBS level, stage-2 settings and the interval table."""
+        check_is_fitted(self, "bounds_")
+        from .tables import interval_text
+
+        lin = self.linear_
+        pr = lin.problem_
+        head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
+                f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
+                f"{self.inner_signal}, N = {pr.N}, dt = "
+                f"{'not given' if self.dt_ is None else f'{self.dt_:g}'}")
+        return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     @property
     def center_(self):
@@ -229,9 +261,20 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "bounds_")
         return 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
 
-    def contains(self, gamma, theta) -> bool:
-        """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals."""
+    def contains(self, gamma, theta=None) -> bool:
+        """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals.
+
+        ``gamma``: ``(ml, cl, mr, cr)`` or a :class:`Backlash`; ``theta``: a vector in
+        ``linear_.param_names_`` order, a discrete ``control.TransferFunction`` or an
+        ``(A, B)`` pair. ``contains(system)`` with a :class:`HammersteinSystem` checks both.
+        """
         check_is_fitted(self, "bounds_")
+        if isinstance(gamma, HammersteinSystem) and theta is None:
+            gamma, theta = gamma.backlash, (gamma.A, gamma.B)
+        if isinstance(gamma, Backlash):
+            gamma = gamma.gamma
+        if theta is None:
+            raise DataValidationError("contains needs theta (or a HammersteinSystem).")
         g = np.asarray(gamma, dtype=float)
         if g.shape != (4,):
             raise DataValidationError("gamma must be (m_l, c_l, m_r, c_r).")

@@ -9,7 +9,7 @@ import numpy as np
 
 from .exceptions import DataValidationError
 
-__all__ = ["read_columns", "load_chapter_tables"]
+__all__ = ["csv_header", "example_data_path", "read_columns", "load_chapter_tables"]
 
 
 def read_columns(path, columns) -> dict[str, np.ndarray]:
@@ -51,6 +51,36 @@ def read_columns(path, columns) -> dict[str, np.ndarray]:
             f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
             "as plain UTF-8 CSV."
         ) from None
+
+
+def csv_header(path) -> list[str]:
+    """The header row (column names) of a CSV file."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataValidationError(f"{path}: no such file; check the path.")
+    try:
+        with path.open(newline="") as fh:
+            row = next(csv.reader(fh), None)
+    except UnicodeDecodeError as exc:
+        raise DataValidationError(
+            f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
+            "as plain UTF-8 CSV.") from None
+    if row is None:
+        raise DataValidationError(f"{path}: the file is empty; expected a header row.")
+    return [h.strip() for h in row]
+
+
+def example_data_path(name: str = "eiv_first_order_2017.csv") -> Path:
+    """Path of a data set shipped with hammerbound (``hammerbound/data``).
+
+    ``eiv_first_order_2017.csv``: 30 samples (dt = 0.1) of a first-order system with input
+    and output errors bounded by 0.05, from the public course repository P0li22/LRIC
+    (Politecnico di Torino, exam of 22 February 2017); see ``README-lric.md`` beside it.
+    """
+    path = Path(__file__).resolve().parent / "data" / name
+    if not path.is_file():
+        raise DataValidationError(f"no shipped data set named {name!r}.")
+    return path
 
 
 def _read_columns(path, columns):

@@ -30,9 +30,9 @@ def plot_feasible_set(fs, ax=None, *, true_params=None, show_orthotope=True, col
                 label="tight orthotope (22.22)")
     if true_params is not None:
         ax.plot(*true_params, "r*", ms=10, label="true value")
-    n = fs.param_names
-    ax.set_xlabel(f"${n[0][0]}_{n[0][2]}$")
-    ax.set_ylabel(f"${n[1][0]}_{n[1][2]}$")
+    n = [str(k).replace("_", "") for k in fs.param_names]  # "ml" -> $m_l$
+    ax.set_xlabel(f"${n[0][0]}_{{{n[0][1:]}}}$")
+    ax.set_ylabel(f"${n[1][0]}_{{{n[1][1:]}}}$")
     ax.ticklabel_format(useOffset=False)
     ax.legend(fontsize=7)
     return ax

@@ -71,7 +71,7 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     fig.savefig(out / "backlash_sets.png", dpi=120)
     plt.close(fig)
     lines += ["## Stage 1: backlash", "", interval_table(
-        ("m_l", "c_l", "m_r", "c_r"), bl.gamma_bounds_, gamma_true), "",
+        ("ml", "cl", "mr", "cr"), bl.gamma_bounds_, gamma_true), "",
         "![backlash feasible sets](backlash_sets.png)", ""]
     for fs in (bl.left_, bl.right_):
         v = np.asarray(fs.vertices_mb)

@@ -232,6 +232,19 @@ def normalize_gain(A, B, backlash: Backlash | None = None):
     return A, B / g, Backlash(backlash.ml * g, backlash.cl, backlash.mr * g, backlash.cr)
 
 
+def _system_dt(linear, dt):
+    """Sampling time of a system: explicit ``dt``, else a TransferFunction's numeric dt."""
+    if dt is None:
+        tf_dt = getattr(linear, "dt", None)
+        if tf_dt is not None and not isinstance(tf_dt, bool) and tf_dt is not True:
+            dt = tf_dt
+    if dt is None:
+        return None
+    if isinstance(dt, bool) or not np.isfinite(float(dt)) or float(dt) <= 0:
+        raise ParameterValidationError(f"dt must be a number > 0 or None; got {dt!r}.")
+    return float(dt)
+
+
 def _is_stable(A) -> bool:
     if A.size <= 1:
         return True
@@ -249,13 +262,18 @@ class HammersteinSystem:
         ``B = [b_0, b_1, ..., b_nb]``.
     x0 : float
         Initial backlash state ``x_{-1}``.
+    dt : float or None
+        Sampling time; default: that of ``linear`` when it is a TransferFunction with a
+        numeric ``dt``, else None (not given; ``to_transfer_function`` then uses
+        python-control's ``dt=True``).
     """
 
-    def __init__(self, backlash: Backlash, linear, x0: float = 0.0):
+    def __init__(self, backlash: Backlash, linear, x0: float = 0.0, dt=None):
         if not isinstance(backlash, Backlash):
             raise ParameterValidationError("backlash must be a hammerbound.systems.Backlash.")
         self.backlash = backlash
         self.A, self.B = as_polynomials(linear)
+        self.dt = _system_dt(linear, dt)
         if not _is_stable(self.A):
             raise ParameterValidationError(
                 "the linear block is not asymptotically stable (assumption A1): A(q^-1) has a "
@@ -269,13 +287,15 @@ class HammersteinSystem:
             raise ParameterValidationError(f"x0 must be a finite number; got {x0!r}.")
 
     @classmethod
-    def _unchecked(cls, backlash: Backlash, linear, x0: float = 0.0) -> HammersteinSystem:
+    def _unchecked(cls, backlash: Backlash, linear, x0: float = 0.0,
+                   dt=None) -> HammersteinSystem:
         """Like the constructor but without the stability check (A1). For central models
         of identified intervals, whose centre need not be stable."""
         self = cls.__new__(cls)
         self.backlash = backlash
         self.A, self.B = as_polynomials(linear)
         self.x0 = float(x0)
+        self.dt = _system_dt(linear, dt)
         return self
 
     @property
@@ -296,9 +316,13 @@ class HammersteinSystem:
         b = self.B if self.B[0] != 0 else self.B[1:]
         return np.concatenate([self.A[1:], b])
 
-    def to_transfer_function(self, dt=True):
-        """The linear block as a discrete ``control.TransferFunction``."""
+    def to_transfer_function(self, dt=None):
+        """The linear block as a discrete ``control.TransferFunction``; ``dt`` defaults to
+        the system's sampling time (``True``, python-control's "not given", without one)."""
         import control
+
+        if dt is None:
+            dt = True if self.dt is None else self.dt
 
         n = max(self.A.size, self.B.size)
         num = np.concatenate([self.B, np.zeros(n - self.B.size)])
@@ -321,7 +345,8 @@ class HammersteinSystem:
         return w
 
     def __repr__(self) -> str:
+        dt = "" if self.dt is None else f", dt={self.dt:g}"
         return (
             f"HammersteinSystem(backlash={self.backlash!r}, A={self.A.tolist()}, "
-            f"B={self.B.tolist()})"
+            f"B={self.B.tolist()}{dt})"
         )

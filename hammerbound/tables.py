@@ -1,0 +1,72 @@
+"""Named interval tables of fitted estimators: ``summary()`` text and ``to_frame()``.
+
+:func:`interval_frame` returns a pandas DataFrame when pandas is importable, else a numpy
+structured array with the same columns (``parameter, lower, centre, upper, half_width,
+status``); :func:`interval_text` renders the same table as fixed-width text.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["interval_frame", "interval_records", "interval_text", "bound_status"]
+
+COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
+
+
+def bound_status(names, infos=(), box_limited=()) -> list[str]:
+    """Per parameter: ``"optimal"`` when both ends are optimal solver bounds set by the
+    data, else which end is set by the a priori box or by a limit (still guaranteed)."""
+    by_end = {}
+    for info in infos:
+        by_end[(info.param, "lower" if info.sense == "min" else "upper")] = info.status
+    out = []
+    for name in names:
+        parts = []
+        for end in ("lower", "upper"):
+            if f"{name} {end}" in box_limited:
+                parts.append(f"{end} from a priori box")
+            else:
+                st = by_end.get((name, end), "optimal")
+                if st != "optimal":
+                    parts.append(f"{end} {st}")
+        out.append("; ".join(parts) or "optimal")
+    return out
+
+
+def interval_records(names, bounds, status=None) -> list[dict]:
+    """One dict per parameter with the keys of :data:`COLUMNS`."""
+    b = np.asarray(bounds, dtype=float).reshape(-1, 2)
+    status = list(status) if status is not None else ["optimal"] * len(names)
+    return [{"parameter": str(n), "lower": float(lo), "centre": float(0.5 * (lo + hi)),
+             "upper": float(hi), "half_width": float(0.5 * (hi - lo)), "status": s}
+            for n, (lo, hi), s in zip(names, b, status, strict=True)]
+
+
+def interval_frame(names, bounds, status=None):
+    """pandas DataFrame (if pandas is installed) or numpy structured array of the intervals."""
+    recs = interval_records(names, bounds, status)
+    try:
+        import pandas as pd
+    except ImportError:
+        width = max([len(r["parameter"]) for r in recs] + [1])
+        swidth = max([len(r["status"]) for r in recs] + [1])
+        dtype = [("parameter", f"U{width}"), ("lower", float), ("centre", float),
+                 ("upper", float), ("half_width", float), ("status", f"U{swidth}")]
+        return np.array([tuple(r[c] for c in COLUMNS) for r in recs], dtype=dtype)
+    return pd.DataFrame.from_records(recs, columns=list(COLUMNS))
+
+
+def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
+    """Fixed-width text table of the intervals (the ``summary()`` of estimators)."""
+    recs = interval_records(names, bounds, status)
+    w = max([len(r["parameter"]) for r in recs] + [9])
+    cw = digits + 7
+    lines = [] if title is None else [title]
+    lines.append(f"{'parameter':<{w}} {'lower':>{cw}} {'centre':>{cw}} {'upper':>{cw}} "
+                 f"{'half-width':>{cw}}  status")
+    for r in recs:
+        nums = " ".join(f"{r[c]:>{cw}.{digits}f}" for c in ("lower", "centre", "upper",
+                                                            "half_width"))
+        lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")
+    return "\n".join(lines)

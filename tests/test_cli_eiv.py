@@ -1,0 +1,118 @@
+"""``hammerbound eiv``: the general EIV problem from one CSV record (issue 14)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from hammerbound.cli import main
+from hammerbound.io import example_data_path
+
+ROOT = Path(__file__).resolve().parents[1]
+LRIC_EXACT = np.array([[-0.9217, -0.8830], [0.7195, 0.7935], [-0.3227, -0.2428]])
+LRIC_ARGS = ["--na", "1", "--nb", "1", "--nk", "0", "--input-noise", "0.05",
+             "--output-noise", "0.05", "--dt", "0.1"]
+
+
+def _record(tmp_path, t=None, names=("u", "y"), N=40, seed=1):
+    """Own simulation: y = 0.5 x(t-1) / (1 - 0.6 q^-1) with output errors at +-0.01."""
+    rng = np.random.default_rng(seed)
+    u = np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    y = lfilter([0, 0.5], [1, -0.6], u) + 0.01 * np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    path = tmp_path / "rec.csv"
+    cols = ([] if t is None else ["t"]) + list(names)
+    rows = [[*([] if t is None else [t[k]]), u[k], y[k]] for k in range(N)]
+    path.write_text(",".join(cols) + "\n" + "\n".join(",".join(repr(float(v)) for v in r)
+                                                      for r in rows) + "\n")
+    return path
+
+
+def test_eiv_json_lric_exact(capsys):
+    rc = main(["eiv", str(example_data_path()), *LRIC_ARGS, "--method", "exact", "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["parameters"] == ["a1", "b0", "b1"]
+    bounds = np.column_stack([out["lower"], out["upper"]])
+    np.testing.assert_allclose(bounds, LRIC_EXACT, atol=2e-4)
+    assert [r["parameter"] for r in out["intervals"]] == ["a1", "b0", "b1"]
+    assert out["data"]["dt"] == 0.1 and out["data"]["N"] == 30
+    assert out["transfer_function"]["dt"] == 0.1
+    np.testing.assert_allclose(out["transfer_function"]["den"][1], bounds[0].mean())
+
+
+def test_eiv_json_subprocess_stdout_is_only_json(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(
+        [sys.executable, "-m", "hammerbound.cli", "eiv", str(example_data_path()),
+         *LRIC_ARGS, "--method", "lp", "--json"],
+        capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)  # nothing but the JSON document on stdout
+    assert out["parameters"] == ["a1", "b0", "b1"]
+    lo, hi = np.array(out["lower"]), np.array(out["upper"])
+    # LP is an outer bound of the exact intervals
+    assert np.all(lo <= LRIC_EXACT[:, 0] + 1e-4) and np.all(hi >= LRIC_EXACT[:, 1] - 1e-4)
+
+
+def test_eiv_text_output_names_and_model(capsys):
+    rc = main(["eiv", str(example_data_path()), *LRIC_ARGS, "--method", "lp"])
+    assert rc == 0
+    out = capsys.readouterr().out
+    assert "dt = 0.1" in out and "no gain constraint" in out
+    for name in ("a1", "b0", "b1"):
+        assert any(line.startswith(name + " ") for line in out.splitlines())
+    assert "G(z) = (" in out and "z - 0.9" in out
+
+
+def test_eiv_time_column_gives_dt_and_columns_by_name(tmp_path, capsys):
+    path = _record(tmp_path, t=0.25 * np.arange(40) + 3.0, names=("volt", "speed"))
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+               "--u-col", "volt", "--y-col", "speed", "--method", "lp", "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["data"]["dt"] == 0.25
+    assert out["data"]["input"] == "volt" and out["data"]["output"] == "speed"
+    lo, hi = np.array(out["lower"]), np.array(out["upper"])
+    assert np.all((lo <= [-0.6, 0.5]) & ([-0.6, 0.5] <= hi))
+
+
+def test_eiv_sample_counter_time_column_with_dt(tmp_path, capsys):
+    path = _record(tmp_path, t=np.arange(40))
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+               "--dt", "0.1", "--method", "lp", "--json"])
+    assert rc == 0
+    assert json.loads(capsys.readouterr().out)["data"]["dt"] == 0.1
+
+
+@pytest.mark.parametrize("t, extra, match", [
+    (np.r_[0.0, 0.1, 0.2, 0.35, 0.4 + 0.1 * np.arange(36)], [], "not uniformly sampled"),
+    (0.5 * np.arange(40), ["--dt", "0.1"], "step 0.5 but dt=0.1"),
+])
+def test_eiv_bad_time_column(tmp_path, capsys, t, extra, match):
+    path = _record(tmp_path, t=t)
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+               "--method", "lp", "--json", *extra])
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == ""
+    assert match in cap.err
+
+
+def test_eiv_missing_column_and_gain_error(tmp_path, capsys):
+    path = _record(tmp_path)
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+               "--u-col", "volt", "--json"])
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == "" and "volt" in cap.err
+    # a wrong gain constraint: the error names it
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+               "--gain", "3", "--method", "lp", "--json"])
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == ""
+    assert "EmptyFeasibleSetError" in cap.err and "B(1)/A(1) = 3" in cap.err

@@ -303,7 +303,19 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 f"{type(self.solver_options).__name__}."
             )
 
-    def _build_problem(self, X, y, input_bound, groups):
+    def _output_bound(self, n, output_bound=None):
+        """``deta`` of shape (n,): the fit-time ``output_bound`` or the ``noise_bound``."""
+        if output_bound is not None:
+            return _positive_bound("output_bound", output_bound, n)
+        try:
+            return _positive_bound("noise_bound", self.noise_bound, n)
+        except DataValidationError as exc:
+            raise DataValidationError(
+                f"{exc} In cross-validation pass per-sample bounds to fit (output_bound=..., "
+                "input_bound=...): scikit-learn splits fit arguments with the samples, not "
+                "constructor parameters.") from None
+
+    def _build_problem(self, X, y, input_bound, groups, output_bound=None):
         x = _as_signal("X", X)
         yy = _as_signal("y", y)
         if x.shape != yy.shape:
@@ -311,7 +323,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 f"X and y must have the same number of samples; got {x.size} and {yy.size}."
             )
         n = x.size
-        deta = _positive_bound("noise_bound", self.noise_bound, n)
+        deta = self._output_bound(n, output_bound)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
         n0 = max(self.na, int(self._lags()[-1]))
         if n <= n0 + 1:
@@ -391,7 +403,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 )
 
     # ------------------------------------------------------------------ fit
-    def fit(self, X, y=None, input_bound=0.0, input_groups=None, *, groups=None):
+    def fit(self, X, y=None, input_bound=0.0, input_groups=None, *, output_bound=None,
+            groups=None):
         """Bound the linear block from central input ``X`` and measured output ``y``.
 
         Parameters
@@ -408,6 +421,10 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             Samples with the same label share *one* unknown input error (e.g. the two
             levels of a PRBS inner signal under Result 1: label ``u < 0``). Default:
             independent per-sample errors, as in the chapter.
+        output_bound : float or array of shape (N,), optional
+            Per-sample output error bound for this fit, overriding ``noise_bound``. Pass
+            sample-aligned bounds here (not as ``noise_bound``) in cross-validation:
+            scikit-learn splits fit arguments together with the samples.
         groups : deprecated
             Old name of ``input_groups`` (it collided with scikit-learn's CV ``groups``).
 
@@ -440,7 +457,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         groups = input_groups
         X, y, data = unpack(X, y)
         self._check_params()
-        problem = self._build_problem(X, y, input_bound, groups)
+        problem = self._build_problem(X, y, input_bound, groups, output_bound)
         from .relaxations.lp import lp_bounds
 
         try:
@@ -615,22 +632,52 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         th = _theta_vector(theta, self.bounds_.shape[0], self.param_names_)
         return bool(np.all(th >= self.bounds_[:, 0] - tol) and np.all(th <= self.bounds_[:, 1] + tol))
 
+    def _n0(self) -> int:
+        return max(self.na, int(self._lags()[-1]))
+
     def predict(self, X):
-        """Noise-free output of the central model simulated on input ``X`` (zero initial state)."""
+        """Noise-free output of the central model simulated on input ``X``.
+
+        ``X`` an array: free-run simulation from zero initial state. ``X`` an
+        :class:`~hammerbound.IOData`: free-run simulation started from its *measured*
+        outputs ``y[:n0]`` (``n0 = max(na, last input lag)``), the meaningful prediction
+        for a held-out segment (see :mod:`hammerbound.timeseries`).
+        """
         check_is_fitted(self, "bounds_")
-        x = _as_signal("X", X)
+        from .iodata import IOData
+        from .timeseries import simulate_from_measured
+
         A, B = self._polys()
+        if isinstance(X, IOData):
+            return simulate_from_measured(A, B, X.u, X.y, self._n0())
+        x = _as_signal("X", X)
         return lfilter(B, A, x)
 
-    def score(self, X, y, sample_weight=None):
-        """Coefficient of determination R^2 of the *simulated* central model (higher is better).
+    def score(self, X, y=None, sample_weight=None):
+        """R^2 of the central model's free-run simulation on a (held-out) segment.
 
-        This is scikit-learn's regressor score applied to :meth:`predict`, i.e. a free-run
-        simulation from zero initial state, not a one-step-ahead prediction.
+        The simulation starts from the measured outputs of the segment's first ``n0 =
+        max(na, last input lag)`` samples and runs on the input alone from there; R^2 is
+        taken over the simulated samples ``t >= n0``. This is a multi-step (simulation)
+        score, not a one-step-ahead one, and is meaningful for a ``TimeSeriesSplit`` test
+        fold that starts mid-record. ``X`` may be an IOData (then ``y`` is None).
         """
-        return super().score(X, y, sample_weight=sample_weight)
+        check_is_fitted(self, "bounds_")
+        from .iodata import unpack
+        from .timeseries import segment_r2, simulate_from_measured
 
-    def one_step_envelope(self, X, y, input_bound=0.0):
+        X, y, _ = unpack(X, y)
+        x, yy = _as_signal("X", X), _as_signal("y", y)
+        if x.shape != yy.shape:
+            raise DataValidationError("X and y must have the same length.")
+        n0 = self._n0()
+        if x.size <= n0 + 1:
+            raise DataValidationError(
+                f"the scored segment needs more than n0 + 1 = {n0 + 1} samples; got {x.size}.")
+        A, B = self._polys()
+        return segment_r2(yy, simulate_from_measured(A, B, x, yy, n0), n0, sample_weight)
+
+    def one_step_envelope(self, X, y, input_bound=0.0, output_bound=None):
         """Guaranteed one-step-ahead band of the noise-free output ``w_t``.
 
         For every ``t >= max(na, last input lag)`` and every ``theta`` in :attr:`bounds_`, every past
@@ -648,7 +695,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         if x.shape != yy.shape:
             raise DataValidationError("X and y must have the same length.")
         n = x.size
-        deta = _positive_bound("noise_bound", self.noise_bound, n)
+        deta = self._output_bound(n, output_bound)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
         na = self.na
         lags = [int(j) for j in self._lags()]

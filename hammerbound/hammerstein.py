@@ -128,7 +128,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.inner_signal = inner_signal
         self.prbs_level = prbs_level
 
-    def fit(self, X, y=None, steady_state=None):
+    def fit(self, X, y=None, steady_state=None, *, output_bound=None):
         """Run stage 1 on ``steady_state``, check Result 1, run stage 2 on ``(X, y)``.
 
         Parameters
@@ -141,6 +141,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         steady_state : SteadyStateData, dict with keys "u" and "y", or pair (u_ss, y_ss)
             Steady-state square-wave data for stage 1 (input amplitudes of both signs and
             the measured steady outputs).
+        output_bound : float or array of shape (N,), optional
+            Per-sample bound on the PRBS output errors for this fit, overriding the stage-2
+            ``noise_bound``; sample-aligned, so scikit-learn's CV splits it with the data.
 
         Returns
         -------
@@ -208,7 +211,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         inner = bl.inner_signal_bounds(u_star)  # checks Result 1
         xc, dx = inner.transform(u)
         groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
-        lin.fit(xc, yy, input_bound=dx, input_groups=groups)
+        lin.fit(xc, yy, input_bound=dx, input_groups=groups, output_bound=output_bound)
         dt = None if data is None else data.dt
         lin.dt_ = dt
         self.backlash_ = bl
@@ -223,6 +226,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         ml, cl, mr, cr = bl.gamma_center_
         self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, dt)
         self.dt_ = dt
+        self.output_bound_ = output_bound
         self.n_features_in_ = 1
         return self
 
@@ -282,25 +286,61 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         return bool(in_gamma) and self.linear_.contains(theta)
 
     def predict(self, X):
-        """Output of the central model simulated on input ``X`` from rest."""
+        """Output of the central model simulated on input ``X``.
+
+        ``X`` an array: from rest. ``X`` an :class:`~hammerbound.IOData`: the linear block
+        starts from the segment's *measured* outputs ``y[:n0]`` and runs freely from there
+        (see :meth:`score`).
+        """
         check_is_fitted(self, "bounds_")
+        from .iodata import IOData
+        from .timeseries import simulate_from_measured
+
+        if isinstance(X, IOData):
+            x = self.system_.inner(X.u)
+            return simulate_from_measured(self.system_.A, self.system_.B, x, X.y,
+                                          self.linear_._n0())
         u = _as_signal("X", X)
         return self.system_.simulate(u)
 
-    def score(self, X, y, sample_weight=None):
-        """R^2 of the central-model simulation on ``(X, y)`` (higher is better)."""
-        return super().score(X, y, sample_weight=sample_weight)
+    def score(self, X, y=None, sample_weight=None):
+        """R^2 of the central model's free-run simulation on a (held-out) segment.
 
-    def output_envelope(self, X, y):
+        The backlash is simulated from its initial state (for a PRBS outside the dead zone
+        the state is on a line after the first sample, whatever it was); the linear block
+        starts from the measured outputs of the first ``n0 = max(na, last input lag)``
+        samples and runs on the input alone from there; R^2 is taken over ``t >= n0``. A
+        multi-step (simulation) score, meaningful for a ``TimeSeriesSplit`` test fold.
+        """
+        check_is_fitted(self, "bounds_")
+        from .iodata import unpack
+        from .timeseries import segment_r2, simulate_from_measured
+
+        X, y, _ = unpack(X, y)
+        u, yy = _as_signal("X", X), _as_signal("y", y)
+        if u.shape != yy.shape:
+            raise DataValidationError("X and y must have the same length.")
+        n0 = self.linear_._n0()
+        if u.size <= n0 + 1:
+            raise DataValidationError(
+                f"the scored segment needs more than n0 + 1 = {n0 + 1} samples; got {u.size}.")
+        w = simulate_from_measured(self.system_.A, self.system_.B, self.system_.inner(u), yy,
+                                   n0)
+        return segment_r2(yy, w, n0, sample_weight)
+
+    def output_envelope(self, X, y, output_bound=None):
         """Guaranteed one-step-ahead band of the noise-free PRBS output.
 
         Uses the inner-signal bounds of stage 1 for ``X`` and the parameter intervals of
-        stage 2 (see :meth:`LinearEIVSetEstimator.one_step_envelope`).
+        stage 2 (see :meth:`LinearEIVSetEstimator.one_step_envelope`). ``output_bound``:
+        per-sample output error bound of ``(X, y)``; default that of the fit.
         """
         check_is_fitted(self, "bounds_")
         u = _as_signal("X", X)
         xc, dx = self.inner_bounds_.transform(u)
-        return self.linear_.one_step_envelope(xc, y, input_bound=dx)
+        return self.linear_.one_step_envelope(xc, y, input_bound=dx,
+                                              output_bound=self.output_bound_
+                                              if output_bound is None else output_bound)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

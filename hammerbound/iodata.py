@@ -216,6 +216,14 @@ class IOData:
         if isinstance(key, numbers.Integral):
             key = [key]
         idx = np.arange(self.N)[key]
+        if idx.size > 1 and np.any(np.diff(idx) != 1):
+            k = int(np.flatnonzero(np.diff(idx) != 1)[0])
+            raise DataValidationError(
+                f"IOData can only be cut into consecutive samples (a jump from sample "
+                f"{idx[k]} to {idx[k + 1]} was asked): identification data are a time series "
+                "and the model relates consecutive samples. Cross-validate with "
+                "sklearn.model_selection.TimeSeriesSplit (contiguous, forward folds), not "
+                "KFold/ShuffleSplit.")
         return IOData(self.u[idx], self.y[idx], self.dt, input_name=self.input_name,
                       output_name=self.output_name, input_unit=self.input_unit,
                       output_unit=self.output_unit,

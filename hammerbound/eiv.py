@@ -271,7 +271,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             )
         if self.nb == 0 and self._nk() != 0:
             raise ParameterValidationError(
-                "B has no coefficient: use nb >= 1 or b0=True (nk=0)."
+                "B has no coefficient: use nb >= 1 or b0=True."
             )
         if self.method not in METHODS:
             raise ParameterValidationError(
@@ -325,10 +325,12 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         n = x.size
         deta = self._output_bound(n, output_bound)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
-        n0 = max(self.na, int(self._lags()[-1]))
+        last = int(self._lags()[-1])
+        n0 = max(self.na, last)
         if n <= n0 + 1:
+            what = "max(na, nb)" if last == self.nb else "max(na, nk + nb - 1)"
             raise DataValidationError(
-                f"need more than max(na, last input lag) + 1 = {n0 + 1} samples; got {n}."
+                f"need more than {what} + 1 = {n0 + 1} samples; got {n}."
             )
         return EIVProblem(yy, x, dx, deta, na=self.na, nb=self.nb, nk=self._nk(),
                           gain=self.steady_state_gain, groups=groups,

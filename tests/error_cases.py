@@ -524,6 +524,38 @@ CASES: list[ErrorCase] = [
       "diagnose(system, u_prbs, y_prbs, 0.05, candidates=['magic'])",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), 0.05, candidates=["magic"]),
       ParameterValidationError, "choose from"),
+    # ------------------------------------------------------------- own data (issue 14)
+    C("eiv-nk-negative", "stage 2", "negative input delay",
+      "LinearEIVSetEstimator(nk=-1, ...).fit(x, y)",
+      lambda: lin(nk=-1).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "integer >= 0"),
+    C("eiv-nk-and-b0", "stage 2", "b0=True together with a delay nk > 0",
+      "LinearEIVSetEstimator(nk=2, b0=True, ...).fit(x, y)",
+      lambda: lin(nk=2, b0=True).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "pass only nk"),
+    C("ident-gain-not-one", "identifier", "stage-2 estimator with a gain other than 1",
+      "HammersteinBacklashIdentifier(linear=LinearEIVSetEstimator(steady_state_gain=2))"
+      ".fit(...)",
+      lambda: hb.HammersteinBacklashIdentifier(linear=lin(steady_state_gain=2.0)).fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "steady_state_gain=None"),
+    C("iodata-kfold", "data", "non-consecutive samples of an IOData (KFold)",
+      "IOData(u, y)[[0, 1, 5]]",
+      lambda: hb.IOData(u_prbs(), y_prbs())[[0, 1, 5]],
+      DataValidationError, "TimeSeriesSplit"),
+    C("iodata-time-irregular", "data", "time column not uniformly sampled",
+      "IOData.from_csv('<tmp>/t.csv')",
+      lambda: hb.IOData.from_csv(csv_file("t.csv", "t,u,y\n0,1,2\n1,1,2\n3,1,2\n")),
+      DataValidationError, "Resample"),
+    C("iodata-dt-mismatch", "data", "time column disagrees with dt",
+      "IOData.from_csv('<tmp>/t2.csv', dt=0.1)",
+      lambda: hb.IOData.from_csv(csv_file("t2.csv", "t,u,y\n0,1,2\n0.5,1,2\n1,1,2\n"),
+                                 dt=0.1),
+      DataValidationError, "drop one of them"),
+    C("eiv-fit-iodata-and-y", "stage 2", "an IOData and a separate y",
+      "LinearEIVSetEstimator(...).fit(IOData(u, y), y)",
+      lambda: lin().fit(hb.IOData(x_inner(), y_prbs()), y_prbs()),
+      DataValidationError, "without y"),
 ]
 
 

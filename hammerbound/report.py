@@ -43,13 +43,15 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .plotting import plot_envelope, plot_feasible_set, plot_intervals
+    from .plotting import plot_backlash, plot_envelope, plot_feasible_set, plot_intervals
 
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     bl, lin = ident.backlash_, ident.linear_
     lines = [f"# {title}", ""]
-    deta = np.broadcast_to(np.asarray(lin.noise_bound, float), np.shape(prbs_y))
+    ob = getattr(ident, "output_bound_", None)
+    deta = np.broadcast_to(np.asarray(lin.noise_bound if ob is None else ob, float),
+                           np.shape(prbs_y))
     lines += ["## Experiment", "",
               f"- steady-state points: {np.size(steady_u)} (noise bound {bl.noise_bound!r})",
               f"- PRBS samples: N = {np.size(prbs_u)}, level u* = {ident.u_star_:g} "
@@ -70,8 +72,17 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     fig.tight_layout()
     fig.savefig(out / "backlash_sets.png", dpi=120)
     plt.close(fig)
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    plot_backlash(bl, steady_u, steady_y, ax, noise_bound=bl.noise_bound,
+                  u_star=ident.u_star_, inner_bounds=ident.inner_bounds_,
+                  true_backlash=gamma_true)
+    ax.set_title("backlash characteristic and its guaranteed band")
+    fig.tight_layout()
+    fig.savefig(out / "backlash_characteristic.png", dpi=120)
+    plt.close(fig)
     lines += ["## Stage 1: backlash", "", interval_table(
         ("ml", "cl", "mr", "cr"), bl.gamma_bounds_, gamma_true), "",
+        "![backlash characteristic](backlash_characteristic.png)", "",
         "![backlash feasible sets](backlash_sets.png)", ""]
     for fs in (bl.left_, bl.right_):
         v = np.asarray(fs.vertices_mb)
@@ -106,12 +117,17 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     fig.tight_layout()
     fig.savefig(out / "envelope.png", dpi=120)
     plt.close(fig)
-    inside = np.nanmean((np.asarray(prbs_y) >= lo - deta) & (np.asarray(prbs_y) <= hi + deta))
+    banded = np.isfinite(lo) & np.isfinite(hi)   # the first n0 samples have no band
+    yv = np.asarray(prbs_y, dtype=float)
+    inside = float(np.mean((yv[banded] >= lo[banded] - deta[banded])
+                           & (yv[banded] <= hi[banded] + deta[banded])))
     lines += ["", "![intervals](intervals.png)", "",
               "### Output envelope", "",
               "Every noise-free output consistent with the intervals and the past data lies "
               "in the one-step band; measurements may deviate from it by at most the noise "
-              f"bound. Fraction of measurements within band +- noise bound: {inside:.3f}.",
+              f"bound. Fraction of measurements within band +- noise bound: {inside:.3f} "
+              f"(over the {int(banded.sum())} samples that have a band; the first "
+              f"{int((~banded).sum())} start the recursion).",
               "", "![envelope](envelope.png)", ""]
     path = out / "report.md"
     path.write_text("\n".join(lines))

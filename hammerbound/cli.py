@@ -59,7 +59,7 @@ def cmd_demo(args) -> int:
 
     levels = CHAPTER_NOISE_LEVELS if args.noise_levels is None else tuple(args.noise_levels)
     print("hammerbound demo: the simulated example of section 22.5 (Cerone, Piga & Regruto)")
-    print("  backlash m_l=0.25 c_l=0.0628 m_r=0.26 c_r=0.0489; G = (2.15 q^-1 - 1.09 q^-2) / "
+    print("  backlash ml=0.25 cl=0.0628 mr=0.26 cr=0.0489; G = (2.15 q^-1 - 1.09 q^-2) / "
           "(1 - 0.76 q^-1 + 0.82 q^-2), normalised to unit gain (22.8)")
     print(f"  M = 50 square-wave amplitudes, PRBS N = {' and '.join(map(str, args.N))}, "
           f"stage-2 method {args.method}"
@@ -167,7 +167,7 @@ def cmd_eiv(args) -> int:
     est = LinearEIVSetEstimator(
         na=args.na, nb=args.nb, nk=args.nk, noise_bound=args.output_noise,
         steady_state_gain=args.gain, method=args.method, relaxation_order=args.order,
-        solver=args.solver, n_jobs=args.n_jobs, progress=args.progress and not args.json)
+        solver=args.solver, n_jobs=args.n_jobs, progress=args.progress)
     est.fit(data, input_bound=args.input_noise)
     tf = est.to_transfer_function()
     num = np.ravel(tf.num[0][0]).tolist()
@@ -250,7 +250,7 @@ def _add_eiv_parser(sub):
     p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
     p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
     p.add_argument("--progress", action="store_true",
-                   help="progress bars on stderr (exact method; ignored with --json)")
+                   help="progress bars on stderr (exact method)")
     p.add_argument("--json", action="store_true",
                    help="write the result as JSON to stdout (and nothing else)")
     p.set_defaults(func=cmd_eiv)

@@ -64,7 +64,7 @@ def test_two_level_groups_tighter_and_sound():
     x, y, theta, groups = _data(N=60, deta=0.05, two_level=True, seed=1)
     indep = LinearEIVSetEstimator(noise_bound=0.05, method="exact").fit(x, y, input_bound=0.003)
     two = LinearEIVSetEstimator(noise_bound=0.05, method="exact").fit(
-        x, y, input_bound=0.003, groups=groups)
+        x, y, input_bound=0.003, input_groups=groups)
     assert two.contains(theta) and indep.contains(theta)
     assert np.all(two.bounds_[:, 0] >= indep.bounds_[:, 0] - 1e-6)
     assert np.all(two.bounds_[:, 1] <= indep.bounds_[:, 1] + 1e-6)

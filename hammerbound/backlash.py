@@ -410,6 +410,25 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         ml, cl, mr, cr = self.gamma_center_
         return np.where(X > 0, mr * (X - cr), ml * (X + cl))
 
+    def to_frame(self):
+        """The tight intervals of ``ml, cl, mr, cr`` as a table (pandas DataFrame when pandas
+        is installed, else a numpy structured array): parameter, lower, centre, upper,
+        half_width, status."""
+        check_is_fitted(self, "left_")
+        from .tables import interval_frame
+
+        return interval_frame(("ml", "cl", "mr", "cr"), self.gamma_bounds_)
+
+    def summary(self) -> str:
+        """Text summary: the exact feasible sets and the tight intervals (22.24)."""
+        check_is_fitted(self, "left_")
+        from .tables import interval_text
+
+        head = (f"BacklashSetEstimator: exact feasible sets, left {len(self.left_.vertices)} "
+                f"and right {len(self.right_.vertices)} vertices, inputs in "
+                f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]")
+        return interval_text(("ml", "cl", "mr", "cr"), self.gamma_bounds_, title=head)
+
 
 def _is_complex(X):
     try:

@@ -137,3 +137,37 @@ def test_identifier_imposes_unit_gain_explicitly():
         hb.BacklashSetEstimator(0.05), lin.set_params(steady_state_gain=2.0))
     with pytest.raises(ParameterValidationError, match="unit steady-state gain"):
         bad.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+
+
+def test_unbounded_error_names_assumptions():
+    rng = np.random.default_rng(0)
+    x = np.zeros(40)                      # no excitation: b is not bounded by the data
+    y = 0.01 * np.where(rng.random(40) < 0.5, 1.0, -1.0)
+    est = LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp")
+    with pytest.raises(hb.UnboundedSetError) as info:
+        est.fit(x, y)
+    msg = str(info.value)
+    assert "Active assumptions" in msg and "nk=1" in msg and "no steady-state gain" in msg
+
+
+@pytest.mark.parametrize("nk", [0, 2])
+def test_one_step_envelope_with_delay_contains_noise_free_output(nk):
+    rng = np.random.default_rng(7)
+    N = 60
+    x = np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    B = np.zeros(nk + 2)
+    B[nk], B[nk + 1] = 0.6, 0.3
+    w = lfilter(B, [1.0, -0.5], x)
+    y = w + 0.02 * np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    est = LinearEIVSetEstimator(na=1, nb=2 if nk else 1, nk=nk, noise_bound=0.02,
+                                method="lp").fit(x, y)
+    lo, hi = est.one_step_envelope(x, y)
+    n0 = max(1, nk + 1)
+    assert np.all(np.isnan(lo[:n0])) and np.all(np.isfinite(lo[n0:]))
+    assert np.all((lo[n0:] <= w[n0:]) & (w[n0:] <= hi[n0:]))
+
+
+def test_version_agrees_with_distribution():
+    from importlib.metadata import version
+
+    assert hb.__version__ == version("hammerbound")

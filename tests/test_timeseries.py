@@ -208,3 +208,17 @@ def test_groups_renamed_input_groups():
         b = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(
             x, y, input_bound=0.01, groups=lab)
     np.testing.assert_array_equal(a.bounds_, b.bounds_)
+
+
+def test_iodata_from_frame_and_backlash_tables():
+    frame = {"time": np.array([0.0, 0.5, 1.0, 1.5]), "in": np.arange(4.0), "out": np.ones(4)}
+    d = IOData.from_frame(frame, u="in", y="out", t="time", input_unit="V")
+    assert d.dt == 0.5 and d.input_name == "in" and d.input_unit == "V"
+    with pytest.raises(DataValidationError, match="not found"):
+        IOData.from_frame(frame, u="volt", y="out")
+    ex = hb.chapter_example(0.05, N=40, random_state=0)
+    bl = hb.BacklashSetEstimator(0.05).fit(ex.steady.u, ex.steady.y)
+    fr = bl.to_frame()
+    assert list(fr["parameter"]) == ["ml", "cl", "mr", "cr"]
+    np.testing.assert_allclose(fr["upper"], bl.gamma_bounds_[:, 1])
+    assert bl.summary().splitlines()[2].startswith("ml ")

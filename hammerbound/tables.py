@@ -12,11 +12,15 @@ import numpy as np
 __all__ = ["interval_frame", "interval_records", "interval_text", "bound_status"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
+#: how a non-optimal end was obtained (the bound is guaranteed in every case)
+STATUS_WORDS = {"inaccurate": "from dual (solver inaccurate)",
+                "limit": "at time/node limit (outer bound)"}
 
 
 def bound_status(names, infos=(), box_limited=()) -> list[str]:
     """Per parameter: ``"optimal"`` when both ends are optimal solver bounds set by the
-    data, else which end is set by the a priori box or by a limit (still guaranteed)."""
+    data, else which end is set by the a priori box, recovered from the dual of an
+    inaccurate solve, or stopped at a limit (guaranteed in every case)."""
     by_end = {}
     for info in infos:
         by_end[(info.param, "lower" if info.sense == "min" else "upper")] = info.status
@@ -29,7 +33,7 @@ def bound_status(names, infos=(), box_limited=()) -> list[str]:
             else:
                 st = by_end.get((name, end), "optimal")
                 if st != "optimal":
-                    parts.append(f"{end} {st}")
+                    parts.append(f"{end} {STATUS_WORDS.get(st, st)}")
         out.append("; ".join(parts) or "optimal")
     return out
 

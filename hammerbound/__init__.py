@@ -28,7 +28,18 @@ from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
 from .systems import Backlash, HammersteinSystem, simulate_backlash
 
-__version__ = "0.1.0"
+
+def _distribution_version() -> str:
+    """The installed distribution's version (pyproject.toml), the one pip reports."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("hammerbound")
+    except PackageNotFoundError:  # source tree not installed (e.g. only on sys.path)
+        return "0+unknown"
+
+
+__version__ = _distribution_version()
 
 __all__ = [
     "Backlash",

@@ -22,6 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hammerbound.report import REPORT_FILES
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -89,6 +91,17 @@ def _state(path: Path):
     return (path.read_bytes(), st.st_mtime_ns)
 
 
+def _previous_report(rep: Path) -> Path:
+    """A directory holding an earlier report and a file of the user's, with old mtimes."""
+    rep.mkdir()
+    for name in REPORT_FILES:
+        (rep / name).write_bytes(b"an earlier report: " + name.encode())
+    (rep / "mine.txt").write_text("not the program's\n")
+    for f in rep.iterdir():  # any rewrite shows in the modification times
+        os.utime(f, ns=(1_000_000_000, 1_000_000_000))
+    return rep
+
+
 def _assert_refused(res, command, *fragments):
     assert res.returncode == 2, (res.returncode, res.stderr)
     lines = res.stderr.strip().splitlines()
@@ -111,15 +124,18 @@ def test_version_is_the_distribution_version():
     assert hammerbound.__version__ == pyproject
 
 
-@pytest.mark.parametrize("n_jobs", [1, 2])
-def test_identify_json_stdout_is_only_json(data, n_jobs):
-    res = run_cli(*_identify_args(data, "--json", "--n-jobs", n_jobs))
+def test_identify_json_stdout_is_only_json(data, tmp_path):
+    """Two worker processes: each would print HiGHS's banner on its first Highs()."""
+    rep = tmp_path / "new" / "rep"
+    rep.parent.mkdir()
+    res = run_cli(*_identify_args(data, "--json", "--n-jobs", 2, "--report", rep))
     assert res.returncode == 0, res.stderr
     assert "HiGHS" not in res.stdout + res.stderr
     out = json.loads(res.stdout)  # the whole of stdout: nothing before or after the JSON
     lo, hi, true = np.array(out["lower"]), np.array(out["upper"]), data[2]
     assert out["parameters"] == ["ml", "cl", "mr", "cr", "a1", "a2", "b1", "b2"]
     assert np.all((lo <= true) & (true <= hi)), (lo, hi)
+    assert sorted(p.name for p in rep.iterdir()) == sorted(REPORT_FILES)
 
 
 @pytest.mark.slow
@@ -160,16 +176,13 @@ def test_demo_json_stdout_is_only_json_and_progress_on_stderr(tmp_path):
     assert err.index(starts[1]) > err.index(ends[0])
 
 
-def test_demo_text_tables_on_stdout_progress_on_stderr_quiet(tmp_path):
-    res = run_cli("demo", "--N", 30, "--noise-levels", 0.05, "--method", "lp", "--report", "",
-                  cwd=tmp_path)
-    assert res.returncode == 0, res.stderr
-    assert "Table 22.1" in res.stdout and "[1/1]" not in res.stdout
-    assert "[1/1] N = 30, delta_eta = 0.05" in res.stderr
-    assert list(tmp_path.iterdir()) == []  # --report '' writes nothing
+def test_demo_text_tables_on_stdout_quiet(tmp_path):
     res = run_cli("demo", "--N", 30, "--noise-levels", 0.05, "--method", "lp", "--report", "",
                   "--quiet", cwd=tmp_path)
-    assert res.returncode == 0 and res.stderr == "" and "Table 22.1" in res.stdout
+    assert res.returncode == 0, res.stderr
+    assert "Table 22.1" in res.stdout and "Table (N=30)" in res.stdout
+    assert "[1/1]" not in res.stdout and res.stderr == ""
+    assert list(tmp_path.iterdir()) == []  # --report '' writes nothing
 
 
 # ------------------------------------------------------------------ output paths
@@ -179,8 +192,6 @@ def test_identify_report_onto_existing_file_is_refused(data, tmp_path):
     before = _state(target)
     res = run_cli(*_identify_args(data, "--report", target))
     _assert_refused(res, "identify", str(target), "not a directory")
-    res = run_cli(*_identify_args(data, "--report", target, "--force"))
-    _assert_refused(res, "identify", "not a directory")  # --force never replaces a file by a dir
     assert _state(target) == before
 
 
@@ -188,17 +199,10 @@ def test_identify_report_onto_existing_file_is_refused(data, tmp_path):
 def test_identify_report_in_unwritable_place(data):
     res = run_cli(*_identify_args(data, "--report", "/proc/x"))
     _assert_refused(res, "identify", "/proc", "cannot create files")
-    res = run_cli(*_identify_args(data, "--report", "/no/such/dir/rep"))
-    _assert_refused(res, "identify", "/no/such/dir", "does not exist")
 
 
 def test_identify_report_over_previous_report(data, tmp_path):
-    rep = tmp_path / "rep"
-    res = run_cli(*_identify_args(data, "--report", rep))
-    assert res.returncode == 0, res.stderr
-    (rep / "mine.txt").write_text("not the program's\n")
-    for f in rep.iterdir():  # make any rewrite visible in the modification times
-        os.utime(f, ns=(1_000_000_000, 1_000_000_000))
+    rep = _previous_report(tmp_path / "rep")
     before = _state(rep)
     res = run_cli(*_identify_args(data, "--report", rep))
     _assert_refused(res, "identify", "already holds a report", "--force")
@@ -208,7 +212,7 @@ def test_identify_report_over_previous_report(data, tmp_path):
     after = _state(rep)
     assert after["mine.txt"] == before["mine.txt"]  # files that are not the report: untouched
     assert set(after) == set(before)
-    for name in ("report.md", "backlash_sets.png", "intervals.png", "envelope.png"):
+    for name in REPORT_FILES:
         assert after[name][1] != before[name][1], name  # rewritten
     assert "Stage 2" in (rep / "report.md").read_text()
 
@@ -216,11 +220,6 @@ def test_identify_report_over_previous_report(data, tmp_path):
 def test_benchmark_output_checked_before_the_run(tmp_path):
     res = run_cli("benchmark", "--N", 30, "--output", "/no/dir/out.json")
     _assert_refused(res, "benchmark", "/no/dir", "does not exist")
-    res = run_cli("benchmark", "--N", 30, "--output", tmp_path)
-    _assert_refused(res, "benchmark", "is a directory")
-    if Path("/dev/null").exists():
-        res = run_cli("benchmark", "--N", 30, "--output", "/dev/null")
-        _assert_refused(res, "benchmark", "not a regular file")
     target = tmp_path / "out.json"
     target.write_text('{"previous": "results"}')
     before = _state(target)
@@ -242,11 +241,7 @@ def test_benchmark_output_force_overwrites(tmp_path):
 
 def test_demo_never_overwrites_a_previous_report(tmp_path):
     args = ("demo", "--N", 30, "--noise-levels", 0.05, "--method", "lp", "--quiet")
-    res = run_cli(*args, cwd=tmp_path)  # default ./demo-report
-    assert res.returncode == 0, res.stderr
-    rep = tmp_path / "demo-report"
-    for f in rep.iterdir():
-        os.utime(f, ns=(1_000_000_000, 1_000_000_000))
+    rep = _previous_report(tmp_path / "demo-report")  # the default ./demo-report
     before = _state(rep)
     res = run_cli(*args, cwd=tmp_path)
     _assert_refused(res, "demo", "demo-report", "already holds a report", "--force")
@@ -254,7 +249,9 @@ def test_demo_never_overwrites_a_previous_report(tmp_path):
     res = run_cli(*args, "--force", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     after = _state(rep)
-    assert set(after) == set(before) and all(after[k][1] != before[k][1] for k in after)
+    assert set(after) == set(before) and after["mine.txt"] == before["mine.txt"]
+    assert all(after[k][1] != before[k][1] for k in REPORT_FILES)
+    assert "Chapter example" in (rep / "report.md").read_text()
 
 
 def test_diagnose_plot_checked_and_force(data, tmp_path):
@@ -270,6 +267,3 @@ def test_diagnose_plot_checked_and_force(data, tmp_path):
     res = run_cli(*args, "--force")
     assert res.returncode in (0, 1), res.stderr  # 1: model inconsistent with these data
     assert target.read_bytes()[:4] == b"\x89PNG"
-    res = run_cli("diagnose", pr, "--num", "0 1", "--den", "1 -0.5", "--noise-bound", "0.5",
-                  "--plot", "/no/dir/fig.png")
-    _assert_refused(res, "diagnose", "/no/dir", "does not exist")

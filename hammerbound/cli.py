@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -100,7 +102,10 @@ def cmd_demo(args) -> int:
 
     # every output is checked before the (minutes long) computation
     report_dir = (check_output_dir(args.report, REPORT_FILES, force=args.force,
-                                   option="--report") if args.report else None)
+                                   option="--report",
+                                   hint="choose another directory (--report DIR; --report '' "
+                                        "for no report)")
+                  if args.report else None)
     levels = CHAPTER_NOISE_LEVELS if args.noise_levels is None else tuple(args.noise_levels)
     text = None if args.json else sys.stdout
     progress = _Progress(not args.quiet)
@@ -413,6 +418,12 @@ def _run_suite(rest) -> int:
     return int(suite.main(rest) or 0)
 
 
+def _error(command, exc) -> int:
+    msg = " ".join(str(exc).split())  # one line, whatever the exception carries
+    print(f"hammerbound {command}: error: {type(exc).__name__}: {msg}", file=sys.stderr)
+    return 2
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:2] == ["benchmark", "suite"]:
@@ -423,10 +434,12 @@ def main(argv=None) -> int:
             return _diagnose(argv[1:])
         args = build_parser().parse_args(argv)
         return args.func(args)
+    except BrokenPipeError:  # the reader of stdout left (e.g. `| head`): stop quietly
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except (HammerboundError, ValueError, TypeError, OSError) as exc:
-        msg = " ".join(str(exc).split())  # one line, whatever the exception carries
-        print(f"hammerbound {command}: error: {type(exc).__name__}: {msg}", file=sys.stderr)
-        return 2
+        return _error(command, exc)
     except KeyboardInterrupt:
         print(f"hammerbound {command}: interrupted", file=sys.stderr)
         return 130

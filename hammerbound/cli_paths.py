@@ -157,7 +157,8 @@ def check_output_file(path, *, force=False, option=None) -> Path:
     return p
 
 
-def check_output_dir(path, files, *, force=False, option=None) -> Path:
+def check_output_dir(path, files, *, force=False, option=None,
+                     hint="choose another directory") -> Path:
     """Check that the files ``files`` can be written into directory ``path``.
 
     The directory may exist (it is then reused) or not (its parent must exist; it is
@@ -172,6 +173,8 @@ def check_output_dir(path, files, *, force=False, option=None) -> Path:
         Allow replacing those files when they exist.
     option : str, optional
         Name of the command-line option, shown at the start of messages.
+    hint : str, optional
+        The alternative to ``--force`` offered when a report exists.
 
     Returns
     -------
@@ -201,7 +204,7 @@ def check_output_dir(path, files, *, force=False, option=None) -> Path:
         shown = ", ".join(present[:3]) + (" ..." if len(present) > 3 else "")
         raise OutputExistsError(
             f"{_where(option)}{p} already holds a report ({shown}); pass {FORCE_FLAG} to "
-            "overwrite it, or choose another directory.", path=p)
+            f"overwrite it, or {hint}.", path=p)
     for f in present:
         _check_existing_file(p / f, True, option, hint="")
     _probe_writable_dir(p, option)

@@ -267,3 +267,31 @@ def test_diagnose_plot_checked_and_force(data, tmp_path):
     res = run_cli(*args, "--force")
     assert res.returncode in (0, 1), res.stderr  # 1: model inconsistent with these data
     assert target.read_bytes()[:4] == b"\x89PNG"
+
+
+def _has_subcommand(name):
+    from hammerbound.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    return name in sub.choices
+
+
+@pytest.mark.skipif(not _has_subcommand("eiv"), reason="no 'eiv' subcommand in this checkout")
+def test_eiv_json_stdout_is_only_json(tmp_path):
+    """First-order EIV record (our own simulation), two worker processes."""
+    rng = np.random.default_rng(5)
+    N, a1, b0, b1 = 30, -0.9, 0.75, -0.28
+    u0 = rng.uniform(-1, 1, N)
+    y0 = np.zeros(N)
+    for t in range(N):
+        y0[t] = (-a1 * (y0[t - 1] if t else 0.0) + b0 * u0[t] + b1 * (u0[t - 1] if t else 0.0))
+    u = u0 + rng.uniform(-0.05, 0.05, N)
+    y = y0 + rng.uniform(-0.05, 0.05, N)
+    _write_csv(tmp_path / "eiv.csv", u, y)
+    res = run_cli("eiv", tmp_path / "eiv.csv", "--na", 1, "--nb", 1, "--nk", 0,
+                  "--input-noise", 0.05, "--output-noise", 0.05, "--method", "lp",
+                  "--n-jobs", 2, "--json")
+    assert res.returncode == 0, res.stderr
+    assert "HiGHS" not in res.stdout
+    out = json.loads(res.stdout)
+    assert len(out["lower"]) == len(out["upper"]) == 3

@@ -158,7 +158,7 @@ def check_output_file(path, *, force=False, option=None) -> Path:
 
 
 def check_output_dir(path, files, *, force=False, option=None,
-                     hint="choose another directory") -> Path:
+                     hint="choose another directory", force_hint=None) -> Path:
     """Check that the files ``files`` can be written into directory ``path``.
 
     The directory may exist (it is then reused) or not (its parent must exist; it is
@@ -175,6 +175,9 @@ def check_output_dir(path, files, *, force=False, option=None,
         Name of the command-line option, shown at the start of messages.
     hint : str, optional
         The alternative to ``--force`` offered when a report exists.
+    force_hint : str, optional
+        How to ask for overwriting (default ``"pass --force"``; the Python API says
+        ``"pass overwrite=True"``).
 
     Returns
     -------
@@ -203,8 +206,8 @@ def check_output_dir(path, files, *, force=False, option=None,
     if present and not force:
         shown = ", ".join(present[:3]) + (" ..." if len(present) > 3 else "")
         raise OutputExistsError(
-            f"{_where(option)}{p} already holds a report ({shown}); pass {FORCE_FLAG} to "
-            f"overwrite it, or {hint}.", path=p)
+            f"{_where(option)}{p} already holds a report ({shown}); "
+            f"{force_hint or 'pass ' + FORCE_FLAG} to overwrite it, or {hint}.", path=p)
     for f in present:
         _check_existing_file(p / f, True, option, hint="")
     _probe_writable_dir(p, option)

@@ -54,7 +54,8 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     inner-signal bounds, the linear-block intervals with per-bound solver information,
     and the guaranteed one-step output envelope against the data.
     """
-    out = check_output_dir(outdir, REPORT_FILES, force=overwrite)
+    out = check_output_dir(outdir, REPORT_FILES, force=overwrite,
+                           force_hint="pass overwrite=True")
     import matplotlib
 
     matplotlib.use("Agg")

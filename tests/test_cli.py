@@ -213,7 +213,7 @@ def test_report_overwrite_is_explicit(csv_files, tmp_path):
     assert write_report(*args) == rep / "report.md"
     assert sorted(p.name for p in rep.iterdir()) == sorted(REPORT_FILES)
     (rep / "report.md").write_text("edited by hand")
-    with pytest.raises(OutputExistsError, match="overwrite"):
+    with pytest.raises(OutputExistsError, match="already holds a report .*overwrite=True"):
         write_report(*args)
     assert (rep / "report.md").read_text() == "edited by hand"
     write_report(*args, overwrite=True)

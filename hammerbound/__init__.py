@@ -28,18 +28,12 @@ from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
 from .systems import Backlash, HammersteinSystem, simulate_backlash
 
-
-def _distribution_version() -> str:
-    """The installed distribution's version (pyproject.toml), the one pip reports."""
+try:
     from importlib.metadata import PackageNotFoundError, version
 
-    try:
-        return version("hammerbound")
-    except PackageNotFoundError:  # source tree not installed (e.g. only on sys.path)
-        return "0+unknown"
-
-
-__version__ = _distribution_version()
+    __version__ = version("hammerbound")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree, not installed
+    __version__ = "0+unknown"
 
 __all__ = [
     "Backlash",

@@ -267,7 +267,9 @@ def cmd_benchmark(args) -> int:
     configs = [("lp", 1, "independent"), ("moment", 1, "independent"),
                ("exact", 1, "independent"), ("exact", 1, "two-level")]
     rows = []
-    for method, order, inner in configs:
+    progress = _Progress(not args.quiet, prefix="hammerbound benchmark")
+    for k, (method, order, inner) in enumerate(configs, start=1):
+        progress(f"[{k}/{len(configs)}] {method} ({inner}) ...")
         ident = HammersteinBacklashIdentifier(
             BacklashSetEstimator(args.noise_bound),
             LinearEIVSetEstimator(noise_bound=args.noise_bound, method=method,
@@ -279,6 +281,7 @@ def cmd_benchmark(args) -> int:
                      "time_s": time.perf_counter() - t,
                      "width": (ident.theta_bounds_[:, 1] - ident.theta_bounds_[:, 0]).tolist(),
                      "true_inside": ident.contains(ex.gamma_true, ex.theta_true)})
+        progress(f"[{k}/{len(configs)}] {method} ({inner}): done in {rows[-1]['time_s']:.1f} s")
     exact_w = np.array(rows[2]["width"])
     print(f"chapter example, delta_eta = {args.noise_bound:g}, N = {args.N}")
     print(f"{'method':28s} {'time [s]':>9s}  width / exact width (a1 a2 b1 b2)   true inside")
@@ -367,6 +370,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", default=None,
                    help=f"write JSON results to this file (checked before the run; an "
                         f"existing file is kept unless {FORCE_FLAG} is given)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines on stderr")
     add_force_option(p)
     p.set_defaults(func=cmd_benchmark)
 

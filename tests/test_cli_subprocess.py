@@ -237,6 +237,8 @@ def test_benchmark_output_force_overwrites(tmp_path):
     rows = json.loads(target.read_text())
     assert [r["method"] for r in rows] == ["lp", "moment", "exact", "exact"]
     assert "lp (independent)" in res.stdout
+    assert "[4/4] exact (two-level): done in" in res.stderr  # progress on stderr only
+    assert "[1/4]" not in res.stdout
 
 
 def test_demo_never_overwrites_a_previous_report(tmp_path):

@@ -12,7 +12,8 @@ from .experiments import snr_db
 __all__ = ["REPORT_FILES", "write_report", "interval_table"]
 
 #: The files :func:`write_report` writes into its directory (nothing else there is touched).
-REPORT_FILES = ("report.md", "backlash_sets.png", "intervals.png", "envelope.png")
+REPORT_FILES = ("report.md", "backlash_characteristic.png", "backlash_sets.png", "intervals.png",
+                "envelope.png")
 
 
 def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:

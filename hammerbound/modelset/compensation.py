@@ -160,38 +160,55 @@ def _wellposed_margin(left_mb, right_mb, u):
             + np.max(-left_mb[:, 0] * u - left_mb[:, 1]))
 
 
+def _u_range(gamma, v_lo, v_hi, x0):
+    ml, cl, mr, cr = gamma
+    cands = [v_lo / mr + cr, v_hi / mr + cr, v_lo / ml - cl, v_hi / ml - cl,
+             0.5 * (x0 / mr + cr + x0 / ml - cl)]
+    return float(min(cands)), float(max(cands))
+
+
 def build_inverse(estimator, v_range=None, x0=0.0) -> BacklashInverse:
     """The compensator of a fitted :class:`~hammerbound.BacklashSetEstimator`.
 
-    ``v_range`` defaults to the central inner-signal range of the steady-state experiment
-    (``[m^_l (-U_L + c^_l), m^_r (U_R - c^_r)]``). The guarantee needs the backlash well
-    posed at every emitted input: checked at the ends of the input range for every
-    feasible backlash (the condition is convex in ``u``), or accepted inside the
-    experiment's input range when ``well_posed_on_data`` is set (the data themselves
-    show the system well posed there).
+    The guarantee needs *every* feasible backlash well posed (``R(u) <= L(u)``) at every
+    input the compensator emits; the condition is convex in ``u``, so it is checked at
+    the two ends of the input range, on the polygon vertices. ``v_range`` defaults to
+    the central inner-signal range of the steady-state experiment
+    (``[m^_l (-U_L + c^_l), m^_r (U_R - c^_r)]``), shrunk by a common factor until that
+    check passes; an explicit ``v_range`` that fails it raises.
     """
     gamma = np.asarray(estimator.gamma_center_, dtype=float)
     ml, cl, mr, cr = gamma
     u_lo_data, u_hi_data = estimator.input_range_
+    L, R = estimator.left_.vertices_mb, estimator.right_.vertices_mb
+    try:
+        x0 = float(x0)
+    except (TypeError, ValueError) as exc:
+        raise ParameterValidationError(f"x0 must be a number; got {x0!r}.") from exc
+
+    def ok(lo, hi):
+        return all(_wellposed_margin(L, R, u) <= 0 for u in _u_range(gamma, lo, hi, x0))
+
     if v_range is None:
-        v_range = (ml * (u_lo_data + cl), mr * (u_hi_data - cr))
+        d_lo, d_hi = ml * (u_lo_data + cl), mr * (u_hi_data - cr)
+        if ok(d_lo, d_hi):
+            v_range = (d_lo, d_hi)
+        else:
+            a, b = 0.0, 1.0
+            for _ in range(60):
+                mid = 0.5 * (a + b)
+                a, b = (mid, b) if ok(x0 + mid * (d_lo - x0), x0 + mid * (d_hi - x0)) else (a, mid)
+            v_range = (x0 + a * (d_lo - x0), x0 + a * (d_hi - x0))
     try:
         v_lo, v_hi = (float(x) for x in v_range)
     except (TypeError, ValueError) as exc:
         raise ParameterValidationError(f"v_range must be a pair (v_min, v_max); got {v_range!r}.") from exc
     if not (np.isfinite(v_lo) and np.isfinite(v_hi) and v_lo < v_hi):
         raise ParameterValidationError(f"v_range must be finite with v_min < v_max; got {v_range!r}.")
-    x0 = float(x0)
     if not (np.isfinite(x0) and v_lo <= x0 <= v_hi):
         raise ParameterValidationError(f"x0 must lie in v_range {v_range}; got {x0!r}.")
-    L, R = estimator.left_.vertices_mb, estimator.right_.vertices_mb
-    cands = [v_lo / mr + cr, v_hi / mr + cr, v_lo / ml - cl, v_hi / ml - cl,
-             0.5 * (x0 / mr + cr + x0 / ml - cl)]
-    u_range = (float(min(cands)), float(max(cands)))
-    ok = all(_wellposed_margin(L, R, u) <= 0 for u in u_range)
-    if not ok and getattr(estimator, "well_posed_on_data", False):
-        ok = u_lo_data <= u_range[0] and u_range[1] <= u_hi_data
-    if not ok:
+    u_range = _u_range(gamma, v_lo, v_hi, x0)
+    if not ok(v_lo, v_hi):
         raise IllPosedBacklashError(
             f"the compensator would drive the backlash input over {u_range}, where some "
             "feasible backlash is past the crossing of its two lines ((22.1) ill-posed), so "

@@ -178,7 +178,7 @@ def sample_eiv(problem, box, n, *, seeds=(), random_state=None, thin=1, max_shri
     chains, out = [], []
     for s in seeds:
         s = _project(problem, np.asarray(s, dtype=float))
-        if np.any(s < lo) or np.any(s > hi):
+        if np.any(s < lo) or np.any(s > hi) or any(np.array_equal(s, c[0]) for c in chains):
             continue
         chk = ver(s)
         if chk is not None:

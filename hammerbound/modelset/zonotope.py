@@ -84,7 +84,7 @@ class Zonotopes:
         # so distance-to-boundary minus that width is a valid lower bound either way.
         area = 0.5 * np.sum((v.conj() * w).imag, axis=1)
         perim = np.sum(np.abs(e), axis=1)
-        thin = area <= 1e-6 * self.scale**2
+        thin = area <= 1e-9 * perim**2
         width = np.where(perim > 0, 2 * np.pi * np.abs(area) / np.where(perim > 0, perim, 1.0), 0.0)
         d_thin = np.maximum(d - self.margin - width, 0.0)
         return np.where(thin, d_thin, np.where(inside, 0.0, np.maximum(d - self.margin, 0.0)))

@@ -170,12 +170,16 @@ def _weight_lower(W, omega, dt):
     return np.maximum(0.5 * (wv[:-1] + wv[1:]) - 0.5 * LW * h, 0.0) * (1 - 1e-12)
 
 
-def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
-                   n_grid: int = 8192) -> WeightCertificate:
-    """Check ``|W(e^{jw dt})| >= sup_theta deviation`` for *all* ``w`` (see module doc)."""
+def _cert_grid(bounds, na, b_lags, dt, kind, n_grid):
     w = np.linspace(0.0, np.pi / dt, int(n_grid))
     dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
-    dev_b = _between(bounds, na, b_lags, w, dt, kind, dev)
+    return w, dev, _between(bounds, na, b_lags, w, dt, kind, dev)
+
+
+def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
+                   n_grid: int = 8192, _grid=None) -> WeightCertificate:
+    """Check ``|W(e^{jw dt})| >= sup_theta deviation`` for *all* ``w`` (see module doc)."""
+    w, dev, dev_b = _cert_grid(bounds, na, b_lags, dt, kind, n_grid) if _grid is None else _grid
     wl = _weight_lower(W, w, dt)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(dev_b > 0, wl / dev_b, np.inf)
@@ -230,6 +234,22 @@ def _roots_from(x, n, rmax):
     return np.array(roots, dtype=complex)
 
 
+def _params_from(roots, n, rmax):
+    """Inverse of :func:`_roots_from` for a start point (roots clipped inside rmax)."""
+    roots = sorted(np.asarray(roots, dtype=complex), key=lambda r: -abs(r.imag))
+    roots = [r for r in roots if r.imag >= 0]  # one of each conjugate pair (and reals)
+    x = []
+    for k in range(n // 2):
+        r = roots[k] if k < len(roots) else 0j
+        rad = min(max(abs(r), 1e-3 * rmax), 0.95 * rmax)
+        ph = min(max(abs(np.angle(r)), 1e-3), np.pi - 1e-3)
+        x += [np.log(rad / (rmax - rad)), np.log(ph / (np.pi - ph))]
+    if n % 2:
+        r = roots[n // 2].real if n // 2 < len(roots) else 0.0
+        x.append(np.arctanh(np.clip(r / rmax, -0.95, 0.95)))
+    return np.array(x, dtype=float)
+
+
 def _shape(x, n, z, rmax):
     zr = _roots_from(x[:n], n, rmax)
     pr = _roots_from(x[n:], n, rmax)
@@ -256,8 +276,8 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
     if not (np.isfinite(margin) and margin >= 0):
         raise ParameterValidationError(f"margin must be >= 0; got {margin!r}.")
     nyq = np.pi / dt
-    w = np.linspace(0.0, nyq, 1024) if omega is None else np.asarray(omega, float)
-    w = np.union1d(w, np.logspace(np.log10(1e-4 * nyq), np.log10(nyq), 512))
+    w = np.linspace(0.0, nyq, 256) if omega is None else np.asarray(omega, float)
+    w = np.union1d(w, np.logspace(np.log10(1e-4 * nyq), np.log10(nyq), 256))
     dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
     if not np.all(np.isfinite(dev)):
         raise UnboundedSetError(
@@ -280,34 +300,33 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
     best_x = np.zeros(2 * order)
     if order:
         # starts: flat weight, poles at the central model's poles, random shapes
-        starts = [np.zeros(2 * order), rng.normal(0, 2, 2 * order), rng.normal(0, 2, 2 * order)]
+        starts = [np.zeros(2 * order), rng.normal(0, 2, 2 * order)]
         pc = np.asarray(central_tf.poles(), dtype=complex)
-        if pc.size and order >= 2:
-            top = pc[np.argmax(np.abs(pc))]
-            r = min(abs(top), 0.95 * rmax)
-            xr = np.log(r / (rmax - r))
-            ph = min(max(abs(np.angle(top)), 1e-3), np.pi - 1e-3)
-            xp = np.log(ph / (np.pi - ph))
-            s = np.zeros(2 * order)
-            s[order:order + 2] = [xr, xp]
-            starts.append(s)
+        zc = np.asarray(central_tf.zeros(), dtype=complex)
+        zc = zc[np.abs(zc) < 1]
+        starts.append(np.concatenate([_params_from([], order, rmax),
+                                      _params_from(pc, order, rmax)]))
+        starts.append(np.concatenate([_params_from(zc, order, rmax),
+                                      _params_from(pc, order, rmax)]))
         best = np.inf
         for s in starts:
             res = minimize(obj, s, method="Nelder-Mead",
-                           options={"maxiter": 400 * order, "xatol": 1e-6, "fatol": 1e-9})
+                           options={"maxiter": 300 * order, "xatol": 1e-6, "fatol": 1e-9})
             if res.fun < best:
                 best, best_x = res.fun, res.x
     mag, zr, pr = _shape(best_x, order, z, rmax)
-    k = float(np.max(tgt / mag))
+    grid = _cert_grid(bounds, na, b_lags, dt, kind, n_grid)
+    mag_c, _, _ = _shape(best_x, order, np.exp(1j * grid[0] * dt), rmax)
+    k = max(float(np.max(tgt / mag)), float(np.max(grid[1] / mag_c)))
     num = k * np.real(np.poly(zr)) if order else np.array([k])
     den = np.real(np.poly(pr)) if order else np.array([1.0])
     W = control.tf(num, den, dt)
-    cert = certify_weight(W, bounds, na, b_lags, dt, kind, n_grid)
+    cert = certify_weight(W, bounds, na, b_lags, dt, kind, n_grid, _grid=grid)
     for _ in range(5):
         if cert.holds:
             break
         W = W * (1.0 / cert.min_ratio * (1 + 1e-6))
-        cert = certify_weight(W, bounds, na, b_lags, dt, kind, n_grid)
+        cert = certify_weight(W, bounds, na, b_lags, dt, kind, n_grid, _grid=grid)
     if not cert.holds:  # pragma: no cover - the gain scaling above always succeeds
         raise UnboundedSetError("could not certify the weight on the frequency grid.")
     return UncertaintyWeight(W, kind, central_tf, w, dev, cert)

@@ -372,7 +372,7 @@ def test_a_weight_that_is_too_small_is_not_certified(chapter_fit, weights):
 def test_unbounded_weight_raises():
     import control
 
-    with pytest.raises(UnboundedSetError, match="vanishes on the unit"):
+    with pytest.raises(UnboundedSetError, match="vanishes on"):
         fit_weight(np.array([[-1.2, -0.8], [1.0, 1.0]]), 1, [1], control.tf([1], [1, 0], 1.0))
 
 
@@ -488,6 +488,7 @@ def test_inverse_validation(stage1):
     assert lo[0] <= -0.2 and hi[0] >= 0.3
 
 
+@pytest.mark.slow
 def test_identifier_delegates_and_figures(stage1, tmp_path):
     import matplotlib.pyplot as plt
 

@@ -180,7 +180,8 @@ def frequency_envelope(bounds, na, b_lags, omega, dt=1.0) -> FrequencyEnvelope:
     with np.errstate(divide="ignore"):
         upper = np.where(a_min > 0, b_max / np.where(a_min > 0, a_min, 1.0), np.inf)
     lower = b_min / a_max
-    central = ZB.centre / ZA.centre
+    with np.errstate(divide="ignore", invalid="ignore"):
+        central = ZB.centre / ZA.centre
     bounded = (a_min > 0) & (b_min > 0)
     blo, bhi = ZB.arg_range()
     alo, ahi = ZA.arg_range()

@@ -34,6 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import expit
 
 from ..exceptions import ParameterValidationError, UnboundedSetError
 from .frequency import _lipschitz
@@ -64,7 +65,8 @@ def deviation_bound(bounds, na, b_lags, omega, dt=1.0, kind="multiplicative"):
     wd = np.asarray(omega, dtype=float) * dt
     ZA = value_sets(a_lo, a_hi, np.arange(na + 1), wd)
     ZB = value_sets(b_lo, b_hi, np.asarray(b_lags), wd)
-    G0 = ZB.centre / ZA.centre
+    with np.errstate(divide="ignore", invalid="ignore"):
+        G0 = ZB.centre / ZA.centre
     amin = ZA.min_abs()
     vb = ZB.vertices()  # (n, nvb)
     va = ZA.vertices()  # (n, nva), CCW; edges va[k] -> va[k+1]
@@ -94,7 +96,8 @@ def deviation_bound(bounds, na, b_lags, omega, dt=1.0, kind="multiplicative"):
         best = np.maximum(best, np.max(r.reshape(r.shape[0], -1), axis=1))
     dev = np.sqrt(np.maximum(best, 0.0))
     if kind == "multiplicative":
-        dev = dev / np.abs(G0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            dev = dev / np.abs(G0)
     dev = dev * (1 + _RTOL) + _RTOL * 1e-3
     return np.where(amin > 0, dev, np.inf)
 
@@ -225,8 +228,8 @@ def _roots_from(x, n, rmax):
     roots = []
     k = 0
     for _ in range(n // 2):
-        r = rmax / (1 + np.exp(-x[k]))
-        ph = np.pi / (1 + np.exp(-x[k + 1]))
+        r = rmax * expit(x[k])
+        ph = np.pi * expit(x[k + 1])
         roots += [r * np.exp(1j * ph), r * np.exp(-1j * ph)]
         k += 2
     if n % 2:
@@ -258,6 +261,16 @@ def _shape(x, n, z, rmax):
     return np.abs(num / den), zr, pr
 
 
+def _unbounded_message(kind):
+    why = ("some A in the parameter box vanishes on the unit circle (0 is in its value set)"
+           if kind == "additive" else
+           "some A in the parameter box, or the central numerator B0, vanishes on (or too "
+           "near) the unit circle, where G/G0 - 1 is unbounded")
+    fix = "" if kind == "additive" else " or use kind='additive'"
+    return (f"the {kind} uncertainty cannot be bounded: {why}, so no finite weight exists. "
+            f"Narrow the set (more data, method='exact'){fix}.")
+
+
 def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", order=2,
                omega=None, margin=0.05, n_grid=8192, random_state=0,
                rmax=0.98) -> UncertaintyWeight:
@@ -280,11 +293,7 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
     w = np.union1d(w, np.logspace(np.log10(1e-4 * nyq), np.log10(nyq), 256))
     dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
     if not np.all(np.isfinite(dev)):
-        raise UnboundedSetError(
-            "the uncertainty is unbounded: some A in the parameter box vanishes on the unit "
-            "circle (0 is in its value set), so no finite weight exists. Narrow the set "
-            "(more data, method='exact') or restrict the frequency range."
-        )
+        raise UnboundedSetError(_unbounded_message(kind))
     target = dev * (1 + margin)
     floor = 1e-6 * max(float(np.max(target)), 1e-300)
     tgt = np.maximum(target, floor)
@@ -316,6 +325,8 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
                 best, best_x = res.fun, res.x
     mag, zr, pr = _shape(best_x, order, z, rmax)
     grid = _cert_grid(bounds, na, b_lags, dt, kind, n_grid)
+    if not (np.all(np.isfinite(grid[1])) and np.all(np.isfinite(grid[2]))):
+        raise UnboundedSetError(_unbounded_message(kind))
     mag_c, _, _ = _shape(best_x, order, np.exp(1j * grid[0] * dt), rmax)
     k = max(float(np.max(tgt / mag)), float(np.max(grid[1] / mag_c)))
     num = k * np.real(np.poly(zr)) if order else np.array([k])

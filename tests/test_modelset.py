@@ -369,6 +369,18 @@ def test_a_weight_that_is_too_small_is_not_certified(chapter_fit, weights):
     assert not cert.holds and cert.min_ratio < 1
 
 
+def test_weight_parameters_are_validated(chapter_fit):
+    est = chapter_fit[0]
+    with pytest.raises(ParameterValidationError, match="n_grid"):
+        est.uncertainty_weight(n_grid=1)
+    with pytest.raises(ParameterValidationError, match="margin"):
+        est.uncertainty_weight(margin="big")
+    with pytest.raises(ParameterValidationError, match="order"):
+        est.uncertainty_weight(order=-1)
+    with pytest.raises(ParameterValidationError, match="kind"):
+        est.uncertainty_weight("relative")
+
+
 def test_unbounded_weight_raises():
     import control
 

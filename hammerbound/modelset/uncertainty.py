@@ -173,6 +173,14 @@ def _weight_lower(W, omega, dt):
     return np.maximum(0.5 * (wv[:-1] + wv[1:]) - 0.5 * LW * h, 0.0) * (1 - 1e-12)
 
 
+def _check_grid(n_grid):
+    if not isinstance(n_grid, (int, np.integer)) or isinstance(n_grid, bool) or n_grid < 64:
+        raise ParameterValidationError(
+            f"n_grid must be an integer >= 64 (points of the proof grid on [0, pi/dt]); "
+            f"got {n_grid!r}."
+        )
+
+
 def _cert_grid(bounds, na, b_lags, dt, kind, n_grid):
     w = np.linspace(0.0, np.pi / dt, int(n_grid))
     dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
@@ -182,6 +190,7 @@ def _cert_grid(bounds, na, b_lags, dt, kind, n_grid):
 def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
                    n_grid: int = 8192, _grid=None) -> WeightCertificate:
     """Check ``|W(e^{jw dt})| >= sup_theta deviation`` for *all* ``w`` (see module doc)."""
+    _check_grid(n_grid)
     w, dev, dev_b = _cert_grid(bounds, na, b_lags, dt, kind, n_grid) if _grid is None else _grid
     wl = _weight_lower(W, w, dt)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -286,7 +295,9 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
 
     if not (isinstance(order, (int, np.integer)) and 0 <= order <= 8):
         raise ParameterValidationError(f"order must be an integer in [0, 8]; got {order!r}.")
-    if not (np.isfinite(margin) and margin >= 0):
+    _check_grid(n_grid)
+    if not (isinstance(margin, (int, float, np.floating, np.integer)) and np.isfinite(margin)
+            and margin >= 0):
         raise ParameterValidationError(f"margin must be >= 0; got {margin!r}.")
     nyq = np.pi / dt
     w = np.linspace(0.0, nyq, 256) if omega is None else np.asarray(omega, float)

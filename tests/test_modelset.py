@@ -256,6 +256,17 @@ def test_envelope_contains_vertices_random_points_and_samples(chapter_fit, chapt
     assert np.all(env.contains(responses(chapter_fit[3], w, 2, [1, 2])))
 
 
+def test_envelope_rejects_responses_outside(chapter_fit):
+    est = chapter_fit[0]
+    w = np.linspace(0.05, 3.0, 64)
+    env = est.frequency_response_bounds(w)
+    assert not env.contains(env.central * (env.mag_upper / env.mag_central) * 1.001).any()
+    assert not env.contains(env.central * (env.mag_lower / env.mag_central) * 0.999).any()
+    rot = np.exp(1j * (env.phase_upper - env.phase_central + 1e-3))
+    assert not env.contains(env.central * rot).any()
+    assert env.contains(env.central).all()
+
+
 def test_envelope_between_grid_frequencies(chapter_fit):
     est = chapter_fit[0]
     w = np.linspace(0, np.pi, 64)

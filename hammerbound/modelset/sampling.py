@@ -96,31 +96,114 @@ class CertifiedSamples:
         return self.theta.shape[0]
 
 
+class _WitnessLP:
+    """The fixed-theta LP of :func:`check_theta` on one warm-started HiGHS instance.
+
+    ``min s`` s.t. ``|M(theta) z - r(theta)| <= s`` over the noise boxes. The returned
+    witness is clipped to the boxes and its residual recomputed here in numpy, exactly as
+    :func:`check_theta` does: acceptance rests on that recomputation, not on the solver.
+    """
+
+    def __init__(self, problem):
+        import highspy
+
+        pr = problem
+        n, k, na = pr.N, pr.n_groups, pr.na
+        m = pr.equation_times.size
+        eta_idx, dx_idx = pr.eta_index(), pr.dx_index()
+        self.problem, self.m, self.nz, self.n = pr, m, n + k, n
+        self.rows = np.concatenate([np.repeat(np.arange(m), na + 1),
+                                    np.repeat(np.arange(m), dx_idx.shape[1])])
+        self.cols = np.concatenate([eta_idx.ravel(), n + dx_idx.ravel()])
+        self.lb = np.concatenate([-pr.deta, -pr.dx_group])
+        self.ub = np.concatenate([pr.deta, pr.dx_group])
+        self.hs = highspy
+        self.h = highspy.Highs()
+        self.h.setOptionValue("output_flag", False)
+        self.h.setOptionValue("threads", 1)
+        self.basis = None
+
+    def witness(self, theta):
+        """``(z, violation)`` or None when the solver does not return an optimum."""
+        import scipy.sparse as sp
+
+        hs, pr, m, nz = self.hs, self.problem, self.m, self.nz
+        a, b = theta[: pr.na], theta[pr.na :]
+        vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
+        M = sp.csr_matrix((vals, (self.rows, self.cols)), shape=(m, nz))
+        r = pr.simulate_noise_free(theta)
+        one = sp.csr_matrix(np.ones((m, 1)))
+        A = sp.vstack([sp.hstack([M, -one]), sp.hstack([M, one])]).tocsc()
+        lp = hs.HighsLp()
+        lp.num_col_, lp.num_row_ = nz + 1, 2 * m
+        c = np.zeros(nz + 1)
+        c[-1] = 1.0
+        lp.col_cost_ = c
+        lp.col_lower_ = np.concatenate([self.lb, [0.0]])
+        lp.col_upper_ = np.concatenate([self.ub, [hs.kHighsInf]])
+        lp.row_lower_ = np.concatenate([np.full(m, -hs.kHighsInf), r])
+        lp.row_upper_ = np.concatenate([r, np.full(m, hs.kHighsInf)])
+        lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
+        lp.a_matrix_.start_ = A.indptr.astype(np.int32)
+        lp.a_matrix_.index_ = A.indices.astype(np.int32)
+        lp.a_matrix_.value_ = A.data
+        self.h.passModel(lp)
+        if self.basis is not None:
+            self.h.setBasis(self.basis)
+        self.h.run()
+        if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
+            self.basis = None
+            return None
+        self.basis = self.h.getBasis()
+        z = np.clip(np.asarray(self.h.getSolution().col_value[:nz]), self.lb, self.ub)
+        viol = float(np.max(np.abs(M @ z - r))) if m else 0.0
+        return z, viol
+
+
 class _Verifier:
-    """check_theta, preceded by the package's warm-started screening LP when available."""
+    """Membership with a witness: the warm-started LP above, :func:`check_theta` as fallback.
+
+    A candidate is accepted only if the clipped witness reproduces every equation of
+    (22.34) to ``1e-9 (1 + max |y|)``, the gain equality holds to ``1e-9 (1 + |g|)`` and
+    ``theta`` is in the a priori box - the acceptance rule of :func:`check_theta`.
+    """
 
     def __init__(self, problem):
         self.problem = problem
         self.n_lp = 0
-        self.screen = None
-        try:  # optional speed-up; acceptance always goes through check_theta
-            from ..relaxations.bnb import _Screen
-
-            self.screen = _Screen(problem)
-        except Exception:  # noqa: BLE001 - any failure just disables screening
-            self.screen = None
+        self.tol = 1e-9 * (1.0 + float(np.max(np.abs(problem.y))))
+        try:
+            self.lp = _WitnessLP(problem)
+        except Exception:  # noqa: BLE001 - highspy missing: check_theta only
+            self.lp = None
 
     def __call__(self, theta):
-        if self.screen is not None:
+        from ..relaxations.problem import FeasibilityCheck
+
+        pr = self.problem
+        theta = np.asarray(theta, dtype=float)
+        box = pr.theta_box
+        if np.any(theta < box[:, 0]) or np.any(theta > box[:, 1]):
+            return None
+        g = pr.gain_row()
+        gres = 0.0 if g is None else float(abs(g[0] @ theta - g[1]))
+        if g is not None and gres > 1e-9 * (1 + abs(pr.gain)):
+            return None
+        if self.lp is not None:
             self.n_lp += 1
             try:
-                if not self.screen.screens(theta):
+                res = self.lp.witness(theta)
+            except Exception:  # noqa: BLE001 - fall back to check_theta below
+                res = None
+            if res is not None:
+                z, viol = res
+                if viol > self.tol:
                     return None
-            except Exception:  # noqa: BLE001
-                self.screen = None
+                n = pr.N
+                return FeasibilityCheck(True, viol, z[:n], z[n:], gres)
         self.n_lp += 1
         try:
-            chk = check_theta(self.problem, theta)
+            chk = check_theta(pr, theta)
         except SolverError:
             return None
         return chk if chk.feasible else None

@@ -22,7 +22,7 @@ Limits (be aware when you use the samples as "the set"):
 * the samples are correlated and *not* uniformly distributed (seeded at the extremes,
   and only moves are recorded); they are guaranteed members, spread over the set,
   not a probability model;
-* each step costs one or a few LPs of size ``N``: about 20-50 ms at ``N = 300``.
+* each step costs one or a few LPs of size ``N`` (about 10 ms of CPU each at ``N = 300``).
 
 **Backlash (stage 1).** Each side's exact set is a convex polygon in ``(m, beta = m c)``,
 the two sides are independent: samples are drawn *uniformly in* ``(m, beta)`` (fan

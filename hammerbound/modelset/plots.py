@@ -60,9 +60,10 @@ def plot_bode_envelope(env, ax=None, *, samples=None, max_samples=200, db=True):
 
 
 def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):
-    """Left: backlash lines with their feasible bands. Right: compensated characteristic
-    ``x`` vs the command ``v`` with the guaranteed error band (and simulated cycles for
-    backlash ``samples`` of shape (k, 4), if given). Returns the figure."""
+    """Left: backlash lines with their feasible bands. Right: residual ``x - v`` of the
+    compensated backlash vs the command ``v``, its guaranteed band, the uncompensated
+    error for reference, and simulated cycles for backlash ``samples`` of shape (k, 4),
+    if given. Returns the figure."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -86,8 +87,11 @@ def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):
     a1.legend(fontsize=8)
     v = np.linspace(inv.v_range[0], inv.v_range[1], n)
     lo, hi = inv.error_bounds(v)
-    a2.fill_between(v, v + lo, v + hi, color="C2", alpha=0.3, lw=0, label="guaranteed band")
-    a2.plot(v, v, "k", lw=0.8, label="x = v")
+    a2.fill_between(v, lo, hi, color="C2", alpha=0.3, lw=0, label="guaranteed band of x - v")
+    a2.axhline(0.0, color="k", lw=0.8)
+    # slopes inverted but no dead-band compensation (u = v / m): x trails by m c
+    a2.axhline(-mr * cr, color="k", ls="--", lw=0.8, label="no dead-band inverse, rising")
+    a2.axhline(ml * cl, color="k", ls=":", lw=0.8, label="no dead-band inverse, falling")
     if samples is not None:
         from ..systems import simulate_backlash
 
@@ -97,11 +101,11 @@ def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):
         uu = inv.compensate(cyc)
         for k, g in enumerate(np.asarray(samples)[:max_samples]):
             x = simulate_backlash(uu, *g, x0=inv.x0)
-            a2.plot(cyc, x, color="0.3", lw=0.4, alpha=0.6,
-                    label="compensated samples" if k == 0 else None)
+            a2.plot(cyc, x - cyc, color="0.3", lw=0.4, alpha=0.6,
+                    label="compensated, feasible backlashes" if k == 0 else None)
     a2.set_xlabel("commanded v")
-    a2.set_ylabel("inner signal x")
-    a2.set_title("compensated characteristic")
-    a2.legend(fontsize=8)
+    a2.set_ylabel("residual x - v")
+    a2.set_title("compensated characteristic: residual error")
+    a2.legend(fontsize=7)
     fig.tight_layout()
     return fig

@@ -113,6 +113,16 @@ def linear_block(name, est, y, x, dx, dt, n_samples, rng):
     rep["phase_width_ratio_to_box_points"] = {"max": float(np.nanmax((pw / pr)[sel])),
                                               "median": float(np.nanmedian((pw / pr)[sel]))}
     rep["phase_bounded_everywhere"] = bool(env.phase_bounded.all())
+    if est.steady_state_gain is not None:
+        envg, rep["t_envelope_512_on_gain_plane"] = timed(
+            lambda: est.frequency_response_bounds(w, dt=dt, on_gain_plane=True), repeat=3)
+        rep["gain_plane_envelope_contains_samples"] = bool(envg.contains(GS).all())
+        rg = (envg.mag_upper - envg.mag_lower) / np.ptp(np.abs(GS), axis=0)
+        rep["gain_plane_mag_width_ratio_to_samples"] = {
+            "max": float(rg.max()), "median": float(np.median(rg)),
+            "median_above_0.1_nyquist": float(np.median(rg[w >= 0.1 * nyq]))}
+        rep["mag_width_ratio_to_samples"]["median_above_0.1_nyquist"] = float(
+            np.median(r_smp[w >= 0.1 * nyq]))
     wd = np.linspace(0, nyq, 4096)
     GVd = responses(V, wd, na, lags, dt)
     GSd = responses(S.theta, wd, na, lags, dt)

@@ -567,7 +567,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         smp = self.sample(n, random_state=random_state)
         return [self.to_transfer_function(dt=dt, theta=th) for th in smp.theta]
 
-    def frequency_response_bounds(self, omega=None, dt=1.0):
+    def frequency_response_bounds(self, omega=None, dt=1.0, *, on_gain_plane=False):
         """Guaranteed magnitude/phase bounds of every model in :attr:`bounds_`.
 
         Exact over the orthotope at each frequency (zonotope value sets of ``A`` and
@@ -580,6 +580,12 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             Strictly increasing, >= 0. Default: 512 log-spaced points up to ``pi/dt``.
         dt : float, default 1.0
             Sampling time of the data (``z = e^{j omega dt}``).
+        on_gain_plane : bool, default False
+            Tighten the magnitude bounds to the orthotope *intersected with the gain
+            equality* (22.8) (every feasible model satisfies it; the box alone cannot
+            express it, which makes the plain envelope wide at low frequencies). The
+            bounds then no longer cover box points off that hyperplane. Needs
+            ``steady_state_gain``.
 
         Returns
         -------
@@ -589,7 +595,14 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         from .modelset.frequency import check_omega, frequency_envelope
 
         w = check_omega(omega, dt)
-        return frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=float(dt))
+        if on_gain_plane and self.steady_state_gain is None:
+            raise ParameterValidationError(
+                "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
+                "(or use the plain envelope, on_gain_plane=False)."
+            )
+        gain = float(self.steady_state_gain) if on_gain_plane else None
+        return frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=float(dt),
+                                  gain=gain)
 
     def uncertainty_weight(self, kind="multiplicative", order=2, dt=1.0, *, margin=0.05,
                            omega=None, n_grid=8192):

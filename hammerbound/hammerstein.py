@@ -265,10 +265,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             random_state, np.random.Generator) else random_state
         return self.backlash_.sample(n, random_state=rng), self.linear_.sample(n, random_state=rng)
 
-    def frequency_response_bounds(self, omega=None, dt=1.0):
+    def frequency_response_bounds(self, omega=None, dt=1.0, *, on_gain_plane=False):
         """Envelope of the linear block (see :meth:`LinearEIVSetEstimator.frequency_response_bounds`)."""
         check_is_fitted(self, "bounds_")
-        return self.linear_.frequency_response_bounds(omega, dt=dt)
+        return self.linear_.frequency_response_bounds(omega, dt=dt, on_gain_plane=on_gain_plane)
 
     def uncertainty_weight(self, kind="multiplicative", order=2, dt=1.0, **kwargs):
         """Weight of the linear block (see :meth:`LinearEIVSetEstimator.uncertainty_weight`)."""

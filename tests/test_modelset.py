@@ -267,6 +267,33 @@ def test_envelope_rejects_responses_outside(chapter_fit):
     assert env.contains(env.central).all()
 
 
+def test_envelope_on_the_gain_plane(chapter_fit, chapter_samples):
+    est = chapter_fit[0]
+    w = np.logspace(-3, np.log10(np.pi), 256)
+    env0 = est.frequency_response_bounds(w)
+    env = est.frequency_response_bounds(w, on_gain_plane=True)
+    # own points of the box on the gain plane B(1) = A(1)
+    rng = np.random.default_rng(11)
+    P = rng.uniform(est.bounds_[:, 0], est.bounds_[:, 1], (60000, 4))
+    row = np.array([-1.0, -1.0, 1.0, 1.0])
+    P += np.outer((1.0 - P @ row) / (row @ row), row)
+    P = P[np.all((P >= est.bounds_[:, 0]) & (P <= est.bounds_[:, 1]), axis=1)]
+    assert len(P) > 1000
+    for T in (P, chapter_samples.theta):
+        G = responses(T, w, 2, [1, 2])
+        assert np.all(env.contains(G))
+    assert np.all(env.mag_upper - env.mag_lower <= env0.mag_upper - env0.mag_lower)
+    low = w < 0.1
+    assert np.all((env.mag_upper - env.mag_lower)[low] < 0.5 * (env0.mag_upper - env0.mag_lower)[low])
+    wk = rng.uniform(w[0], w[-1], 1000)
+    k = np.searchsorted(w, wk) - 1
+    Gk = np.abs(responses(P[:500], wk, 2, [1, 2]))
+    assert np.all(Gk <= env.mag_upper_between[k]) and np.all(Gk >= env.mag_lower_between[k])
+    with pytest.raises(ParameterValidationError, match="gain constraint"):
+        hb.LinearEIVSetEstimator(2, 2, steady_state_gain=None, method="lp").fit(
+            *chapter_like_data(N=40)[:2]).frequency_response_bounds(on_gain_plane=True)
+
+
 def test_envelope_between_grid_frequencies(chapter_fit):
     est = chapter_fit[0]
     w = np.linspace(0, np.pi, 64)

@@ -27,12 +27,13 @@ values by more than a relative tolerance.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..exceptions import DataValidationError, ParameterValidationError
-from .zonotope import value_sets
+from .zonotope import Zonotopes, value_sets
 
 __all__ = ["FrequencyEnvelope", "frequency_envelope", "default_omega", "denominators_stable"]
 
@@ -153,7 +154,8 @@ class FrequencyEnvelope:
             mids = 0.5 * (env.omega[:-1] + env.omega[1:])[bad]
             mids = mids[: max_points - env.omega.size]
             env = frequency_envelope(spec["bounds"], spec["na"], spec["b_lags"],
-                                     np.union1d(env.omega, mids), dt=env.dt)
+                                     np.union1d(env.omega, mids), dt=env.dt,
+                                     gain=spec.get("gain"))
         return env
 
     def plot(self, ax=None, **kwargs):
@@ -163,9 +165,76 @@ class FrequencyEnvelope:
         return plot_bode_envelope(self, ax=ax, **kwargs)
 
 
-def frequency_envelope(bounds, na, b_lags, omega, dt=1.0) -> FrequencyEnvelope:
+def _gain_plane_magnitude(bounds, na, b_lags, w, dt, gain, n_sub=256):
+    """Magnitude bounds over the box intersected with ``sum b = gain (1 + sum a)``.
+
+    Eliminating the last ``b_L`` (and dropping its interval: an outer bound),
+    ``G = N / D`` with ``N = sum_{j<L} b_j (z^-j - z^-L) + gain z^-L (1 + sum a_i)`` and
+    ``D = A``. Both depend on ``a``; the ``a``-box is cut into ``n_sub`` sub-boxes and on
+    each one ``max|N| / min|D|`` and ``min|N| / max|D|`` bound the ratio (zonotope
+    extremes, decoupled: outward). Returns lower, upper and the between-grid bounds.
+    """
+    bounds = np.asarray(bounds, dtype=float)
+    b_lags = np.asarray(b_lags)
+    L = float(b_lags[-1])
+    free = b_lags[:-1].astype(float)
+    bf = bounds[na:na + free.size]
+    k = max(1, int(np.floor(n_sub ** (1.0 / max(na, 1))))) if na else 1
+    edges = [np.linspace(lo, hi, k + 1) for lo, hi in bounds[:na]]
+    cells = list(itertools.product(range(k), repeat=na)) if na else [()]
+    ac = np.array([[0.5 * (edges[i][c[i]] + edges[i][c[i] + 1]) for i in range(na)]
+                   for c in cells]).reshape(len(cells), na)
+    ar = np.array([[0.5 * (edges[i][c[i] + 1] - edges[i][c[i]]) for i in range(na)]
+                   for c in cells]).reshape(len(cells), na)
+    wd = w * dt
+    zl = np.exp(-1j * wd * L)                                    # (nw,)
+    phi = np.exp(-1j * np.outer(wd, free)) - zl[:, None]          # (nw, nf)
+    psi = np.exp(-1j * np.outer(wd, np.arange(1, na + 1)))        # (nw, na)
+    nw, ns = w.size, len(cells)
+    bc, br = bf.mean(axis=1), 0.5 * (bf[:, 1] - bf[:, 0])
+    n_c = (phi @ bc)[:, None] + gain * zl[:, None] * (1 + ac.sum(axis=1))[None, :]
+    n_g = np.concatenate([np.broadcast_to((phi * br)[:, None, :], (nw, ns, free.size)),
+                          gain * zl[:, None, None] * ar[None, :, :]], axis=2)
+    d_c = 1 + psi @ ac.T
+    d_g = psi[:, None, :] * ar[None, :, :]
+    ZN = Zonotopes(n_c.ravel(), n_g.reshape(nw * ns, -1))
+    ZD = Zonotopes(d_c.ravel(), d_g.reshape(nw * ns, -1))
+    nmax, nmin = ZN.max_abs().reshape(nw, ns), ZN.min_abs().reshape(nw, ns)
+    dmax, dmin = ZD.max_abs().reshape(nw, ns), ZD.min_abs().reshape(nw, ns)
+    # Lipschitz constants in omega, valid for every point of the (extended) box
+    amax = np.max(np.abs(bounds[:na]), axis=1) if na else np.zeros(0)
+    LN = dt * (float(np.sum(np.max(np.abs(bf), axis=1) * (free + L)))
+               + abs(gain) * L * (1 + float(np.sum(amax))))
+    LD = dt * float(np.sum(np.arange(1, na + 1) * amax))
+    h = np.diff(w)[:, None]
+
+    def ratio(num, den):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
+
+    def combine(nmx, nmn, dmx, dmn):
+        return ratio(nmn, dmx).min(axis=1), ratio(nmx, dmn).max(axis=1)
+
+    lo, up = combine(nmax, nmin, dmax, dmin)
+
+    def up_i(x, lip):
+        return 0.5 * (x[:-1] + x[1:]) + 0.5 * lip * h
+
+    def dn_i(x, lip):
+        return np.maximum(0.5 * (x[:-1] + x[1:]) - 0.5 * lip * h, 0.0)
+
+    lo_b, up_b = combine(up_i(nmax, LN), dn_i(nmin, LN), up_i(dmax, LD), dn_i(dmin, LD))
+    return lo, up, lo_b, up_b
+
+
+def frequency_envelope(bounds, na, b_lags, omega, dt=1.0, gain=None) -> FrequencyEnvelope:
     """Envelope of ``B/A`` over the box ``bounds`` (rows ``a_1..a_na``, then ``b_j``, j in
-    ``b_lags``) at the frequencies ``omega`` (rad/s, strictly increasing)."""
+    ``b_lags``) at the frequencies ``omega`` (rad/s, strictly increasing).
+
+    With ``gain``, the magnitude bounds are intersected with bounds valid on the box
+    *intersected with the gain equality* ``B(1) = gain A(1)`` (22.8), which every
+    feasible model satisfies (much tighter at low frequencies); they then no longer
+    hold for box points off that hyperplane. The phase stays the box's."""
     bounds = np.asarray(bounds, dtype=float)
     w = np.asarray(omega, dtype=float)
     wd = w * dt
@@ -206,7 +275,11 @@ def frequency_envelope(bounds, na, b_lags, omega, dt=1.0) -> FrequencyEnvelope:
     ok = np.isfinite(lph) & (lph * h < np.pi) & bounded[:-1] & bounded[1:]
     ph_lo_b = np.where(ok, 0.5 * (ph_lo[:-1] + ph_lo[1:]) - 0.5 * lph * h, np.nan)
     ph_hi_b = np.where(ok, 0.5 * (ph_hi[:-1] + ph_hi[1:]) + 0.5 * lph * h, np.nan)
-    spec = {"bounds": bounds, "na": na, "b_lags": b_lags}
+    if gain is not None and b_lags.size >= 1:
+        g_lo, g_up, g_lo_b, g_up_b = _gain_plane_magnitude(bounds, na, b_lags, w, dt, float(gain))
+        lower, upper = np.maximum(lower, g_lo), np.minimum(upper, g_up)
+        lo_b, up_b = np.maximum(lo_b, g_lo_b), np.minimum(up_b, g_up_b)
+    spec = {"bounds": bounds, "na": na, "b_lags": b_lags, "gain": gain}
     return FrequencyEnvelope(
         omega=w, dt=float(dt), mag_lower=lower, mag_upper=upper, phase_lower=ph_lo,
         phase_upper=ph_hi, phase_bounded=bounded, central=central,

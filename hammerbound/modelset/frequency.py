@@ -23,6 +23,15 @@ hence guaranteed bounds on ``|G|`` over the whole interval
 ``|d arg G / dw| <= L_B/min|B| + L_A/min|A|`` on the phase (``phase_*_between``).
 :meth:`FrequencyEnvelope.refine` bisects the intervals where these differ from the grid
 values by more than a relative tolerance.
+
+**On the gain plane.** A box cannot express the steady-state gain equality (22.8)
+``B(1) = g A(1)`` that every feasible model satisfies, so at low frequencies the box's
+models spread where the feasible ones do not. With ``gain=g`` the magnitude bounds are
+intersected with bounds valid on the box *intersected with* that hyperplane: eliminating
+the last ``b_L`` (and dropping its interval, an outer step) gives ``G = N/D`` with ``N``
+and ``D`` affine in the remaining coordinates but both depending on ``a``; the ``a``-box
+is cut into sub-boxes and on each one ``max|Z_N| / min|Z_D|`` (decoupled, outward)
+bounds ``|G|``.
 """
 
 from __future__ import annotations

@@ -73,3 +73,23 @@ def test_chapter_compensator_bound_for_1000_backlash_samples(fitted):
         assert np.all(np.abs(y_ss - pred) <= 0.05 * (1 + 1e-9))
         e = play(u, *g, x0=0.0) - v
         assert np.all(e >= lo) and np.all(e <= hi)
+
+
+def test_two_level_inner_signal_certificates():
+    """Grouped input errors (one per PRBS level): the witness uses one dx per group."""
+    ex = hb.chapter_example(0.05, N=60, random_state=0)
+    idf = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"),
+        inner_signal="two-level",
+    ).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    _, ts = idf.sample(10, random_state=0)
+    assert ts.dx.shape == (10, 2)
+    groups = (ex.prbs.u < 0).astype(int)
+    dx_level = np.array([idf.dx_[groups == 0][0], idf.dx_[groups == 1][0]])
+    for th, eta, dxv in zip(ts.theta, ts.eta, ts.dx, strict=True):
+        assert np.all(np.abs(dxv) <= dx_level) and np.all(np.abs(eta) <= 0.05)
+        x = idf.xc_ - dxv[groups]
+        w = ex.prbs.y - eta
+        r = w[2:] + th[0] * w[1:-1] + th[1] * w[:-2] - th[2] * x[1:-1] - th[3] * x[:-2]
+        assert np.max(np.abs(r)) <= 1e-8
+        assert abs(th[2] + th[3] - (1 + th[0] + th[1])) <= 1e-8

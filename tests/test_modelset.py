@@ -103,7 +103,8 @@ def chapter_like_data(N=80, deta=0.05, seed=1):
 @pytest.fixture(scope="module")
 def chapter_fit():
     x, y, theta = chapter_like_data()
-    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, method="exact").fit(
+    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, steady_state_gain=1.0,
+                                   method="exact").fit(
         x, y, input_bound=DX)
     return est, x, y, theta
 
@@ -195,7 +196,8 @@ def test_samples_when_every_error_is_at_the_bound():
     x, y, theta = chapter_like_data(N=40, seed=9)
     g = B_TRUE.sum() / A_TRUE.sum()
     y = lfilter(B_TRUE / g, A_TRUE, x) + 0.05 * np.where(rng.random(40) < 0.5, 1.0, -1.0)
-    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, method="exact").fit(x, y)
+    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, steady_state_gain=1.0,
+                                   method="exact").fit(x, y)
     S = est.sample(6, random_state=0)
     for th in S.theta:
         assert own_feasible(th, y, x, 0.0, 0.05, 2, [1, 2], gain=1.0)
@@ -224,7 +226,8 @@ def test_sample_validates_n(chapter_fit):
 
 def test_lp_method_sampler_finds_a_seed():
     x, y, _ = chapter_like_data(N=60, seed=4)
-    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, method="lp").fit(x, y)
+    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, steady_state_gain=1.0,
+                                   method="lp").fit(x, y)
     S = est.sample(5, random_state=0)
     for th in S.theta:
         assert own_feasible(th, y, x, 0.0, 0.05, 2, [1, 2], gain=1.0)

@@ -173,14 +173,15 @@ class _Pool:
             return None
         return self.verify(theta)
 
-    def seek(self, starts, box, max_evals=800) -> _Point | None:
+    def seek(self, starts, box, max_evals=800, deadline=None) -> _Point | None:
         """Look for a first verified point when none of the LP points is feasible.
 
         Thin feasible sets (the two-level inner signal, high noise) may contain none of the
         relaxation's points. Starting from ``starts`` (projected onto the gain equality
         (22.8), if any), Nelder-Mead minimises the screening violation (zero on the set)
         plus the distance outside ``box``, in the coordinates of the gain hyperplane; the
-        first screened point that :func:`check_theta` accepts is returned.
+        first screened point that :func:`check_theta` accepts is returned. The search gives
+        up (returns None) at ``deadline`` (a :func:`time.time` timestamp), if given.
         """
         from scipy.optimize import minimize
 
@@ -197,10 +198,15 @@ class _Pool:
         class _Found(Exception):
             pass
 
+        class _Stop(Exception):
+            pass
+
         for start in starts:
             th0 = _on_gain_plane(pr, start)
 
             def f(z, th0=th0):
+                if deadline is not None and time.time() > deadline:
+                    raise _Stop
                 th = th0 + basis @ z
                 out = np.maximum(box[:, 0] - th, 0.0) + np.maximum(th - box[:, 1], 0.0)
                 if out.any():
@@ -216,6 +222,8 @@ class _Pool:
                                   "initial_simplex": None})
             except _Found:
                 return self.points[-1]
+            except _Stop:
+                return None
         return None
 
     def line_search(self, inside, outside, steps=20, k=None, resolution=0.0) -> _Point | None:
@@ -279,11 +287,13 @@ def _obbt_task(problem, box, tasks, bases):
     return out
 
 
-def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
+def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, deadline=None):
     """Optimality-based bound tightening of the theta box on the McCormick relaxation.
 
     Each round solves ``min/max theta_k`` (k = 1..p) over the relaxation on the current
     box (in parallel when ``n_jobs > 1``) and shrinks the box with the rigorous bounds.
+    The first round always runs; later rounds only before ``deadline`` (a
+    :func:`time.time` timestamp, if given). Every round's box is a valid outer box.
 
     Returns
     -------
@@ -332,6 +342,8 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
         w_old = old[:, 1] - old[:, 0]
         w_new = box[:, 1] - box[:, 0]
         if np.all(w_new >= (1 - rel_improve) * w_old):
+            break
+        if deadline is not None and time.time() >= deadline:
             break
     return box, roots, thetas
 
@@ -397,23 +409,85 @@ class _Search:
     solver_value: float
 
 
+def _box_end(box, k, sense):
+    """The end of ``box`` that bounds ``min sense * theta_k`` from below."""
+    return float(box[k, 0]) if sense > 0 else -float(box[k, 1])
+
+
+class _GapBar:
+    """Progress bar of one interval end: the fraction of its initial certified gap closed.
+
+    The gap is "best verified value minus certified outer bound" (before a verified point
+    exists, the width of the root box in ``theta_k`` stands for the value); the search is
+    done when the gap is below ``tol``, so 100 % means done. The postfix shows the gap,
+    the nodes and the time left before the time limit stops the search.
+    """
+
+    def __init__(self, label, position, gap0, stop_at):
+        from tqdm.auto import tqdm
+
+        self.gap0 = max(float(gap0), 1e-300)
+        self.stop_at = stop_at
+        self.shown = 0.0
+        self.bar = tqdm(total=100.0, position=position, leave=False, desc=label,
+                        bar_format="{desc}: {percentage:3.0f}% of gap closed |{bar}| "
+                                   "{elapsed} {postfix}")
+
+    def update(self, gap, target, nodes):
+        gap = max(float(gap), 0.0)
+        done = 1.0 - max(gap - target, 0.0) / max(self.gap0 - target, 1e-300)
+        pct = 100.0 * min(max(done, 0.0), 1.0)
+        left = self.stop_at - time.perf_counter()
+        self.bar.set_postfix_str(f"gap {gap:.3g}, {nodes} nodes, stops within {max(left, 0):.0f} s"
+                                 if np.isfinite(left) else f"gap {gap:.3g}, {nodes} nodes",
+                                 refresh=False)
+        if pct > self.shown:
+            self.bar.update(pct - self.shown)
+            self.shown = pct
+        else:
+            self.bar.update(0)
+
+    def close(self):
+        self.bar.close()
+
+
 def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, progress,
-            position):
+            position, deadline=None):
     """Minimise ``sense * theta_k`` over the EIV set by branch-and-bound (one interval end).
 
-    ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None).
+    ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None). ``box0`` is the
+    OBBT box, a certified outer box: the returned bound is never below its end (monotone
+    knowledge), also when a limit stops the search. The search runs for at most
+    ``time_limit`` seconds and stops at ``deadline`` (a :func:`time.time` timestamp, the
+    total budget of the fit); an end whose budget is used up before it starts reports the
+    box end with status ``"limit"``.
     """
     t0 = time.perf_counter()
     p = problem.p
     box0 = np.array(box0, dtype=float)
+    end0 = _box_end(box0, k, sense)
+
+    def val(theta):
+        return sense * float(theta[k])
+
+    limit = float(time_limit)
+    by_budget = False
+    if deadline is not None and deadline - time.time() < limit:
+        limit, by_budget = deadline - time.time(), True
+    if limit <= 0 and by_budget:
+        inc = min(points, key=lambda q: val(q.theta), default=None)
+        ub = val(inc.theta) if inc is not None else np.inf
+        bound = min(end0, ub)
+        return _Search(bound, ub, inc, 0, time.perf_counter() - t0, "limit",
+                       "not searched: the total time budget (total_time_limit) was used up "
+                       "before this end started; the LP/OBBT outer bound is reported",
+                       0, np.nan)
+    stop_at = t0 + limit
     relax = McCormickRelaxation(problem, box0)
     c = np.zeros(relax.ncol)
     c[k] = sense
     relax.lp.set_cost(c)
     pool = _Pool(problem, list(points))
-
-    def val(theta):
-        return sense * float(theta[k])
 
     inc = min(pool.points, key=lambda q: val(q.theta), default=None)
     ub = val(inc.theta) if inc is not None else np.inf
@@ -427,9 +501,9 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     pending = None  # (lb, box, precomputed LPSolve-like (bound, x))
     if root is not None and root[1] is not None:
         relax.lp.set_basis(root[2])
-        pending = (max(-np.inf, root[0]), box0, root[1])
+        pending = (max(end0, root[0]), box0, root[1])
     else:
-        heap.append((-np.inf, counter, box0))
+        heap.append((end0, counter, box0))
         counter += 1
     closed_lb = np.inf  # min bound over leaves closed by bound (not by infeasibility)
     last_try, try_gap = -1, 1
@@ -438,11 +512,10 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     status = "optimal"
     root_value = np.nan
     bar = None
+    top = end0 + float(width0[k])  # sup of sense * theta_k over the root box
     if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=max_nodes, position=position, leave=False,
-                   desc=f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}")
+        bar = _GapBar(f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}", position,
+                      min(ub, top) - end0, stop_at)
     while heap or pending is not None:
         tol_eff = tol * max(1.0, abs(ub)) if np.isfinite(ub) else 0.0
         rc = None
@@ -454,7 +527,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         else:
             if heap[0][0] >= ub - tol_eff:
                 break
-            if nodes >= max_nodes or time.perf_counter() - t0 > time_limit:
+            if nodes >= max_nodes or time.perf_counter() > stop_at:
                 status = "limit"
                 break
             lb_parent, _, box = heapq.heappop(heap)
@@ -478,7 +551,8 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             if nodes == 1 and x is not None:
                 root_value = res.value
         if bar is not None:
-            bar.update(1)
+            lb_now = max(end0, min(closed_lb, lb, heap[0][0] if heap else np.inf))
+            bar.update(min(ub, top) - lb_now, tol_eff, nodes)
         if lb >= ub - tol_eff:
             closed_lb = min(closed_lb, lb)
             continue
@@ -539,12 +613,21 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         bar.close()
     open_lb = min((h[0] for h in heap), default=np.inf)
     bound = min(closed_lb, open_lb, ub)
-    gap = ub - bound
+    # monotone knowledge: the OBBT box end is a certified bound as well (a leaf LP that
+    # failed, or the root of a search stopped at once, may carry -inf); +inf (every leaf
+    # certified infeasible, no verified point) is kept: exact_bounds reports the empty set
+    bound = max(bound, min(end0, ub))
+    gap = max(ub - bound, 0.0)
     elapsed = time.perf_counter() - t0
     if status == "limit":
-        msg = (f"stopped by the {'node' if nodes >= max_nodes else 'time'} limit "
-               f"({nodes} nodes, {elapsed:.1f} s): the bound is a valid outer bound, "
-               f"certified gap {gap:.3g}")
+        if nodes >= max_nodes:
+            why = "node limit (max_nodes)"
+        elif by_budget:
+            why = "total time budget (total_time_limit)"
+        else:
+            why = "time limit (time_limit)"
+        msg = (f"stopped by the {why} ({nodes} nodes, {elapsed:.1f} s): the bound is a valid "
+               f"outer bound, certified gap {gap:.3g}")
     elif not np.isfinite(ub):
         status = "limit"
         msg = "no verified-feasible point found: only the outer bound is certified"
@@ -563,8 +646,14 @@ def exact_bounds(
     theta_box=None,
     *,
     check_box: bool = True,
+    total_time_limit: float | None = None,
+    deadline: float | None = None,
 ) -> IntervalResult:
     """Tight parameter uncertainty intervals (22.35)-(22.37) with a certificate.
+
+    Every end starts from, and never reports wider than, the polytopic LP bound
+    (:func:`.lp.lp_bounds`) shrunk by OBBT: a node or time limit returns the best certified
+    outer bound found so far (status ``"limit"``), never a wider or infinite one.
 
     Parameters
     ----------
@@ -585,6 +674,15 @@ def exact_bounds(
         A priori box replacing ``problem.theta_box``.
     check_box : bool, default True
         Raise :class:`UnboundedSetError` when a bound coincides with the a priori box.
+    total_time_limit : float or None, default None
+        Wall-time budget (s) of the whole call, shared by the ``2 p`` ends and the joblib
+        workers: each end searches for at most ``min(time_limit, time left)``; the LP and
+        the first OBBT round always run (set-up), further OBBT rounds and the search for a
+        first feasible point only while time is left; an end that has no time left when it
+        starts reports its LP/OBBT bound with status ``"limit"``.
+    deadline : float or None, default None
+        The same budget as an absolute :func:`time.time` timestamp (e.g. shared with other
+        steps of a fit); with both, the earlier one counts.
 
     Returns
     -------
@@ -604,6 +702,13 @@ def exact_bounds(
         An exact bound coincides with the a priori box.
     """
     t0 = time.perf_counter()
+    if total_time_limit is not None:
+        end = time.time() + float(total_time_limit)
+        deadline = end if deadline is None else min(deadline, end)
+
+    def time_left():
+        return deadline is None or time.time() < deadline
+
     if theta_box is not None:
         problem = problem.with_theta_box(theta_box)
     lp = lp_bounds(problem, check_box=False)
@@ -616,17 +721,19 @@ def exact_bounds(
         parallel = Parallel(n_jobs=n_jobs)
         parallel.__enter__()
     try:
-        box, roots, thetas = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel)
+        box, roots, thetas = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel,
+                                   deadline=deadline)
         pool = _Pool(problem)
-        for th in thetas:
-            pool.add(th)
         starts = ([np.mean(thetas, axis=0)] if thetas else []) + [box.mean(axis=1)]
-        for th in starts:
-            pool.add(_on_gain_plane(problem, th))
-        if not pool.points:
-            pool.seek(starts, box)
+        for th in list(thetas) + [_on_gain_plane(problem, th) for th in starts]:
+            if not time_left():
+                break
+            pool.add(th)
+        if not pool.points and time_left():
+            pool.seek(starts, box, deadline=deadline)
         pts = pool.points
-        args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress)
+        args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
+                    deadline=deadline)
         if parallel is None:
             outs = [_search(problem, box, k, s, pts, roots.get((k, s)), position=i, **args)
                     for i, (k, s) in enumerate(jobs)]
@@ -653,14 +760,17 @@ def exact_bounds(
     for (k, s), o in zip(jobs, outs, strict=True):
         e = 0 if s > 0 else 1
         bounds[k, e] = s * o.bound
+        # never wider than the LP bound (the OBBT box lies inside it; kept explicit)
+        bounds[k, e] = max(bounds[k, e], lp.bounds[k, 0]) if e == 0 else \
+            min(bounds[k, e], lp.bounds[k, 1])
         wit = o.witness
         if wit is not None:
             inner[k, e] = wit.theta[k]
         infos.append(BoundInfo(
-            param=names[k], sense="min" if s > 0 else "max", bound=float(s * o.bound),
+            param=names[k], sense="min" if s > 0 else "max", bound=float(bounds[k, e]),
             solver_value=float(s * o.solver_value), status=o.status, certified=True,
             time=o.time, iterations=o.iterations,
-            gap=float(o.value - o.bound) if np.isfinite(o.value) else None,
+            gap=max(float(o.value - o.bound), 0.0) if np.isfinite(o.value) else None,
             witness=None if wit is None else wit.theta.copy(), nodes=o.nodes, message=o.message,
             extra={} if wit is None else {"eta": wit.eta, "dx": wit.dx,
                                           "value": float(wit.theta[k])},

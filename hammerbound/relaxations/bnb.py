@@ -40,7 +40,7 @@ import numpy as np
 from ..exceptions import EmptyFeasibleSetError, SolverError
 from .lp import lp_bounds, raise_if_box_limited
 from .mccormick import McCormickRelaxation
-from .problem import EIVProblem, check_theta
+from .problem import EIVProblem, check_theta, equation_scale
 from .result import BoundInfo, IntervalResult
 
 __all__ = ["exact_bounds"]
@@ -48,6 +48,25 @@ __all__ = ["exact_bounds"]
 _SPLIT_CLIP = 0.05
 # after a line search that does not improve the incumbent, wait up to this many nodes
 _MAX_SEARCH_GAP = 16
+
+
+def _limit_lp(lp, seconds):
+    """Let the next solves of ``lp`` (a :class:`._highs.HighsLP`) stop after ``seconds``.
+
+    HiGHS compares its ``time_limit`` with the run clock accumulated over all solves of the
+    object, hence the offset. A solve stopped this way still yields a rigorous (maybe weak)
+    bound from its current duals (:meth:`._highs.HighsLP.solve`).
+    """
+    h = lp.h
+    limit = np.inf if seconds is None or not np.isfinite(seconds) else \
+        h.getRunTime() + max(float(seconds), 1e-3)
+    h.setOptionValue("time_limit", float(min(limit, highs_inf())))
+
+
+def highs_inf():
+    from ._highs import INF
+
+    return INF
 
 
 @dataclass
@@ -80,7 +99,6 @@ class _Screen:
         self.na1, self.nbp = na + 1, dx_idx.shape[1]
         self.lb = np.concatenate([-pr.deta, -pr.dx_group, [0.0]])
         self.ub = np.concatenate([pr.deta, pr.dx_group, [highspy.kHighsInf]])
-        self.tol = 1e-9 * (1.0 + float(np.max(np.abs(pr.y))))
         # fixed sparsity of A = [[M, -1], [M, 1]] (column-major, duplicates summed): only the
         # values depend on theta, gathered from the contributions with one bincount
         nc = self.rows.size
@@ -136,8 +154,14 @@ class _Screen:
         self.basis = self.h.getBasis()
         return float(self.h.getInfo().objective_function_value)
 
+    def tol_at(self, theta) -> float:
+        """Screening tolerance: the strictest equation tolerance of :func:`check_theta`."""
+        from ..tolerances import FEASIBILITY_RTOL
+
+        return FEASIBILITY_RTOL * float(np.min(equation_scale(self.problem, theta)))
+
     def screens(self, theta) -> bool:
-        return self.violation(theta) <= self.tol
+        return self.violation(theta) <= self.tol_at(theta)
 
 
 @dataclass
@@ -148,6 +172,10 @@ class _Pool:
     points: list = field(default_factory=list)
     screen: _Screen | None = None
     checks: int = 0
+    stop_at: float | None = None  # time.perf_counter() after which heuristics give up
+
+    def _out_of_time(self) -> bool:
+        return self.stop_at is not None and time.perf_counter() > self.stop_at
 
     def verify(self, theta) -> _Point | None:
         """Accept ``theta`` only if :func:`check_theta` says it is feasible."""
@@ -167,7 +195,9 @@ class _Pool:
             self.screen = _Screen(self.problem)
 
     def add(self, theta) -> _Point | None:
-        """Screen, then verify."""
+        """Screen, then verify (nothing once ``stop_at`` has passed)."""
+        if self._out_of_time():
+            return None
         self._ensure_screen()
         if not self.screen.screens(theta):
             return None
@@ -212,7 +242,7 @@ class _Pool:
                 if out.any():
                     return float(np.sum(out)) + 1.0
                 v = self.screen.violation(th)
-                if v <= self.screen.tol and self.verify(th) is not None:
+                if v <= self.screen.tol_at(th) and self.verify(th) is not None:
                     raise _Found
                 return v
 
@@ -238,7 +268,7 @@ class _Pool:
         d = outside - inside
         span = abs(float(d[k])) if k is not None else np.inf
         for _ in range(steps):
-            if (hi - lo) * span <= resolution:
+            if (hi - lo) * span <= resolution or self._out_of_time():
                 break
             mid = 0.5 * (lo + hi)
             if self.screen.screens(inside + mid * d):
@@ -246,7 +276,7 @@ class _Pool:
             else:
                 hi = mid
         for _ in range(3):
-            if lo <= 0.0:
+            if lo <= 0.0 or self._out_of_time():
                 return None
             pt = self.verify(inside + lo * d)
             if pt is not None:
@@ -264,15 +294,22 @@ def _on_gain_plane(problem, theta):
     return theta + g[0] * (g[1] - g[0] @ theta) / float(g[0] @ g[0])
 
 
-def _obbt_task(problem, box, tasks, bases):
+def _obbt_task(problem, box, tasks, bases, deadline=None):
     """Solve the OBBT LPs ``tasks`` (list of (k, sense)) on one McCormick model.
 
     Returns a list of ``(bound, theta (p,) or None, x or None, basis)`` where ``bound``
-    is a rigorous lower bound of ``min sense * theta_k`` over the relaxation.
+    is a rigorous lower bound of ``min sense * theta_k`` over the relaxation (``-inf``
+    for a task skipped or cut short at ``deadline``, a :func:`time.time` timestamp).
     """
     relax = McCormickRelaxation(problem, box)
     out = []
     for (k, s), basis in zip(tasks, bases, strict=True):
+        if deadline is not None:
+            left = deadline - time.time()
+            if left <= 0:
+                out.append((-np.inf, None, basis, 0))
+                continue
+            _limit_lp(relax.lp, left)
         c = np.zeros(relax.ncol)
         c[k] = s
         relax.lp.set_cost(c)
@@ -292,8 +329,9 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
 
     Each round solves ``min/max theta_k`` (k = 1..p) over the relaxation on the current
     box (in parallel when ``n_jobs > 1``) and shrinks the box with the rigorous bounds.
-    The first round always runs; later rounds only before ``deadline`` (a
-    :func:`time.time` timestamp, if given). Every round's box is a valid outer box.
+    Every LP stops at ``deadline`` (a :func:`time.time` timestamp, if given) with the
+    rigorous bound of its current duals; no further round starts after it. Every round's
+    box is a valid outer box.
 
     Returns
     -------
@@ -315,12 +353,13 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
     for _ in range(rounds):
         old = box.copy()
         if nj == 1:
-            res = _obbt_task(problem, box, tasks, [bases[t] for t in tasks])
+            res = _obbt_task(problem, box, tasks, [bases[t] for t in tasks], deadline)
             res = dict(zip(tasks, res, strict=True))
         else:
             from joblib import delayed
 
-            outs = parallel(delayed(_obbt_task)(problem, box, ch, [bases[t] for t in ch])
+            outs = parallel(delayed(_obbt_task)(problem, box, ch, [bases[t] for t in ch],
+                                                deadline)
                             for ch in chunks)
             res = {t: o for ch, oc in zip(chunks, outs, strict=True)
                    for t, o in zip(ch, oc, strict=True)}
@@ -487,12 +526,12 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     c = np.zeros(relax.ncol)
     c[k] = sense
     relax.lp.set_cost(c)
-    pool = _Pool(problem, list(points))
+    pool = _Pool(problem, list(points), stop_at=stop_at)
 
     inc = min(pool.points, key=lambda q: val(q.theta), default=None)
     ub = val(inc.theta) if inc is not None else np.inf
     interior = np.mean([q.theta for q in pool.points], axis=0) if pool.points else None
-    if interior is not None and pool.verify(interior) is None:
+    if interior is not None and (pool._out_of_time() or pool.verify(interior) is None):
         interior = inc.theta
     width0 = box0[:, 1] - box0[:, 0]
     min_w = 1e-12 * np.maximum(1.0, np.abs(box0).max(axis=1))
@@ -539,6 +578,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                     continue
             relax.set_box(box)
             relax.lp.set_cutoff(ub - tol_eff if np.isfinite(ub) else None)
+            _limit_lp(relax.lp, stop_at - time.perf_counter())
             res = relax.lp.solve()
             nodes += 1
             iters += res.iterations

@@ -399,6 +399,15 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             The data do not bound some parameter inside ``theta_box``.
         SolverError, SolverNotAvailableError, SolverOptionError
             Moment-method backend problems.
+        RelaxationTooLargeError
+            Moment method: the relaxation's estimated size exceeds its budget (checked
+            before any work; use ``method="lp"`` or ``"exact"``).
+
+        Warns
+        -----
+        SearchLimitWarning
+            Exact method: some interval ends stopped at ``max_nodes``, ``time_limit`` or
+            ``total_time_limit``; they are named, and their bounds are still guaranteed.
         """
         import time
 
@@ -425,14 +434,21 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 from .relaxations.moment import moment_bounds
                 from .solvers import get_solver
 
+                from .relaxations.moment_size import (
+                    check_moment_budget,
+                    estimate_moment_relaxation,
+                )
+
                 backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
                 backend.check_options(self.solver_options)
+                # memory/time guard before any work (refuses with the estimate, or warns)
+                check_moment_budget(estimate_moment_relaxation(problem, self.relaxation_order))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
                                     solver_options=self.solver_options, n_jobs=self.n_jobs,
                                     theta_box=lp.bounds, on_failure=self.on_failure,
-                                    fallback=lp.bounds)
+                                    fallback=lp.bounds, max_work=float("inf"))
                 res.extra["lp"] = lp
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
             hint = self._box_hint(problem)

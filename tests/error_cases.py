@@ -28,6 +28,7 @@ from hammerbound.exceptions import (
     IllPosedBacklashError,
     NotEnoughAmplitudesError,
     ParameterValidationError,
+    RelaxationTooLargeError,
     ResultOneViolationError,
     SolverNotAvailableError,
     SolverOptionError,
@@ -524,6 +525,19 @@ CASES: list[ErrorCase] = [
       "diagnose(system, u_prbs, y_prbs, 0.05, candidates=['magic'])",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), 0.05, candidates=["magic"]),
       ParameterValidationError, "choose from"),
+    # ------------------------------------------------------------- stage 2: budgets
+    C("s2-total-time-negative", "stage 2", "negative total time budget",
+      "LinearEIVSetEstimator(method='exact', total_time_limit=-1, ...).fit(x, y)",
+      lambda: lin(method="exact", total_time_limit=-1).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "seconds >= 0"),
+    C("s2-total-time-text", "stage 2", "total time budget given as text",
+      "LinearEIVSetEstimator(method='exact', total_time_limit='10', ...).fit(x, y)",
+      lambda: lin(method="exact", total_time_limit="10").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "None or a number of seconds"),
+    C("s2-moment-too-large", "stage 2", "moment relaxation above its size budget",
+      "LinearEIVSetEstimator(method='moment', relaxation_order=3, ...).fit(x, y)",
+      lambda: lin(method="moment", relaxation_order=3).fit(x_inner(), y_prbs()),
+      RelaxationTooLargeError, "method='lp'"),
 ]
 
 

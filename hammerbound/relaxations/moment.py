@@ -385,7 +385,8 @@ def moment_bounds(
         Size budget ``rows x moments`` of the relaxation, checked *before* it is built
         (:mod:`.moment_size`); default ``MOMENT_MAX_WORK = 2.5e8`` (about 1 GB and ten
         minutes of build time; order 1 with ``na = nb = 2`` reaches it at N ~ 900).
-        Above ``MOMENT_WARN_WORK = 2e7`` a :class:`RuntimeWarning` is issued.
+        Above ``MOMENT_WARN_WORK = 2e7`` a :class:`RuntimeWarning` is issued; ``inf``
+        skips the check (and the warning).
 
     Returns
     -------
@@ -410,7 +411,8 @@ def moment_bounds(
     t_start = time.perf_counter()
     backend = get_solver(solver)
     opts = backend.check_options(solver_options)
-    if int(order) == order and order >= 1:  # else MomentRelaxation reports the bad order
+    if int(order) == order and order >= 1 and not max_work == np.inf:
+        # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
         size = estimate_moment_relaxation(problem, order, theta_box)
         check_moment_budget(size, max_work=max_work)
     if fallback is None:

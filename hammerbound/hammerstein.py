@@ -84,7 +84,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     linear : LinearEIVSetEstimator or None
         Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``, unit
         steady-state gain (22.8), order-1 moment relaxation); its ``noise_bound`` bounds
-        the PRBS output errors.
+        the PRBS output errors. To bound the time of stage 2, give it a total budget:
+        ``linear=LinearEIVSetEstimator(method="exact", total_time_limit=60)`` or
+        ``set_params(linear__total_time_limit=60)`` (seconds, shared by all interval ends;
+        ends stopped by it report guaranteed bounds, never wider than the LP ones).
     inner_signal : {"independent", "two-level"}, default "independent"
         How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
         chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.

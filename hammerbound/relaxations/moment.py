@@ -411,6 +411,14 @@ def moment_bounds(
     t_start = time.perf_counter()
     backend = get_solver(solver)
     opts = backend.check_options(solver_options)
+    if theta_box is not None:
+        tb = np.asarray(theta_box, dtype=float)
+        if tb.shape != (problem.p, 2) or not np.all(np.isfinite(tb)) or np.any(
+            tb[:, 0] > tb[:, 1]
+        ):
+            raise ParameterValidationError(
+                f"theta_box must be a finite ({problem.p}, 2) array with lower <= upper."
+            )
     if int(order) == order and order >= 1 and not max_work == np.inf:
         # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
         size = estimate_moment_relaxation(problem, order, theta_box)

@@ -60,10 +60,10 @@ def _limit_lp(lp, seconds):
     h = lp.h
     limit = np.inf if seconds is None or not np.isfinite(seconds) else \
         h.getRunTime() + max(float(seconds), 1e-3)
-    h.setOptionValue("time_limit", float(min(limit, highs_inf())))
+    h.setOptionValue("time_limit", float(min(limit, _highs_inf())))
 
 
-def highs_inf():
+def _highs_inf():
     from ._highs import INF
 
     return INF

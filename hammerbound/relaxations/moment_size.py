@@ -84,6 +84,7 @@ class MomentSize:
     est_bytes: float
 
     def describe(self) -> str:
+        """One sentence with the sizes and the rough build cost (used in messages)."""
         return (f"order {self.order}: {self.n_cliques} cliques of up to {self.clique_vars} "
                 f"variables (moment matrices {self.psd_side} x {self.psd_side}), "
                 f"{self.n_rows} conic rows x {'' if self.moments_exact else '<= '}"

@@ -167,6 +167,11 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
         cost (order 2 at N = 30 took ~290 s with Clarabel; see ``docs/benchmarks.md``).
+        The relaxation's size is estimated before it is built: above
+        ``rows x moments = 2.5e8`` (order 1 at N ~ 900) the fit raises
+        :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or
+        ``"exact"``), above ``2e7`` it warns (module
+        :mod:`hammerbound.relaxations.moment_size`).
     solver : {"clarabel", "cvxopt", "mosek"}, default "clarabel"
         Conic backend of the moment method.
     solver_options : dict or None
@@ -176,9 +181,21 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         lies in it) and ``|b_j| <= 1e4``.
     tol, max_nodes, time_limit : float, int, float
         Stopping rules of the exact method, per interval end (gap ``<= tol * max(1, |v|)``).
+        An end stopped by ``max_nodes`` or ``time_limit`` reports the best certified outer
+        bound found so far (never wider than the LP bound) with status ``"limit"``, and
+        the fit warns (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends.
+    total_time_limit : float or None, default None
+        Wall-time budget in seconds for the whole fit of the exact method, shared by the
+        ``2 p`` interval ends and the joblib workers (``time_limit`` is per end). It starts
+        when :meth:`fit` is called; the polytopic LP and the first OBBT round always run
+        (set-up, usually well under a second to a few seconds), then each end searches for
+        at most ``min(time_limit, time left)``; ends that find no time left report their
+        LP/OBBT bound with status ``"limit"``. The result is always finite and guaranteed
+        where the LP bound is. ``None``: no total budget. The LP method needs none; the
+        moment method is guarded by its size budget instead (see ``relaxation_order``).
     on_failure : {"box", "raise"}, default "raise"
         Moment method: when a bound cannot be certified, raise :class:`SolverError`
-        (default) or report the a priori (LP) bound for it.
+        (default) or report the LP bound for it (still guaranteed).
     n_jobs : int, default 1
         The ``2 p`` bound problems run in parallel (joblib).
     progress : bool, default False
@@ -226,7 +243,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                  steady_state_gain=None,
                  method="moment", relaxation_order=1, solver="clarabel", solver_options=None,
                  theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
-                 on_failure="raise", n_jobs=1, progress=False):
+                 total_time_limit=None, on_failure="raise", n_jobs=1, progress=False):
         self.na = na
         self.nb = nb
         self.nk = nk
@@ -241,6 +258,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.tol = tol
         self.max_nodes = max_nodes
         self.time_limit = time_limit
+        self.total_time_limit = total_time_limit
         self.on_failure = on_failure
         self.n_jobs = n_jobs
         self.progress = progress
@@ -268,6 +286,12 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
             raise ParameterValidationError(
                 f"time_limit must be a number of seconds >= 0; got {tl!r}."
+            )
+        ttl = self.total_time_limit
+        if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
+                                or not ttl >= 0):
+            raise ParameterValidationError(
+                f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
             )
         if self.nb == 0 and self._nk() != 0:
             raise ParameterValidationError(
@@ -404,6 +428,23 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                     "smaller noise bound if justified, or a theta_box with prior knowledge."
                 )
 
+    @staticmethod
+    def _warn_limits(res):
+        """Warn, naming the interval ends, when a search stopped at a node/time limit."""
+        import warnings
+
+        from .exceptions import SearchLimitWarning
+
+        ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in res.infos
+                if i.status == "limit"]
+        if ends:
+            warnings.warn(
+                f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "
+                f"ends ({', '.join(ends)}): their bounds are guaranteed outer bounds (never "
+                "wider than the LP bound) but may be looser than the exact ones; raise "
+                "time_limit / total_time_limit / max_nodes for tighter ones (bound_info_ "
+                "gives each end's status and certified gap).", SearchLimitWarning, stacklevel=3)
+
     # ------------------------------------------------------------------ fit
     def fit(self, X, y=None, input_bound=0.0, input_groups=None, *, output_bound=None,
             groups=None):
@@ -445,6 +486,15 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             The data do not bound some parameter inside ``theta_box`` (names the same).
         SolverError, SolverNotAvailableError, SolverOptionError
             Moment-method backend problems.
+        RelaxationTooLargeError
+            Moment method: the relaxation's estimated size exceeds its budget (checked
+            before any work; use ``method="lp"`` or ``"exact"``).
+
+        Warns
+        -----
+        SearchLimitWarning
+            Exact method: some interval ends stopped at ``max_nodes``, ``time_limit`` or
+            ``total_time_limit``; they are named, and their bounds are still guaranteed.
         """
         from .iodata import unpack
 
@@ -458,7 +508,11 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 input_groups = groups
         groups = input_groups
         X, y, data = unpack(X, y)
+        import time
+
+        t_fit = time.time()
         self._check_params()
+        deadline = None if self.total_time_limit is None else t_fit + float(self.total_time_limit)
         problem = self._build_problem(X, y, input_bound, groups, output_bound)
         from .relaxations.lp import lp_bounds
 
@@ -471,19 +525,29 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
                 res = exact_bounds(problem, tol=self.tol, max_nodes=self.max_nodes,
                                    time_limit=self.time_limit, n_jobs=self.n_jobs,
-                                   progress=self.progress, check_box=False)
+                                   progress=self.progress, check_box=False,
+                                   deadline=deadline)
                 self._check_box(problem, res)
+                self._warn_limits(res)
             else:
                 from .relaxations.moment import moment_bounds
                 from .solvers import get_solver
 
+                from .relaxations.moment_size import (
+                    check_moment_budget,
+                    estimate_moment_relaxation,
+                )
+
                 backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
                 backend.check_options(self.solver_options)
+                # memory/time guard before any work (refuses with the estimate, or warns)
+                check_moment_budget(estimate_moment_relaxation(problem, self.relaxation_order))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
                                     solver_options=self.solver_options, n_jobs=self.n_jobs,
-                                    theta_box=lp.bounds, on_failure=self.on_failure)
+                                    theta_box=lp.bounds, on_failure=self.on_failure,
+                                    fallback=lp.bounds, max_work=float("inf"))
                 res.extra["lp"] = lp
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
             hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))
@@ -494,7 +558,13 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.problem_ = problem
         self.result_ = res
         self.bounds_ = np.array(res.bounds, dtype=float)
-        self.center_ = self.bounds_.mean(axis=1)
+        if not np.all(np.isfinite(self.bounds_)):  # pragma: no cover - every method clips
+            from .exceptions import SolverError
+
+            raise SolverError(f"internal error: non-finite bounds {self.bounds_.tolist()}; "
+                              "please report it.")
+        # halves first: no overflow for bounds near the float range
+        self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
         self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
         self.coef_ = self.center_
         self.param_names_ = tuple(problem.param_names)

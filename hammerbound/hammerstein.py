@@ -88,6 +88,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         backlash/linear split identifiable (stage 1 measures ``G(1) m``, read as ``m``):
         a ``linear`` estimator with ``steady_state_gain=None`` (its default) is cloned
         with ``steady_state_gain=1``; any other gain raises ``ParameterValidationError``.
+        To bound the time of stage 2, give it a total budget:
+        ``linear=LinearEIVSetEstimator(method="exact", total_time_limit=60)`` or
+        ``set_params(linear__total_time_limit=60)`` (seconds, shared by all interval ends;
+        ends stopped by it report guaranteed bounds, never wider than the LP ones).
     inner_signal : {"independent", "two-level"}, default "independent"
         How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
         chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.

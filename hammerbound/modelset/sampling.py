@@ -4,7 +4,9 @@
 linear in the noise sequences, so membership is decided by one LP
 (:func:`hammerbound.relaxations.problem.check_theta`), whose witness ``(eta, dx)`` is
 the certificate kept with every sample: ``|eta_t| <= deta_t``, ``|dx_k| <= dx_k`` and every
-equation of (22.34) holds to ``1e-9 (1 + max |y|)`` (the outward tolerance of the package).
+equation of (22.34) holds to ``FEASIBILITY_RTOL`` (1e-9) times the magnitude of its terms
+(:func:`~hammerbound.relaxations.problem.equation_scale`; the tolerance policy of
+``docs/tolerances.md``).
 
 The sampler is *hit-and-run with shrinkage* (the slice-sampling shrinkage of Neal,
 2003) restricted to the gain hyperplane (22.8) when there is one, inside the orthotope
@@ -74,11 +76,13 @@ class CertifiedSamples:
     dx : ndarray (n, K)
         Witness input errors, one per input-error group (``|dx| <= input_bound``).
     max_violation : ndarray (n,)
-        Largest equation residual of (22.34) at the witness (<= ``tol``).
+        Largest equation residual of (22.34) at the witness divided by the magnitude of
+        that equation's terms (``equation_scale``); ``<= tol`` for every sample.
     gain_residual : ndarray (n,)
         ``|B(1) - g A(1)|`` (0 without a gain constraint).
     tol : float
-        The feasibility tolerance the residuals were checked against.
+        The relative feasibility tolerance the residuals were checked against
+        (``FEASIBILITY_RTOL``).
     n_lp : int
         LPs solved (screening and verification).
     """
@@ -118,13 +122,14 @@ class _WitnessLP:
         self.lb = np.concatenate([-pr.deta, -pr.dx_group])
         self.ub = np.concatenate([pr.deta, pr.dx_group])
         self.hs = highspy
-        self.h = highspy.Highs()
-        self.h.setOptionValue("output_flag", False)
+        from ..relaxations._highs import new_highs
+
+        self.h = new_highs()
         self.h.setOptionValue("threads", 1)
         self.basis = None
 
     def witness(self, theta):
-        """``(z, violation)`` or None when the solver does not return an optimum."""
+        """``(z, relative violation)`` or None when the solver does not return an optimum."""
         import scipy.sparse as sp
 
         hs, pr, m, nz = self.hs, self.problem, self.m, self.nz
@@ -156,7 +161,9 @@ class _WitnessLP:
             return None
         self.basis = self.h.getBasis()
         z = np.clip(np.asarray(self.h.getSolution().col_value[:nz]), self.lb, self.ub)
-        viol = float(np.max(np.abs(M @ z - r))) if m else 0.0
+        from ..relaxations.problem import equation_scale
+
+        viol = float(np.max(np.abs(M @ z - r) / equation_scale(pr, theta))) if m else 0.0
         return z, viol
 
 
@@ -164,14 +171,17 @@ class _Verifier:
     """Membership with a witness: the warm-started LP above, :func:`check_theta` as fallback.
 
     A candidate is accepted only if the clipped witness reproduces every equation of
-    (22.34) to ``1e-9 (1 + max |y|)``, the gain equality holds to ``1e-9 (1 + |g|)`` and
-    ``theta`` is in the a priori box - the acceptance rule of :func:`check_theta`.
+    (22.34) to ``FEASIBILITY_RTOL`` times the magnitude of its terms, the gain equality holds
+    to ``FEASIBILITY_RTOL`` times the magnitude of its terms and ``theta`` is in the a priori
+    box - the acceptance rule of :func:`check_theta`.
     """
 
     def __init__(self, problem):
         self.problem = problem
         self.n_lp = 0
-        self.tol = 1e-9 * (1.0 + float(np.max(np.abs(problem.y))))
+        from ..tolerances import FEASIBILITY_RTOL
+
+        self.tol = FEASIBILITY_RTOL
         try:
             self.lp = _WitnessLP(problem)
         except Exception:  # noqa: BLE001 - highspy missing: check_theta only
@@ -187,7 +197,7 @@ class _Verifier:
             return None
         g = pr.gain_row()
         gres = 0.0 if g is None else float(abs(g[0] @ theta - g[1]))
-        if g is not None and gres > 1e-9 * (1 + abs(pr.gain)):
+        if g is not None and gres > self.tol * float(np.abs(g[0]) @ np.abs(theta) + abs(g[1])):
             return None
         if self.lp is not None:
             self.n_lp += 1
@@ -206,7 +216,11 @@ class _Verifier:
             chk = check_theta(pr, theta)
         except SolverError:
             return None
-        return chk if chk.feasible else None
+        if not chk.feasible:
+            return None
+        # report the relative violation, as the warm-started path does
+        return FeasibilityCheck(True, chk.max_rel_violation * self.tol, chk.eta, chk.dx,
+                                chk.gain_residual, chk.max_rel_violation)
 
 
 def _null_basis(problem, radius):
@@ -317,7 +331,7 @@ def sample_eiv(problem, box, n, *, seeds=(), random_state=None, thin=1, max_shri
         )
     theta = np.array([o[0] for o in out])
     chks = [o[1] for o in out]
-    tol = 1e-9 * (1.0 + float(np.max(np.abs(problem.y))))
+    tol = ver.tol
     names = tuple(param_names) if param_names is not None else tuple(problem.param_names)
     return CertifiedSamples(
         theta=theta, param_names=names, eta=np.array([c.eta for c in chks]),

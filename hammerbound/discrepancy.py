@@ -66,6 +66,7 @@ from scipy.signal import lfilter
 from .exceptions import DataValidationError, HammerboundError, ParameterValidationError
 from .relaxations.safe_lp import safe_minimize
 from .systems import Backlash, HammersteinSystem, as_polynomials, simulate_backlash
+from .validation import as_real, check_scale
 
 __all__ = [
     "CANDIDATES",
@@ -1199,15 +1200,10 @@ def _validate(model, u, y, noise_bound, refit, skip):
         raise DataValidationError(
             f"u has {u.size} samples but y has {y.size}; pass aligned input/output records."
         )
-    try:
-        if isinstance(noise_bound, (str, bytes)):
-            raise TypeError
-        nb = float(noise_bound)
-    except (TypeError, ValueError) as exc:
-        raise ParameterValidationError(
-            "noise_bound must be a single positive number (the bound |eta_t| <= noise_bound)."
-        ) from exc
-    if not np.isfinite(nb) or nb <= 0:
+    nb = as_real("noise_bound", noise_bound,
+                 want="noise_bound must be a single positive number (the bound "
+                      "|eta_t| <= noise_bound), e.g. noise_bound=0.05")
+    if nb <= 0:
         raise ParameterValidationError(
             f"noise_bound must be a finite number > 0; got {noise_bound!r}."
         )
@@ -1227,6 +1223,7 @@ def _validate(model, u, y, noise_bound, refit, skip):
             "cannot be compared with data that were not excited - record data with a "
             "varying input."
         )
+    check_scale("diagnose", {"u": u, "y": y}, {"noise_bound": nb})
     s = _as_structure(model)
     return s, u, y, nb, refit == "linear", skip
 

@@ -453,7 +453,7 @@ CASES: list[ErrorCase] = [
     C("exp-noise-shape", "experiments", "noise bound of the wrong length",
       "square_wave_experiment(system, [1.0, 2.0], [0.1, 0.2, 0.3])",
       lambda: hb.square_wave_experiment(SYS, [1.0, 2.0], [0.1, 0.2, 0.3]),
-      ParameterValidationError, "one value per measured sample"),
+      ParameterValidationError, "one value per sample"),
     C("exp-noise-negative", "experiments", "negative noise bound",
       "prbs_experiment(system, 50, 1.0, -0.05)",
       lambda: hb.prbs_experiment(SYS, 50, 1.0, -0.05),

@@ -9,6 +9,7 @@ errors-in-variables problem; :class:`HammersteinBacklashIdentifier` runs both.
 from .backlash import BacklashSetEstimator, InnerSignalBounds
 from .eiv import LinearEIVSetEstimator
 from .exceptions import (
+    DataScaleError,
     DataValidationError,
     EmptyFeasibleSetError,
     HammerboundError,
@@ -33,6 +34,7 @@ __version__ = "0.1.0"
 __all__ = [
     "Backlash",
     "BacklashSetEstimator",
+    "DataScaleError",
     "DataValidationError",
     "EIVProblem",
     "EmptyFeasibleSetError",

@@ -22,13 +22,12 @@ import numbers
 
 import numpy as np
 
-from .exceptions import DataValidationError, ParameterValidationError
+from .exceptions import DataScaleError, DataValidationError, ParameterValidationError
 
 __all__ = [
     "SCALE_MAX",
     "SCALE_MIN",
     "SLOPE_MIN",
-    "DataScaleError",
     "as_bound",
     "as_flag",
     "as_real",
@@ -37,10 +36,6 @@ __all__ = [
     "check_excited",
     "check_scale",
 ]
-
-
-class DataScaleError(DataValidationError):
-    """The data's magnitudes are outside the range the arithmetic can certify; rescale them."""
 
 
 def _describe(value) -> str:
@@ -111,7 +106,7 @@ def as_bound(name: str, value, n: int, *, allow_zero: bool = False,
     sign_error = error if sign_error is None else sign_error
     what = f"a number or an array of {n} numbers (shape ({n},) or ({n}, 1))"
     if value is None or _is_text(value):
-        hint = (f" - pass the number {value!r} without quotes" if _is_text(value)
+        hint = (f" - pass the number {value} (without quotes)" if _is_text(value)
                 and _parses_as_float(value) else "")
         raise error(f"{name} must be {what}; got {_describe(value)}{hint}.")
     if _is_bool(value):
@@ -179,7 +174,7 @@ def as_real(name: str, value, *, positive: bool = False, nonzero: bool = False,
         want = (f"{name} must be a {kind}{rng}{' or None' if or_none else ''}, e.g. "
                 f"{name}={example}")
     if _is_text(value):
-        hint = (f"; pass the number {value!r} without quotes" if _parses_as_float(value)
+        hint = (f"; pass the number {value} (without quotes)" if _parses_as_float(value)
                 else "")
         raise error(f"{want}; got the text {_describe(value)}{hint}.")
     if _is_bool(value):
@@ -342,11 +337,14 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
         if np.isfinite(big) and big > SCALE_MAX:
             found.append(f"max {name} = {big:.3g}")
     if found:
+        top = max([p for p in peaks.values() if p > 0 and np.isfinite(p)] or [1.0])
+        factor = 10.0 ** round(float(np.log10(top)))
         raise DataScaleError(
             f"{where}: the data are outside the range of magnitudes [{SCALE_MIN:g}, "
             f"{SCALE_MAX:g}] for which the bounds can be certified ({'; '.join(found)}). "
             "Rescale: divide the signals and the noise bounds by a common factor s (a "
-            f"power of ten) so that their largest magnitudes are near 1{hint}."
+            f"power of ten, here e.g. s = {factor:g}) so that their largest magnitudes are "
+            f"near 1{hint}."
         )
     if slope is not None:
         num, den = slope
@@ -357,5 +355,5 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
                     f"{where}: max |{num}| / max |{den}| = {ratio:.3g} is below {SLOPE_MIN:g}, "
                     "so the slopes are too small to be certified in double precision. "
                     f"Rescale: multiply {num} and the noise bound by a power of ten s (the "
-                    f"slopes are multiplied by s; divide their bounds by s afterwards){hint}."
+                    f"slopes are multiplied by s; divide their bounds by s afterwards)."
                 )

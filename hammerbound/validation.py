@@ -325,20 +325,21 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
     """
     found = []
     peaks = {}
+    offending = []
     for name, v in signals.items():
         arr = np.asarray(v, dtype=float)
         big = float(np.max(np.abs(arr))) if arr.size else 0.0
         peaks[name] = big
         if big != 0.0 and np.isfinite(big) and not SCALE_MIN <= big <= SCALE_MAX:
             found.append(f"max |{name}| = {big:.3g}")
+            offending.append(big)
     for name, v in (bounds or {}).items():
         arr = np.asarray(v, dtype=float)
         big = float(np.max(np.abs(arr))) if arr.size else 0.0
         if np.isfinite(big) and big > SCALE_MAX:
             found.append(f"max {name} = {big:.3g}")
     if found:
-        top = max([p for p in peaks.values() if p > 0 and np.isfinite(p)] or [1.0])
-        factor = 10.0 ** round(float(np.log10(top)))
+        factor = 10.0 ** round(float(np.log10(offending[0] if offending else SCALE_MAX)))
         raise DataScaleError(
             f"{where}: the data are outside the range of magnitudes [{SCALE_MIN:g}, "
             f"{SCALE_MAX:g}] for which the bounds can be certified ({'; '.join(found)}). "

@@ -1,8 +1,9 @@
 """One validation of signals, bounds and scalar settings for every entry point.
 
-Every public entry point (the estimators, the identifier, :func:`~hammerbound.diagnose`,
-the experiment generators and hence the command line) validates its inputs here, so the
-same input gets the same answer everywhere:
+Every public entry point (the estimators, the identifier, the experiment generators,
+the bound and scale checks of :func:`~hammerbound.discrepancy.diagnose`, and hence the
+command line) validates its inputs here, so the same input gets the same answer
+everywhere:
 
 * **signals** (``u``, ``y``, ``X``): real numbers of shape ``(N,)`` or ``(N, 1)``;
   sparse, ragged, text, complex, empty and non-finite inputs are refused;
@@ -306,8 +307,9 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
     and ``k >= 14`` (so ``1e300`` and ``1e-300`` fail); with ``u`` and ``y`` scaled
     independently it failed once ``max|y| / max|u| <= 1e-10`` (slopes ``m ~ 1e-10``) and
     was unaffected up to ``1e16``. The stage-2 LP bounds were identical to 3 digits for
-    magnitudes ``2.5e-7 .. 2.5e11``, looser (still containing the truth) at ``2.5e-8``
-    and ``2.5e12``, ``UnboundedSetError`` at ``2.5e-9`` and from ``2.5e14``. At the edges
+    ``k`` in ``[-7, 9]`` (magnitudes ``2.5e-7 .. 2.5e9``), looser but still containing the
+    truth at ``k = -8, 10, 12, 13``, and ``UnboundedSetError`` at ``k = -9`` and from
+    ``k = 14``. At the edges
     ``1e-7`` and ``1e9`` the LP, moment and exact methods all returned intervals containing
     the truth (the exact method with a node/time limit is looser there than at ``1``:
     its branch-and-bound gaps close more slowly).

@@ -14,9 +14,9 @@ Workflow (see ``docs/discrepancy.md``)
    the noise bound ``Delta`` iff ``gap <= Delta`` - in floating point, iff every scored
    residual satisfies ``|y_t - yhat_t| <= Delta + 1e-9 (|y_t| + |yhat_t| + Delta)`` (the
    outward tolerance of :mod:`hammerbound.tolerances`; the same rule counts the samples
-   "outside"). Samples whose best-fit residual lies outside that band are flagged and grouped by operating condition (after input
-   reversals, after input changes, in steady state, at large / small amplitude), with
-   constant-shift and lag indicators.
+   "outside"). Samples whose best-fit residual lies outside that band are flagged and
+   grouped by operating condition (after input reversals, after input changes, in steady
+   state, at large / small amplitude), with constant-shift and lag indicators.
 2. **Name.** Each candidate effect adds *one* parameter to the model class:
 
    ==============  ===========================================================  =====

@@ -21,9 +21,10 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .backlash import BacklashSetEstimator
-from .eiv import LinearEIVSetEstimator, _as_signal
+from .eiv import LinearEIVSetEstimator
 from .exceptions import DataValidationError, ParameterValidationError
 from .systems import Backlash, HammersteinSystem
+from .validation import as_real, as_signal, as_theta, check_scale
 
 __all__ = ["HammersteinBacklashIdentifier"]
 
@@ -165,12 +166,16 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 "backlash must be a BacklashSetEstimator and linear a LinearEIVSetEstimator."
             )
-        u = _as_signal("X (PRBS input)", X)
-        yy = _as_signal("y (PRBS output)", y)
+        u = as_signal("X (PRBS input)", X)
+        yy = as_signal("y (PRBS output)", y)
         if u.shape != yy.shape:
             raise DataValidationError(
                 f"X and y must have the same number of samples; got {u.size} and {yy.size}."
             )
+        check_scale("HammersteinBacklashIdentifier.fit", {"X (PRBS input)": u,
+                                                          "y (PRBS output)": yy},
+                    hint=" (the slopes m_l, m_r and theta are unchanged; multiply the bounds "
+                         "on c_l, c_r by s)")
         u_ss, y_ss = _steady_pair(steady_state)
         bl.fit(u_ss, y_ss)
         if self.prbs_level is None:
@@ -185,13 +190,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 )
             u_star = float(levels[1])
         else:
-            try:
-                u_star = float(self.prbs_level)
-            except (TypeError, ValueError) as exc:
-                raise ParameterValidationError(
-                    f"prbs_level must be a number u* > 0 (or None to read it from X); got "
-                    f"{self.prbs_level!r}."
-                ) from exc
+            u_star = as_real("prbs_level", self.prbs_level, positive=True,
+                             want="prbs_level must be a number u* > 0 (or None to read it "
+                                  "from X), e.g. prbs_level=1.0")
         inner = bl.inner_signal_bounds(u_star)  # checks Result 1
         xc, dx = inner.transform(u)
         groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
@@ -223,16 +224,14 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     def contains(self, gamma, theta) -> bool:
         """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals."""
         check_is_fitted(self, "bounds_")
-        g = np.asarray(gamma, dtype=float)
-        if g.shape != (4,):
-            raise DataValidationError("gamma must be (m_l, c_l, m_r, c_r).")
+        g = as_theta(gamma, 4, ("m_l", "c_l", "m_r", "c_r"), name="gamma")
         in_gamma = np.all((g >= self.gamma_bounds_[:, 0]) & (g <= self.gamma_bounds_[:, 1]))
         return bool(in_gamma) and self.linear_.contains(theta)
 
     def predict(self, X):
         """Output of the central model simulated on input ``X`` from rest."""
         check_is_fitted(self, "bounds_")
-        u = _as_signal("X", X)
+        u = as_signal("X", X)
         return self.system_.simulate(u)
 
     def score(self, X, y, sample_weight=None):
@@ -246,7 +245,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         stage 2 (see :meth:`LinearEIVSetEstimator.one_step_envelope`).
         """
         check_is_fitted(self, "bounds_")
-        u = _as_signal("X", X)
+        u = as_signal("X", X)
         xc, dx = self.inner_bounds_.transform(u)
         return self.linear_.one_step_envelope(xc, y, input_bound=dx)
 

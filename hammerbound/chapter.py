@@ -47,6 +47,7 @@ __all__ = [
     "STAGE1_MODES",
     "chapter_inner_bounds",
     "chapter_reference",
+    "fit_example",
     "format_records",
     "reproduce_chapter",
     "reproduction_misses",
@@ -390,6 +391,22 @@ def run_demo(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NOISE_LEVEL
             f"{len(st2) - len(miss)}/{len(st2)}")
     say(CLOSING_NOTE)
     return records
+
+
+def fit_example(delta_eta=0.05, N=100, seed=0, method="exact", *, inner_signal="independent",
+                relaxation_order=1, solver="clarabel", n_jobs=1):
+    """One fitted :class:`~hammerbound.HammersteinBacklashIdentifier` on the chapter's example
+    (our stage 1), e.g. for the demo's report. Returns ``(example, identifier)``."""
+    from .hammerstein import HammersteinBacklashIdentifier
+
+    ex = chapter_example(delta_eta, N=N, random_state=seed)
+    ident = HammersteinBacklashIdentifier(
+        BacklashSetEstimator(delta_eta),
+        LinearEIVSetEstimator(noise_bound=delta_eta, method=method,
+                              relaxation_order=relaxation_order, solver=solver, n_jobs=n_jobs),
+        inner_signal=inner_signal)
+    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    return ex, ident
 
 
 # --------------------------------------------------------------------------- output

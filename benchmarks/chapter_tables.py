@@ -58,6 +58,9 @@ def main(argv=None):
                     help="several noise draws through hammerbound.chapter (see above)")
     ap.add_argument("--stage1", nargs="+", default=["chapter", "experiment"],
                     choices=["chapter", "experiment"], help="with --seeds")
+    ap.add_argument("--rounding", default="outward", choices=["outward", "as-printed"],
+                    help="with --seeds --stage1 chapter: Table 22.1 ends moved outward by half "
+                         "a printed digit (default) or as printed (file suffix _as-printed)")
     args = ap.parse_args(argv)
     if args.seeds is not None:
         return main_seeds(args)
@@ -147,7 +150,8 @@ def main_seeds(args):
             C.log(f"stage1={stage1} method={m} N={Ns} levels={args.levels} seeds={args.seeds}")
             recs = reproduce_chapter(stage1, Ns, args.levels, args.seeds, kw.pop("method"),
                                      inner_signal=inner, n_jobs=args.n_jobs,
-                                     time_limit=args.time_limit, progress=C.log, **kw)
+                                     time_limit=args.time_limit, rounding=args.rounding,
+                                     progress=C.log, **kw)
             miss = reproduction_misses(recs)
             bad = [r for r in recs if not all(r["inside"])]
             C.log(f"stage1={stage1} method={m}: rows outside ratio 0.7-1.5 or missing the "
@@ -161,6 +165,8 @@ def main_seeds(args):
                           f"{'-' if r['ratio'] is None else round(r['ratio'], 3)} "
                           f"inside {all(r['inside'])}")
             name = f"chapter_seeds_{stage1}_{m}"
+            if args.rounding != "outward":
+                name += f"_{args.rounding}"
             C.write_json({"environment": env, "args": vars(args), "stage1": stage1,
                           "method": m, "records": recs}, C.RESULTS / f"{name}.json")
             C.write_csv(recs, C.RESULTS / f"{name}.csv")

@@ -524,7 +524,23 @@ CASES: list[ErrorCase] = [
       "diagnose(system, u_prbs, y_prbs, 0.05, candidates=['magic'])",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), 0.05, candidates=["magic"]),
       ParameterValidationError, "choose from"),
+    # ------------------------------------------------------------- chapter reproduction
+    C("chapter-stage1", "chapter", "unknown stage-1 mode",
+      "reproduce_chapter(stage1='table')",
+      lambda: _chapter().reproduce_chapter("table", N=40, noise_levels=(0.05,), seeds=[0],
+                                           method="lp"),
+      ParameterValidationError, "stage1 must be one of"),
+    C("chapter-level", "chapter", "noise level without a row in Table 22.1",
+      "chapter_inner_bounds(0.1)",
+      lambda: _chapter().chapter_inner_bounds(0.1),
+      ParameterValidationError, "stage1='experiment'"),
 ]
+
+
+def _chapter():
+    import hammerbound.chapter as chapter
+
+    return chapter
 
 
 def run_case(case: ErrorCase) -> BaseException | None:

@@ -241,11 +241,12 @@ def _rng(r, nd=4):
 def section_chapter_seeds():
     """Medians over seeds, both stage-1 modes (benchmarks/chapter_tables.py --seeds)."""
     runs = [(s1, _json(f"chapter_seeds_{s1}_exact.json")) for s1 in ("chapter", "experiment")]
+    runs.append(("chapter, Table 22.1 ends as printed (no outward rounding)",
+                 _json("chapter_seeds_chapter_exact_as-printed.json")))
     runs = [(s1, j) for s1, j in runs if j]
     if not runs:
         return ""
-    out = ["### Over several noise draws: exact method, both stage-1 modes
-",
+    out = ["### Over several noise draws: exact method, both stage-1 modes\n",
            "`python benchmarks/chapter_tables.py --seeds 0 1 2 3 4 --stage1 chapter experiment "
            "--methods exact --n-jobs 1` (`hammerbound.chapter.reproduce_chapter`). *stage 1 = "
            "chapter*: stage 2 receives the inner-signal bounds implied by the chapter's Table "

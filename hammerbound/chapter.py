@@ -53,10 +53,13 @@ __all__ = [
     "reproduction_misses",
     "run_demo",
     "stdout_to_stderr",
+    "records_json",
     "write_records",
 ]
 
 STAGE1_MODES = ("experiment", "chapter")
+#: Seeds of the default ``hammerbound demo`` (a quick run; the benchmark uses 0-4).
+DEMO_SEEDS = (0, 1)
 GAMMA_NAMES = ("ml", "cl", "mr", "cr")
 THETA_NAMES = ("a1", "a2", "b1", "b2")
 INNER_NAMES = ("x(+u*)", "x(-u*)")
@@ -202,7 +205,7 @@ def _record(table, N, deta, param, true, method, stage1, seeds, lowers, uppers, 
 def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NOISE_LEVELS,
                       seeds=range(5), method="exact", *, inner_signal="independent",
                       relaxation_order=1, solver="clarabel", n_jobs=1, time_limit=600.0,
-                      rounding="outward", progress=None) -> list[dict]:
+                      rounding="outward", linear_options=None, progress=None) -> list[dict]:
     """Run the chapter's example for every noise level, ``N`` and seed; one record per row.
 
     Parameters
@@ -219,6 +222,10 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
         Stage 2 (:class:`~hammerbound.LinearEIVSetEstimator`).
     inner_signal : {"independent", "two-level"}
         As in :class:`~hammerbound.HammersteinBacklashIdentifier`.
+    rounding : {"outward", "as-printed"}
+        With ``stage1="chapter"``: see :func:`chapter_inner_bounds`.
+    linear_options : dict or None
+        Further keyword arguments of the stage-2 estimator (e.g. ``{"progress": True}``).
     progress : callable(str) or None
         Called with one line per finished fit.
 
@@ -264,7 +271,8 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
                 groups = (ex.prbs.u < 0).astype(int) if inner_signal == "two-level" else None
                 lin = LinearEIVSetEstimator(noise_bound=deta, method=method,
                                             relaxation_order=relaxation_order, solver=solver,
-                                            n_jobs=n_jobs, time_limit=time_limit)
+                                            n_jobs=n_jobs, time_limit=time_limit,
+                                            **(linear_options or {}))
                 t0 = time.perf_counter()
                 lin.fit(xc, ex.prbs.y, input_bound=dx, groups=groups)
                 dt = time.perf_counter() - t0
@@ -330,7 +338,8 @@ def format_records(records, file=None) -> None:
             title = ("Table 22.1 - backlash parameters (our exact stage 1) and inner-signal "
                      f"levels for u* = {rows[-1].get('u_star', CHAPTER_U_STAR):g}")
         else:
-            title = (f"Table {table} - linear block, N = {n}, method {r0['method']}, "
+            name = f"({table})" if table.startswith("N=") else table
+            title = (f"Table {name} - linear block, N = {n}, method {r0['method']}, "
                      f"stage 1: {r0['stage1']}")
         print(f"\n{title}", file=file)
         print(f"  ours: interval of the median seed, median half-width (min-max) over "
@@ -355,9 +364,9 @@ def format_records(records, file=None) -> None:
 
 
 def run_demo(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NOISE_LEVELS,
-             seeds=range(3), method="exact", *, inner_signal="independent",
-             relaxation_order=1, solver="clarabel", n_jobs=1, progress=None,
-             file=None) -> list[dict]:
+             seeds=DEMO_SEEDS, method="exact", *, inner_signal="independent",
+             relaxation_order=1, solver="clarabel", n_jobs=1, linear_options=None,
+             progress=None, file=None) -> list[dict]:
     """The ``hammerbound demo``: :func:`reproduce_chapter`, printed with a closing note.
 
     Tables go to ``file`` (default stdout; ``file=False`` prints nothing), progress lines to
@@ -378,7 +387,8 @@ def run_demo(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NOISE_LEVEL
     t0 = time.perf_counter()
     records = reproduce_chapter(stage1, Ns, noise_levels, seeds, method,
                                 inner_signal=inner_signal, relaxation_order=relaxation_order,
-                                solver=solver, n_jobs=n_jobs, progress=progress)
+                                solver=solver, n_jobs=n_jobs, linear_options=linear_options,
+                                progress=progress)
     if out is not False:
         format_records(records, out)
     bad = [r for r in records if not all(r["inside"])]
@@ -434,9 +444,14 @@ def stdout_to_stderr():
             os.close(saved)
 
 
+def records_json(records) -> str:
+    """The records as a JSON list (one object per table row)."""
+    return json.dumps(records, indent=1, default=_json_default)
+
+
 def write_records(records, path, *, file=None) -> None:
     """Write the records as a JSON list to ``path`` (``"-"``: to ``file``, default stdout)."""
-    text = json.dumps(records, indent=1, default=_json_default)
+    text = records_json(records)
     if str(path) == "-":
         out = sys.stdout if file is None else file
         out.write(text + "\n")

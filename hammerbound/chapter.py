@@ -67,21 +67,25 @@ _TABLE_OF_N = {100: "22.2", 300: "22.3"}
 
 #: The demo's closing note: the measured causes of the differences with the chapter.
 CLOSING_NOTE = """\
-Notes (measured; see docs/benchmarks.md, section "Chapter tables"):
- * Rows use the exact method (branch and bound): the chapter's delta = 2 relaxation equals
-   the exact intervals wherever both were run (N <= 20); the order-1 relaxation is 2-3x
-   wider than exact at delta_eta = 0.3 and is not what the chapter reports.
+Notes (measured with 5 seeds; docs/benchmarks.md, section 1, says which numbers are whose):
+ * Rows use the exact method: the chapter's delta = 2 relaxation equals the exact intervals
+   wherever both were run (N = 10, 20). The order-1 relaxation (--method moment) is 2.0-3.2x
+   the exact width at delta_eta = 0.3 on seed 0 and is not what the chapter reports.
  * The rest of the difference is the inner-signal radius dx that stage 1 hands to stage 2.
-   With --stage1 chapter, stage 2 receives the dx implied by the chapter's Table 22.1 (its
-   box of (m, c), outward-rounded) instead of ours.
- * The chapter's Table 22.1 is not reproduced at its stated SNR under its stated
-   assumptions (M = 50, uniform noise): neither 300 noise draws nor 4 amplitude designs
-   reached it, and larger amplitudes make dx worse at u* = 1. Its amplitudes and u* are
-   not given; ours are hammerbound.experiments.CHAPTER_AMPLITUDES / CHAPTER_U_STAR.
- * Widths vary strongly with the noise draw (seed 0 is about a 10th-percentile draw); the
-   ratio is that of the median half-width over the seeds to the chapter's one draw.
- * Tighter and still guaranteed: inner_signal="two-level" (one unknown inner value per
-   PRBS level, as Result 1 implies) with the exact method."""
+   --stage1 chapter feeds stage 2 the dx implied by the chapter's Table 22.1 (interval
+   arithmetic on its (m, c) box, ends moved outward by half a printed digit): 43 of 48 rows of
+   Tables 22.2/22.3 are then within 0.7-1.5x of the chapter (the 5 others: the outward
+   rounding at delta_eta = 0.005, and the chapter's one draw lying inside our seed range).
+   With our stage 1, 7 of 48 are; our median dx is 1.15-2.9x the implied one (except at 0.02).
+ * The chapter's Table 22.1 is not reproduced at its stated SNR under its stated assumptions
+   (M = 50, uniform noise): not over 300 draws x 4 amplitude designs (earlier), and larger
+   amplitudes make dx worse at u* = 1 (0/100 draws reach the implied dx with amplitudes in
+   [1.0, 2.8]). Its amplitudes and u* are not given; ours: experiments.CHAPTER_AMPLITUDES/U_STAR.
+ * Widths vary strongly with the noise draw: seed 0 is unlucky (transient SNR at the 3rd
+   percentile of 100 draws); the ratio is our median over the seeds / the chapter's one draw.
+ * Tighter and still guaranteed: --inner-signal two-level (one unknown inner value per PRBS
+   level, as Result 1 implies) with the exact method, e.g. a1 half-width 0.0146 instead of
+   0.0328 (chapter) at N = 100, delta_eta = 0.3."""
 
 
 # --------------------------------------------------------------------------- reference data

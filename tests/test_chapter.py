@@ -192,3 +192,16 @@ def test_demo_json_file_and_stage1_chapter(tmp_path, capsys):
     assert "stage 1: chapter" in out and "Table 22.2" in out and "ratio" in out
     recs = json.loads(path.read_text())
     assert len(recs) == 10 and all(len(r["widths"]) == 1 for r in recs)
+
+
+def test_demo_json_file_is_never_overwritten_without_force(tmp_path, capsys):
+    path = tmp_path / "out.json"
+    path.write_text("my earlier results\n")
+    rc = main(_TINY + ["--json", str(path)])
+    cap = capsys.readouterr()
+    assert rc == 2 and "--force" in cap.err and cap.out == ""  # refused before the work
+    assert path.read_text() == "my earlier results\n"
+    rc = main(_TINY + ["--json", str(path), "--force", "--quiet"])
+    assert rc == 0
+    recs = json.loads(path.read_text())
+    assert len(recs) == 10 and all(r["stage1"] == "experiment" for r in recs)

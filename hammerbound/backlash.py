@@ -410,6 +410,37 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         ml, cl, mr, cr = self.gamma_center_
         return np.where(X > 0, mr * (X - cr), ml * (X + cl))
 
+    # ------------------------------------------------------------------ model set (issue 16)
+    def sample(self, n, random_state=None):
+        """``n`` backlashes ``(m_l, c_l, m_r, c_r)`` from the exact feasible polygons.
+
+        Uniform in ``(m, beta = m c)`` on each side (the sides are independent); each
+        sample is checked against every half-plane of its polygon. Returns
+        :class:`~hammerbound.modelset.BacklashSamples`.
+        """
+        check_is_fitted(self, "left_")
+        from .modelset.sampling import sample_backlash
+
+        return sample_backlash(self.left_, self.right_, n, random_state=random_state)
+
+    def inverse(self, v_range=None, x0=0.0):
+        """Backlash-inverse compensator from the central estimate, with a guaranteed error.
+
+        The classic right-inverse (rise: ``u = v/m_r + c_r``, fall: ``u = v/m_l - c_l``)
+        plus :meth:`~hammerbound.modelset.BacklashInverse.error_bounds`, the band of the
+        residual ``x - v`` valid for every backlash of the feasible set and every command
+        sequence in ``v_range`` (default: the inner-signal range of the experiment).
+
+        Raises
+        ------
+        IllPosedBacklashError
+            The compensator would drive some feasible backlash past its line crossing.
+        """
+        check_is_fitted(self, "left_")
+        from .modelset.compensation import build_inverse
+
+        return build_inverse(self, v_range=v_range, x0=x0)
+
 
 def _is_complex(X):
     try:

@@ -85,3 +85,12 @@ class SolverNotAvailableError(HammerboundError, ValueError):
 
 class SolverOptionError(HammerboundError, TypeError):
     """Unknown or ill-typed solver options."""
+
+
+class RelaxationTooLargeError(HammerboundError, ValueError):
+    """The moment relaxation would exceed its size budget; use method "lp" or "exact"."""
+
+
+class SearchLimitWarning(UserWarning):
+    """A bound search stopped at a node/time limit; the reported bound is still guaranteed
+    (an outer bound, never wider than the LP bound) but may be looser than the exact one."""

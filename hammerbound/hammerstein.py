@@ -84,7 +84,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     linear : LinearEIVSetEstimator or None
         Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``, unit
         steady-state gain (22.8), order-1 moment relaxation); its ``noise_bound`` bounds
-        the PRBS output errors.
+        the PRBS output errors. To bound the time of stage 2, give it a total budget:
+        ``linear=LinearEIVSetEstimator(method="exact", total_time_limit=60)`` or
+        ``set_params(linear__total_time_limit=60)`` (seconds, shared by all interval ends;
+        ends stopped by it report guaranteed bounds, never wider than the LP ones).
     inner_signal : {"independent", "two-level"}, default "independent"
         How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
         chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
@@ -251,3 +254,31 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         tags = super().__sklearn_tags__()
         tags.input_tags.one_d_array = True
         return tags
+
+    # ------------------------------------------------------------------ model set (issue 16)
+    def sample(self, n, random_state=None):
+        """Certified samples of both blocks: ``(backlash_samples, linear_samples)``.
+
+        The stage-2 set does not depend on which feasible backlash is true (it accounts
+        for all of them through the inner-signal bounds), so the joint set is the product
+        and any pairing of the two sample sets is feasible.
+        """
+        check_is_fitted(self, "bounds_")
+        rng = np.random.default_rng(random_state) if not isinstance(
+            random_state, np.random.Generator) else random_state
+        return self.backlash_.sample(n, random_state=rng), self.linear_.sample(n, random_state=rng)
+
+    def frequency_response_bounds(self, omega=None, dt=1.0, *, on_gain_plane=False):
+        """Envelope of the linear block (see :meth:`LinearEIVSetEstimator.frequency_response_bounds`)."""
+        check_is_fitted(self, "bounds_")
+        return self.linear_.frequency_response_bounds(omega, dt=dt, on_gain_plane=on_gain_plane)
+
+    def uncertainty_weight(self, kind="multiplicative", order=2, dt=1.0, **kwargs):
+        """Weight of the linear block (see :meth:`LinearEIVSetEstimator.uncertainty_weight`)."""
+        check_is_fitted(self, "bounds_")
+        return self.linear_.uncertainty_weight(kind, order, dt, **kwargs)
+
+    def inverse(self, v_range=None, x0=0.0):
+        """Backlash compensator (see :meth:`BacklashSetEstimator.inverse`)."""
+        check_is_fitted(self, "bounds_")
+        return self.backlash_.inverse(v_range=v_range, x0=x0)

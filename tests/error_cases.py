@@ -686,6 +686,16 @@ CASES: list[ErrorCase] = [
       "diagnose(system, 1e-300 * u_prbs, 1e-300 * y_prbs, 0.05e-300)",
       lambda: _diagnose(SYS, 1e-300 * u_prbs(), 1e-300 * y_prbs(), 0.05e-300),
       DataScaleError, "rescale"),
+    # ------------------------------------------------------------- chapter reproduction
+    C("chapter-stage1", "chapter", "unknown stage-1 mode",
+      "reproduce_chapter(stage1='table')",
+      lambda: _chapter().reproduce_chapter("table", N=40, noise_levels=(0.05,), seeds=[0],
+                                           method="lp"),
+      ParameterValidationError, "stage1 must be one of"),
+    C("chapter-level", "chapter", "noise level without a row in Table 22.1",
+      "chapter_inner_bounds(0.1)",
+      lambda: _chapter().chapter_inner_bounds(0.1),
+      ParameterValidationError, "stage1='experiment'"),
 ]
 
 
@@ -702,6 +712,12 @@ def _check_report_dir():
     (CSV_DIR / "report-dir").mkdir(parents=True, exist_ok=True)
     csv_file("report-dir/report.md", "# earlier report\n")
     return check_output_dir(CSV_DIR / "report-dir", REPORT_FILES)
+
+
+def _chapter():
+    import hammerbound.chapter as chapter
+
+    return chapter
 
 
 def run_case(case: ErrorCase) -> BaseException | None:

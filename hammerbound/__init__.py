@@ -9,6 +9,7 @@ errors-in-variables problem; :class:`HammersteinBacklashIdentifier` runs both.
 from .backlash import BacklashSetEstimator, InnerSignalBounds
 from .eiv import LinearEIVSetEstimator
 from .exceptions import (
+    DataScaleError,
     DataValidationError,
     EmptyFeasibleSetError,
     HammerboundError,
@@ -41,6 +42,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree, n
 __all__ = [
     "Backlash",
     "BacklashSetEstimator",
+    "DataScaleError",
     "DataValidationError",
     "EIVProblem",
     "EmptyFeasibleSetError",

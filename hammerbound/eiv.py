@@ -41,6 +41,7 @@ from .exceptions import (
 )
 from .feasible_set import FeasibleSet
 from .relaxations.problem import EIVProblem
+from .validation import as_bound, as_real, as_signal, as_theta, check_excited, check_scale
 
 __all__ = ["LinearEIVSetEstimator", "METHODS"]
 
@@ -48,82 +49,18 @@ METHODS = ("moment", "lp", "exact")
 
 
 def _positive_bound(name, value, n, *, allow_zero=False):
-    """Scalar or per-sample bound -> float array of shape (n,), validated."""
-    if value is None:
-        raise ParameterValidationError(
-            f"{name} must be a number or an array of {n} numbers; got None."
-        )
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ParameterValidationError(
-            f"{name} must be a number or an array of {n} numbers; got {value!r}."
-        ) from exc
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise DataValidationError(
-            f"{name} must be a scalar or have one value per sample (shape ({n},)); "
-            f"got shape {arr.shape}."
-        )
-    if not np.all(np.isfinite(arr)):
-        raise ParameterValidationError(f"{name} must be finite (no NaN or infinity).")
-    if allow_zero:
-        if np.any(arr < 0):
-            raise ParameterValidationError(f"{name} must be >= 0; got min {arr.min():g}.")
-    elif np.any(arr <= 0):
-        raise ParameterValidationError(
-            f"{name} must be > 0 (a bounded-error method needs a positive noise bound); "
-            f"got min {arr.min():g}."
-        )
-    return arr
+    """Scalar or per-sample bound -> float array of shape (n,) (see :mod:`.validation`)."""
+    return as_bound(name, value, n, allow_zero=allow_zero)
 
 
 def _as_signal(name, v):
-    """1-D float signal from a list/array of shape (N,) or (N, 1)."""
-    if hasattr(v, "toarray") or hasattr(v, "tocsr"):
-        raise DataValidationError(f"{name}: sparse input is not supported; pass a dense array.")
-    try:
-        arr = np.asarray(v)
-    except (TypeError, ValueError) as exc:  # ragged nested sequences
-        raise DataValidationError(
-            f"{name} must be a 1-D array of real numbers (shape (N,) or (N, 1)); got a "
-            f"ragged or non-array value ({exc})."
-        ) from exc
-    if arr.dtype == object or np.iscomplexobj(arr) or not (
-        np.issubdtype(arr.dtype, np.number) or arr.dtype == bool
-    ):
-        raise DataValidationError(
-            f"{name} must contain real numbers; got dtype {arr.dtype}."
-        )
-    arr = arr.astype(float)
-    if arr.ndim == 2 and arr.shape[1] == 1:
-        arr = arr[:, 0]
-    if arr.ndim != 1:
-        raise DataValidationError(
-            f"{name} must be a 1-D signal (shape (N,) or (N, 1)); got shape {arr.shape}."
-        )
-    if arr.size == 0:
-        raise DataValidationError(f"{name} is empty; pass at least one sample.")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise DataValidationError(
-            f"{name} contains NaN or infinity (first at sample {bad}); remove or repair it."
-        )
-    return arr
+    """1-D float signal from a list/array of shape (N,) or (N, 1) (see :mod:`.validation`)."""
+    return as_signal(name, v)
 
 
 def _theta_vector(theta, p, names):
-    """``theta`` as a float vector of shape (p,), or a DataValidationError saying the order."""
-    try:
-        th = np.asarray(theta, dtype=float)
-    except (TypeError, ValueError):
-        th = None
-    if th is None or th.shape != (p,):
-        raise DataValidationError(
-            f"theta must be {p} numbers of shape ({p},) in order {names}; got {theta!r}."
-        )
-    return th
+    """``theta`` as a finite float vector of shape (p,), else a DataValidationError."""
+    return as_theta(theta, p, names)
 
 
 def _is_vector_like(theta) -> bool:
@@ -310,11 +247,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
             )
-        g = self.steady_state_gain
-        if g is not None and (not isinstance(g, numbers.Real) or not np.isfinite(g) or g == 0):
-            raise ParameterValidationError(
-                f"steady_state_gain must be a finite non-zero number or None; got {g!r}."
-            )
+        as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
+                example="1.0")
         if not (isinstance(self.tol, numbers.Real) and self.tol > 0):
             raise ParameterValidationError(f"tol must be > 0; got {self.tol!r}.")
         if not (isinstance(self.n_jobs, numbers.Integral) and (self.n_jobs >= 1 or self.n_jobs == -1)):
@@ -349,6 +283,11 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         n = x.size
         deta = self._output_bound(n, output_bound)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
+        check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
+        check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
+                    {"noise_bound": deta, "input_bound": dx},
+                    hint=" (scaling X, y and both bounds by the same factor leaves theta "
+                         "unchanged)")
         last = int(self._lags()[-1])
         n0 = max(self.na, last)
         if n <= n0 + 1:

@@ -20,6 +20,11 @@ class ParameterValidationError(HammerboundError, ValueError):
     """A hyper-parameter or model parameter is out of its valid range."""
 
 
+class DataScaleError(DataValidationError):
+    """The data's magnitudes lie outside the range the arithmetic can certify (see
+    :func:`hammerbound.validation.check_scale`); rescale the signals and bounds."""
+
+
 class NotEnoughAmplitudesError(DataValidationError):
     """A backlash side has fewer than two distinct input amplitudes (Remark 22.2)."""
 

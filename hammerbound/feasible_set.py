@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .validation import as_theta
+
 __all__ = [
     "Constraint",
     "Edge",
@@ -102,7 +104,7 @@ class FeasibleSet:
 
     def contains(self, params, tol: float = 0.0) -> bool:
         """Whether ``params`` lies in the orthotope (exact sets override this)."""
-        p = np.asarray(params, dtype=float)
+        p = as_theta(params, self.orthotope.shape[0], self.param_names, name="params")
         return bool(np.all(p >= self.orthotope[:, 0] - tol) and np.all(p <= self.orthotope[:, 1] + tol))
 
 
@@ -128,7 +130,7 @@ class PolygonFeasibleSet(FeasibleSet):
 
     def contains(self, params, tol: float = 1e-12) -> bool:
         """Exact membership of ``(m, c)`` in the set (not just in the orthotope)."""
-        m, c = np.asarray(params, dtype=float)
+        m, c = as_theta(params, 2, self.param_names, name="params")
         p = np.array([m, m * c])
         A = np.array([k.a for k in self.constraints])
         b = np.array([k.b for k in self.constraints])

@@ -21,9 +21,10 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .backlash import BacklashSetEstimator
-from .eiv import LinearEIVSetEstimator, _as_signal
+from .eiv import LinearEIVSetEstimator
 from .exceptions import DataValidationError, ParameterValidationError
 from .systems import Backlash, HammersteinSystem
+from .validation import as_real, as_signal, as_theta, check_scale
 
 __all__ = ["HammersteinBacklashIdentifier"]
 
@@ -185,12 +186,16 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         from .iodata import unpack
 
         X, y, data = unpack(X, y)
-        u = _as_signal("X (PRBS input)", X)
-        yy = _as_signal("y (PRBS output)", y)
+        u = as_signal("X (PRBS input)", X)
+        yy = as_signal("y (PRBS output)", y)
         if u.shape != yy.shape:
             raise DataValidationError(
                 f"X and y must have the same number of samples; got {u.size} and {yy.size}."
             )
+        check_scale("HammersteinBacklashIdentifier.fit", {"X (PRBS input)": u,
+                                                          "y (PRBS output)": yy},
+                    hint=" (the slopes m_l, m_r and theta are unchanged; multiply the bounds "
+                         "on c_l, c_r by s)")
         u_ss, y_ss = _steady_pair(steady_state)
         bl.fit(u_ss, y_ss)
         if self.prbs_level is None:
@@ -205,13 +210,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 )
             u_star = float(levels[1])
         else:
-            try:
-                u_star = float(self.prbs_level)
-            except (TypeError, ValueError) as exc:
-                raise ParameterValidationError(
-                    f"prbs_level must be a number u* > 0 (or None to read it from X); got "
-                    f"{self.prbs_level!r}."
-                ) from exc
+            u_star = as_real("prbs_level", self.prbs_level, positive=True,
+                             want="prbs_level must be a number u* > 0 (or None to read it "
+                                  "from X), e.g. prbs_level=1.0")
         inner = bl.inner_signal_bounds(u_star)  # checks Result 1
         xc, dx = inner.transform(u)
         groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
@@ -283,9 +284,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             gamma = gamma.gamma
         if theta is None:
             raise DataValidationError("contains needs theta (or a HammersteinSystem).")
-        g = np.asarray(gamma, dtype=float)
-        if g.shape != (4,):
-            raise DataValidationError("gamma must be (m_l, c_l, m_r, c_r).")
+        g = as_theta(gamma, 4, ("ml", "cl", "mr", "cr"), name="gamma")
         in_gamma = np.all((g >= self.gamma_bounds_[:, 0]) & (g <= self.gamma_bounds_[:, 1]))
         return bool(in_gamma) and self.linear_.contains(theta)
 
@@ -304,7 +303,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             x = self.system_.inner(X.u)
             return simulate_from_measured(self.system_.A, self.system_.B, x, X.y,
                                           self.linear_._n0())
-        u = _as_signal("X", X)
+        u = as_signal("X", X)
         return self.system_.simulate(u)
 
     def score(self, X, y=None, sample_weight=None):
@@ -321,7 +320,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         from .timeseries import segment_r2, simulate_from_measured
 
         X, y, _ = unpack(X, y)
-        u, yy = _as_signal("X", X), _as_signal("y", y)
+        u, yy = as_signal("X", X), as_signal("y", y)
         if u.shape != yy.shape:
             raise DataValidationError("X and y must have the same length.")
         n0 = self.linear_._n0()
@@ -340,7 +339,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         per-sample output error bound of ``(X, y)``; default that of the fit.
         """
         check_is_fitted(self, "bounds_")
-        u = _as_signal("X", X)
+        u = as_signal("X", X)
         xc, dx = self.inner_bounds_.transform(u)
         return self.linear_.one_step_envelope(xc, y, input_bound=dx,
                                               output_bound=self.output_bound_

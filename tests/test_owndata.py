@@ -141,7 +141,8 @@ def test_identifier_imposes_unit_gain_explicitly():
 
 def test_unbounded_error_names_assumptions():
     rng = np.random.default_rng(0)
-    x = np.zeros(40)                      # no excitation: b is not bounded by the data
+    x = np.zeros(40)                      # almost no excitation: b is not bounded by the data
+    x[5] = 1e-6
     y = 0.01 * np.where(rng.random(40) < 0.5, 1.0, -1.0)
     est = LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp")
     with pytest.raises(hb.UnboundedSetError) as info:

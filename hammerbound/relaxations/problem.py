@@ -38,30 +38,20 @@ from math import comb
 import numpy as np
 
 from ..exceptions import DataValidationError, ParameterValidationError
+from ..validation import as_bound, as_signal
 
 DEFAULT_B_BOUND = 1.0e4
 
 
 def _as_1d(name, v, n=None, *, positive=False, nonneg=False):
-    try:
-        a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataValidationError(f"{name} must be numeric; got {type(v).__name__}.") from exc
-    if a.ndim == 0 and n is not None:
-        a = np.full(n, float(a))
-    if a.ndim != 1:
-        raise DataValidationError(
-            f"{name} must be one-dimensional (or a scalar); got shape {a.shape}. "
-            "Use np.ravel() on a column vector."
-        )
+    """A signal (shape (N,) or (N, 1)) or, with ``positive``/``nonneg``, a scalar or
+    per-sample bound, validated by :mod:`hammerbound.validation`."""
+    if positive or nonneg:
+        return as_bound(name, v, n, allow_zero=nonneg, shape_error=DataValidationError,
+                        error=DataValidationError, sign_error=ParameterValidationError)
+    a = as_signal(name, v)
     if n is not None and a.shape[0] != n:
         raise DataValidationError(f"{name} has length {a.shape[0]} but the data have length {n}.")
-    if not np.all(np.isfinite(a)):
-        raise DataValidationError(f"{name} contains NaN or inf; remove or repair those samples.")
-    if positive and np.any(a <= 0):
-        raise ParameterValidationError(f"{name} must be > 0 everywhere; got min {a.min():g}.")
-    if nonneg and np.any(a < 0):
-        raise ParameterValidationError(f"{name} must be >= 0 everywhere; got min {a.min():g}.")
     return a
 
 

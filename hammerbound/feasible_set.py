@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
@@ -25,6 +26,7 @@ __all__ = [
     "FeasibleSet",
     "PolygonFeasibleSet",
     "algorithm_22_1",
+    "farkas_certificate",
     "polygon_from_halfplanes",
 ]
 
@@ -36,12 +38,15 @@ class Constraint:
     ``index`` is the measurement index (in the caller's data) and ``sign`` is ``"+"`` for
     the boundary ``y + Delta eta`` (h^+ of (22.14)) and ``"-"`` for ``y - Delta eta`` (h^-,
     (22.15)); positivity constraints have ``index=None`` and ``sign`` ``"m>=0"``/``"c>=0"``.
+    ``slack`` is the outward tolerance already added to ``b`` (``docs/tolerances.md``):
+    the measured bound is ``b - slack``.
     """
 
     a: tuple
     b: float
     index: int | None
     sign: str
+    slack: float = 0.0
 
     @property
     def label(self) -> str:
@@ -114,18 +119,29 @@ class PolygonFeasibleSet(FeasibleSet):
     constraints: tuple = ()
 
     def contains(self, params, tol: float = 1e-12) -> bool:
-        """Exact membership of ``(m, c)`` in the set (not just in the orthotope)."""
+        """Membership of ``(m, c)`` in the set (not just in the orthotope).
+
+        The constraints are the measured ones relaxed outward by the tolerance policy
+        (``docs/tolerances.md``); ``tol`` is a further relative allowance for the rounding
+        of ``a . (m, m c) - b``, relative to the magnitudes of its terms.
+        """
         m, c = np.asarray(params, dtype=float)
         p = np.array([m, m * c])
-        A = np.array([k.a for k in self.constraints])
-        b = np.array([k.b for k in self.constraints])
-        scale = 1.0 + np.abs(b)
+        A = np.array([k.a for k in self.constraints], dtype=float)
+        b = np.array([k.b for k in self.constraints], dtype=float)
+        scale = np.abs(A[:, 0] * p[0]) + np.abs(A[:, 1] * p[1]) + np.abs(b)
         return bool(np.all(A @ p - b <= tol * scale))
 
     def linear_range(self, coef_m: float, coef_beta: float) -> tuple[float, float]:
-        """Exact ``min``/``max`` of ``coef_m m + coef_beta beta`` over the set (at vertices)."""
-        v = self.vertices_mb @ np.array([coef_m, coef_beta])
-        return float(v.min()), float(v.max())
+        """``min``/``max`` of ``coef_m m + coef_beta beta`` over the set (at vertices).
+
+        Rounded outward: each end is moved by a few ulps of the terms, so the interval
+        contains the exact one whatever the rounding of the products.
+        """
+        V = self.vertices_mb
+        v = V @ np.array([coef_m, coef_beta])
+        slop = 8 * np.finfo(float).eps * (np.abs(coef_m * V[:, 0]) + np.abs(coef_beta * V[:, 1]))
+        return float(np.min(v - slop)), float(np.max(v + slop))
 
     @property
     def active_constraints(self) -> tuple:
@@ -154,30 +170,70 @@ class PolygonFeasibleSet(FeasibleSet):
 # --------------------------------------------------------------------------------------
 # exact 2-D half-plane intersection
 # --------------------------------------------------------------------------------------
+_EPS = np.finfo(float).eps
+
+
 def _intersect(c1: Constraint, c2: Constraint):
-    a1, a2 = np.asarray(c1.a), np.asarray(c2.a)
-    det = a1[0] * a2[1] - a1[1] * a2[0]
+    """Intersection of the boundary lines of two half-planes (``None`` if parallel).
+
+    One coordinate comes from Cramer's rule, the other is substituted into the line with
+    the larger coefficient for it. The point then satisfies that line to rounding and the
+    other line to ``~eps |a| |x|`` however close to parallel the two lines are (plain
+    Cramer for both coordinates has residuals that grow like the condition number).
+    """
+    a10, a11 = float(c1.a[0]), float(c1.a[1])
+    a20, a21 = float(c2.a[0]), float(c2.a[1])
+    det = a10 * a21 - a11 * a20
     if det == 0:
         return None
-    x = (c1.b * a2[1] - a1[1] * c2.b) / det
-    y = (a1[0] * c2.b - c1.b * a2[0]) / det
+    # substitute into the line whose largest coefficient is largest, for that coordinate
+    k1 = 0 if abs(a10) >= abs(a11) else 1
+    k2 = 0 if abs(a20) >= abs(a21) else 1
+    if max(abs(a10), abs(a11)) < max(abs(a20), abs(a21)):
+        (a10, a11, b1), (a20, a21, b2), k = (a20, a21, c2.b), (a10, a11, c1.b), k2
+        det = -det
+    else:
+        b1, b2, k = c1.b, c2.b, k1
+    if k == 0:  # Cramer for y, then x from line 1
+        y = (a10 * b2 - b1 * a20) / det
+        x = (b1 - a11 * y) / a10
+    else:  # Cramer for x, then y from line 1
+        x = (b1 * a21 - a11 * b2) / det
+        y = (b1 - a10 * x) / a11
     return np.array([x, y])
 
 
-def _tol(cons: Constraint) -> float:
-    return 1e-12 * (abs(cons.b) + np.hypot(*cons.a))
+def _round_tol(cons: Constraint, p) -> float:
+    """Rounding-level tolerance of evaluating ``a . p - b`` (a few ulps of its terms)."""
+    return 16 * _EPS * (abs(cons.a[0] * p[0]) + abs(cons.a[1] * p[1]) + abs(cons.b))
 
 
 def _outside(cons: Constraint, p) -> bool:
-    return cons.a[0] * p[0] + cons.a[1] * p[1] > cons.b + _tol(cons)
+    """``p`` is outside ``cons`` beyond rounding (in doubt, keep the constraint)."""
+    return cons.a[0] * p[0] + cons.a[1] * p[1] - cons.b > _round_tol(cons, p)
+
+
+def _max_violation(A, b, P) -> float:
+    """Largest violation of ``A p <= b`` over the rows of ``P``, relative to the terms."""
+    lhs = P @ A.T
+    scale = np.abs(P[:, :1] * A[:, 0]) + np.abs(P[:, 1:] * A[:, 1]) + np.abs(b)
+    return float(np.max((lhs - b) / np.where(scale > 0, scale, 1.0)))
 
 
 def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
-    """Exact intersection of half-planes ``a . p <= b`` (bounded result assumed).
+    """Intersection of half-planes ``a . p <= b`` (bounded result assumed).
 
     Returns ``(vertices, edge_constraints)`` with vertices counter-clockwise and
-    ``edge_constraints[k]`` the constraint carrying the edge from vertex ``k`` to ``k+1``,
-    or ``None`` if the intersection is empty (or of zero area).
+    ``edge_constraints[k]`` the constraint carrying the edge from vertex ``k`` to ``k+1``.
+    A degenerate intersection is returned as such: one vertex (a point) or two (a
+    segment), with the constraints through them. ``None`` means that no point satisfies
+    every constraint to rounding; that is *not* a certificate of emptiness (see
+    :func:`farkas_certificate`): callers relax the constraints outward before calling.
+
+    Every decision is checked a posteriori: the vertices must form a convex
+    counter-clockwise polygon whose edges lie on their constraints (so the polygon is the
+    intersection of a subset of the half-planes, hence contains the full intersection),
+    and every vertex must satisfy every constraint to rounding (so it is not larger).
     """
     cons = list(constraints)
     ang = np.array([np.arctan2(c.a[0], -c.a[1]) for c in cons])  # direction d = (-a_y, a_x)
@@ -188,7 +244,7 @@ def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
     uniq = []
     last = None
     for i in order:
-        if last is not None and abs(ang[i] - ang[last]) <= 1e-15:
+        if last is not None and ang[i] == ang[last]:
             continue
         uniq.append(cons[i])
         last = i
@@ -225,42 +281,81 @@ def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
             dq.popleft()
         else:
             break
-    if len(dq) < 3:
+    if len(dq) < 2:
         return None
     hs = list(dq)
     verts = []
     for k in range(len(hs)):
         p = _intersect(hs[k], hs[(k + 1) % len(hs)])
         if p is None:
+            if len(hs) == 2:
+                continue
             return None
         verts.append(p)
-    verts = np.array(verts)
-    # every vertex must satisfy every constraint (guards against degenerate/empty cases)
-    A = np.array([c.a for c in cons])
-    b = np.array([c.b for c in cons])
-    scale = np.abs(b) + np.hypot(A[:, 0], A[:, 1])
-    viol = (verts @ A.T - b) / scale
-    if np.max(viol) > 1e-9:
+    if not verts:
         return None
-    # vertex k sits between hs[k] and hs[k+1]; the edge from vertex k-1 to k lies on hs[k]
-    edge_cons = [hs[(k + 1) % len(hs)] for k in range(len(hs))]
+    verts = np.array(verts)
+    A = np.array([c.a for c in cons], dtype=float)
+    b = np.array([c.b for c in cons], dtype=float)
+    # every vertex must satisfy every constraint (to rounding of the intersection)
+    if _max_violation(A, b, verts) > 1e-11:
+        return None
+    # vertex k sits between hs[k] and hs[k+1]; the edge from vertex k to k+1 lies on hs[k+1]
+    edge_cons = [hs[(k + 1) % len(hs)] for k in range(len(verts))]
     # drop zero-length edges (several constraints through one vertex)
     keep_v, keep_e = [], []
     n = len(verts)
     for k in range(n):
         nxt = verts[(k + 1) % n]
-        if np.linalg.norm(nxt - verts[k]) > 1e-14 * (1 + np.linalg.norm(verts[k])):
+        if n == 1 or np.any(nxt != verts[k]):
             keep_v.append(verts[k])
             keep_e.append(edge_cons[k])
-    if len(keep_v) < 3:
+    if not keep_v:  # every vertex coincides: a single point
+        keep_v, keep_e = [verts[0]], [edge_cons[0]]
+    V = np.array(keep_v)
+    if len(V) >= 3 and not _is_convex_ccw_on(V, keep_e):
         return None
-    area = 0.5 * np.sum(
-        np.array(keep_v)[:, 0] * np.roll(np.array(keep_v)[:, 1], -1)
-        - np.roll(np.array(keep_v)[:, 0], -1) * np.array(keep_v)[:, 1]
-    )
-    if area <= 0:
+    return V, keep_e
+
+
+def _is_convex_ccw_on(V, edge_cons) -> bool:
+    """Each edge runs along its constraint's direction and every turn is to the left.
+
+    Then the polygon is exactly the intersection of its edges' half-planes (up to
+    rounding of the vertices), which contains the intersection of all the constraints.
+    """
+    E = np.roll(V, -1, axis=0) - V
+    D = np.array([(-c.a[1], c.a[0]) for c in edge_cons], dtype=float)
+    along = np.einsum("ij,ij->i", E, D)
+    lens = np.hypot(E[:, 0], E[:, 1]) * np.hypot(D[:, 0], D[:, 1])
+    if np.any(along < -1e-6 * lens):
+        return False
+    turn = E[:, 0] * np.roll(E[:, 1], -1) - E[:, 1] * np.roll(E[:, 0], -1)
+    tl = np.hypot(E[:, 0], E[:, 1]) * np.roll(np.hypot(E[:, 0], E[:, 1]), -1)
+    return bool(np.all(turn >= -1e-6 * tl))
+
+
+def farkas_certificate(rows):
+    """Exact infeasibility certificate of three half-planes ``a . p <= b`` in rationals.
+
+    ``rows`` is a sequence of three ``(a0, a1, b)`` (floats, ints or
+    :class:`fractions.Fraction`; floats are taken at their exact binary value). Returns
+    the multipliers ``lambda >= 0`` (Fractions) with ``sum lambda_i a_i = 0`` and
+    ``sum lambda_i b_i < 0`` -- a proof that no real point satisfies the three -- or
+    ``None``. By Helly's theorem an empty intersection of half-planes in the plane always
+    has such a certificate on at most three of them (two anti-parallel ones and any third
+    row give a certificate with a zero multiplier).
+    """
+    (a0, a1, b0), (c0, c1, d0), (e0, e1, f0) = (
+        tuple(Fraction(x) for x in r) for r in rows)
+    lam = (c0 * e1 - c1 * e0, e0 * a1 - e1 * a0, a0 * c1 - a1 * c0)
+    if all(x <= 0 for x in lam):
+        lam = tuple(-x for x in lam)
+    if not all(x >= 0 for x in lam) or not any(lam):
         return None
-    return np.array(keep_v), keep_e
+    if lam[0] * b0 + lam[1] * d0 + lam[2] * f0 < 0:
+        return lam
+    return None
 
 
 def algorithm_22_1(pairs, extra=()) -> np.ndarray:

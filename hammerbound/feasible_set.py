@@ -302,37 +302,43 @@ def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
         return None
     # vertex k sits between hs[k] and hs[k+1]; the edge from vertex k to k+1 lies on hs[k+1]
     edge_cons = [hs[(k + 1) % len(hs)] for k in range(len(verts))]
-    # drop zero-length edges (several constraints through one vertex)
+    # drop zero-length edges (several constraints through one vertex); "zero" is the
+    # rounding of the vertices, far below any outward tolerance of the callers
+    delta = _VERTEX_ROUNDING * (1.0 + float(np.max(np.abs(verts))))
     keep_v, keep_e = [], []
     n = len(verts)
     for k in range(n):
         nxt = verts[(k + 1) % n]
-        if n == 1 or np.any(nxt != verts[k]):
+        if n == 1 or np.max(np.abs(nxt - verts[k])) > delta:
             keep_v.append(verts[k])
             keep_e.append(edge_cons[k])
     if not keep_v:  # every vertex coincides: a single point
         keep_v, keep_e = [verts[0]], [edge_cons[0]]
     V = np.array(keep_v)
-    if len(V) >= 3 and not _is_convex_ccw_on(V, keep_e):
+    if len(V) >= 3 and not _is_convex_ccw_on(V, keep_e, delta):
         return None
     return V, keep_e
 
 
-def _is_convex_ccw_on(V, edge_cons) -> bool:
+#: Relative size below which two computed vertices are the same point (rounding of the
+#: intersections: a few hundred ulps of the polygon's magnitude).
+_VERTEX_ROUNDING = 1e-13
+
+
+def _is_convex_ccw_on(V, edge_cons, delta) -> bool:
     """Each edge runs along its constraint's direction and every turn is to the left.
 
-    Then the polygon is exactly the intersection of its edges' half-planes (up to
+    Then the polygon is the intersection of its edges' half-planes (up to ``delta``, the
     rounding of the vertices), which contains the intersection of all the constraints.
     """
     E = np.roll(V, -1, axis=0) - V
     D = np.array([(-c.a[1], c.a[0]) for c in edge_cons], dtype=float)
     along = np.einsum("ij,ij->i", E, D)
-    lens = np.hypot(E[:, 0], E[:, 1]) * np.hypot(D[:, 0], D[:, 1])
-    if np.any(along < -1e-6 * lens):
+    if np.any(along < -2 * delta * np.hypot(D[:, 0], D[:, 1])):
         return False
+    L = np.hypot(E[:, 0], E[:, 1])
     turn = E[:, 0] * np.roll(E[:, 1], -1) - E[:, 1] * np.roll(E[:, 0], -1)
-    tl = np.hypot(E[:, 0], E[:, 1]) * np.roll(np.hypot(E[:, 0], E[:, 1]), -1)
-    return bool(np.all(turn >= -1e-6 * tl))
+    return bool(np.all(turn >= -2 * delta * (L + np.roll(L, -1))))
 
 
 def farkas_certificate(rows):

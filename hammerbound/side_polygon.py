@@ -40,6 +40,7 @@ __all__ = ["SideProblem", "SidePolygon", "RELAX_FACTORS"]
 RELAX_FACTORS = (1.0, 1e2, 1e4)
 
 _BOX = 1e6  # in (p, q) the set lies within |p| <= ~2, |q| <= ~3: never active
+_SNAP = 1e-12  # relative rounding below which a vertex is on m = 0 / beta = 0
 
 
 def _pow2(x: float) -> float:
@@ -139,7 +140,12 @@ class SideProblem:
         """Map ``(p, q)`` vertices to ``(m, beta)``; ``m, beta >= 0`` hold exactly in the model."""
         m = V[:, 0] * (self.sy / self.su)
         beta = self.sigma * (self.sy * V[:, 1] + self.y0 - m * self.u0)
-        return np.column_stack([np.maximum(m, 0.0), np.maximum(beta, 0.0)])
+        # a vertex on m = 0 or beta = 0 comes out within rounding of it: put it there (this
+        # only lowers c_min / m_min, i.e. outward; the other extremes sit a tolerance away)
+        mag = np.abs(self.sy * V[:, 1]) + abs(self.y0) + np.abs(m * self.u0)
+        beta = np.where(beta <= _SNAP * mag, 0.0, beta)
+        m = np.where(m <= _SNAP * self.m_ref, 0.0, m)
+        return np.column_stack([m, beta])
 
     def polygon(self, sel, factor=1.0):
         """Polygon of the selected samples in ``(p, q)`` (``None`` if numerically empty)."""

@@ -204,8 +204,12 @@ def _intersect(c1: Constraint, c2: Constraint):
 
 
 def _round_tol(cons: Constraint, p) -> float:
-    """Rounding-level tolerance of evaluating ``a . p - b`` (a few ulps of its terms)."""
-    return 16 * _EPS * (abs(cons.a[0] * p[0]) + abs(cons.a[1] * p[1]) + abs(cons.b))
+    """Rounding-level tolerance of ``a . p - b`` at a computed vertex ``p``.
+
+    A vertex from :func:`_intersect` satisfies its lines to ``~eps |a| |p|`` (``|p|`` the
+    whole point, not just the terms of this line), so that is the scale.
+    """
+    return 16 * _EPS * ((abs(cons.a[0]) + abs(cons.a[1])) * (abs(p[0]) + abs(p[1])) + abs(cons.b))
 
 
 def _outside(cons: Constraint, p) -> bool:
@@ -214,9 +218,9 @@ def _outside(cons: Constraint, p) -> bool:
 
 
 def _max_violation(A, b, P) -> float:
-    """Largest violation of ``A p <= b`` over the rows of ``P``, relative to the terms."""
+    """Largest violation of ``A p <= b`` over the rows of ``P``, relative to ``|a| |p| + |b|``."""
     lhs = P @ A.T
-    scale = np.abs(P[:, :1] * A[:, 0]) + np.abs(P[:, 1:] * A[:, 1]) + np.abs(b)
+    scale = (np.abs(P).sum(axis=1)[:, None] * np.abs(A).sum(axis=1)) + np.abs(b)
     return float(np.max((lhs - b) / np.where(scale > 0, scale, 1.0)))
 
 

@@ -5,8 +5,8 @@ The measurements of one side, ``|y_s - m u_s - sigma beta| <= Delta_s`` in ``(m,
 convex polygon. :class:`SideProblem` computes it by the policy of ``docs/tolerances.md``:
 
 1. **Outward tolerance.** Every bound is relaxed to ``Delta_s + t_s`` with
-   ``t_s = feasibility_tol(...)`` of the largest magnitudes the terms of the constraint can
-   take over the set (``|y_s|``, ``Delta_s``, ``m_ref |u_s|``, ``beta_ref``, and the centre
+   ``t_s = feasibility_tol(..., rtol=ARITHMETIC_RTOL)`` (1e-11) of the largest magnitudes
+   the terms of the constraint can take over the set (``|y_s|``, ``Delta_s``, ``m_ref |u_s|``, ``beta_ref``, and the centre
    ``|y0|``, ``m_ref |u0|`` of the coordinates below), where ``m_ref`` and ``beta_ref`` are
    a priori bounds read off the two slabs of the extreme amplitudes. ``m >= 0`` and
    ``beta >= 0`` are exact model facts and are not relaxed.
@@ -31,7 +31,7 @@ import numpy as np
 
 from .exceptions import SolverError, UnboundedSetError
 from .feasible_set import Constraint, algorithm_22_1, farkas_certificate, polygon_from_halfplanes
-from .tolerances import feasibility_tol
+from .tolerances import ARITHMETIC_RTOL, feasibility_tol
 
 __all__ = ["SideProblem", "SidePolygon", "RELAX_FACTORS"]
 
@@ -40,7 +40,7 @@ __all__ = ["SideProblem", "SidePolygon", "RELAX_FACTORS"]
 RELAX_FACTORS = (1.0, 1e2, 1e4)
 
 _BOX = 1e6  # in (p, q) the set lies within |p| <= ~2, |q| <= ~3: never active
-_SNAP = 1e-12  # relative rounding below which a vertex is on m = 0 / beta = 0
+_SNAP = 1e-14  # relative rounding below which a vertex is on m = 0 / beta = 0
 
 
 def _pow2(x: float) -> float:
@@ -99,7 +99,7 @@ class SideProblem:
         self.m_ref = (abs(y[iR] - y[iL]) + nb[iR] + nb[iL]) / (umax - umin)
         self.beta_ref = abs(y[iL]) + nb[iL] + self.m_ref * abs(u[iL])
         self.tol = feasibility_tol(y, self.y0, nb, self.m_ref * u, self.m_ref * self.u0,
-                                   self.beta_ref)
+                                   self.beta_ref, rtol=ARITHMETIC_RTOL)
         self.t = (u - self.u0) / self.su
 
     # ------------------------------------------------------------------ constraints
@@ -196,7 +196,8 @@ class SideProblem:
 
     def _satisfies_all(self, V, zu, zl) -> bool:
         lhs = V[:, :1] * self.t + V[:, 1:]
-        slop = 1e-11 * (np.abs(V[:, :1] * self.t) + np.abs(V[:, 1:]) + np.abs(zu) + np.abs(zl))
+        slop = 1e-12 * (np.abs(V).sum(axis=1)[:, None] * (1 + np.abs(self.t)) + np.abs(zu)
+                        + np.abs(zl))
         return bool(np.all(lhs <= zu + slop) and np.all(lhs >= zl - slop))
 
     def _algorithm(self, factor):

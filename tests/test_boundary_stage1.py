@@ -78,6 +78,8 @@ def _assert_inside(est, gamma, what):
     gb = est.gamma_bounds_
     assert np.all(gb[:, 0] <= gamma) and np.all(gamma <= gb[:, 1]), (what, gb, gamma)
     assert est.left_.contains(gamma[:2]) and est.right_.contains(gamma[2:]), what
+    # built at the policy's tolerance, without the widened fallback
+    assert est.left_.extra["tolerance_factor"] == est.right_.extra["tolerance_factor"] == 1.0
 
 
 # ----------------------------------------------------------------------------- the repro

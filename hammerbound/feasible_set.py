@@ -209,12 +209,15 @@ def _round_tol(cons: Constraint, p) -> float:
     A vertex from :func:`_intersect` satisfies its lines to ``~eps |a| |p|`` (``|p|`` the
     whole point, not just the terms of this line), so that is the scale.
     """
-    return 16 * _EPS * ((abs(cons.a[0]) + abs(cons.a[1])) * (abs(p[0]) + abs(p[1])) + abs(cons.b))
+    a0, a1, b = float(cons.a[0]), float(cons.a[1]), float(cons.b)
+    return 16 * _EPS * ((abs(a0) + abs(a1)) * (abs(float(p[0])) + abs(float(p[1]))) + abs(b))
 
 
 def _outside(cons: Constraint, p) -> bool:
     """``p`` is outside ``cons`` beyond rounding (in doubt, keep the constraint)."""
-    return cons.a[0] * p[0] + cons.a[1] * p[1] - cons.b > _round_tol(cons, p)
+    a0, a1, b = float(cons.a[0]), float(cons.a[1]), float(cons.b)
+    x, y = float(p[0]), float(p[1])
+    return a0 * x + a1 * y - b > 16 * _EPS * ((abs(a0) + abs(a1)) * (abs(x) + abs(y)) + abs(b))
 
 
 def _max_violation(A, b, P) -> float:

@@ -105,9 +105,12 @@ class SideProblem:
     # ------------------------------------------------------------------ constraints
     def bounds(self, factor=1.0):
         """Relaxed bounds ``lo <= m u + sigma beta <= hi`` and their scaled images."""
-        d = self.nb + factor * self.tol
-        hi, lo = self.y + d, self.y - d
-        return hi, lo, (hi - self.y0) / self.sy, (lo - self.y0) / self.sy
+        cache = self.__dict__.setdefault("_bounds", {})
+        if factor not in cache:
+            d = self.nb + factor * self.tol
+            hi, lo = self.y + d, self.y - d
+            cache[factor] = (hi, lo, (hi - self.y0) / self.sy, (lo - self.y0) / self.sy)
+        return cache[factor]
 
     def pairs(self, sel, factor=1.0):
         """``(h+, h-)`` pairs of the selected samples: scaled ``(p, q)`` and original ``(m, beta)``."""

@@ -228,7 +228,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         while lo < hi:
             mid = (lo + hi) // 2
             sel = slice(0, mid + 1)
-            c = problem.certificate(sel) if problem.polygon(sel)[0] is None else None
+            c = problem.certificate(sel) if problem.filtered_polygon(sel)[0] is None else None
             if c is not None:
                 hi, cert = mid, c
             else:

@@ -171,35 +171,46 @@ class SideProblem:
             f"stage 1 could neither build the {self.side} feasible polygon nor certify it "
             "empty, even with the tolerance widened 1e4-fold; please report these data.")
 
-    def _solve_at(self, factor, method):
+    def filtered_polygon(self, sel=slice(None), factor=1.0):
+        """Polygon of the selected samples, through the convex-hull pre-filter.
+
+        Only measurements on the convex hulls of ``(t, z_hi)`` and ``(t, z_lo)`` can carry an
+        edge (the others are implied by their neighbours): a C-speed pre-filter that can
+        only drop constraints, checked against every selected measurement afterwards.
+        Returns ``(res, cons_pq, cons_mb, n_used)``; ``res`` is ``None`` if numerically empty.
+        """
         hi, lo, zu, zl = self.bounds(factor)
-        # only measurements on the convex hulls of (t, z_hi) and (t, z_lo) can carry an edge
-        # (the others are implied by their neighbours): a C-speed pre-filter, checked below
-        keep = _hull_mask(self.t, zu) | _hull_mask(self.t, zl)
-        n_all = self.u.size
-        for sel in (np.flatnonzero(keep), slice(None)):
-            res, cons_pq, cons_mb, pq, mb = self.polygon(sel, factor)
-            if res is None:
-                if isinstance(sel, slice) or keep.all():
-                    return None
-                continue  # the pre-filter cannot empty a set; retry with every sample
-            V, E = res
-            if isinstance(sel, slice) or self._satisfies_all(V, zu, zl):
-                break
+        idx = np.arange(self.u.size)[sel]
+        t, zu, zl = self.t[idx], zu[idx], zl[idx]
+        keep = _hull_mask(t, zu) | _hull_mask(t, zl)
+        if not keep.all():
+            res, cons_pq, cons_mb, pq, _ = self.polygon(idx[keep], factor)
+            # None: the hull system (a superset of the set) is numerically empty, so is the
+            # full one; the caller certifies it (or widens the tolerance) either way
+            if res is None or self._satisfies_all(res[0], t, zu, zl):
+                return res, cons_pq, cons_mb, len(pq)
+        res, cons_pq, cons_mb, pq, _ = self.polygon(idx, factor)
+        return res, cons_pq, cons_mb, len(pq)
+
+    def _solve_at(self, factor, method):
+        res, cons_pq, cons_mb, n_used = self.filtered_polygon(slice(None), factor)
+        if res is None:
+            return None
+        V, E = res
         if any(c.sign == "box" for c in E):  # pragma: no cover - bounded by construction
             raise UnboundedSetError(
                 f"the {self.side} feasible set is unbounded: the data do not bound the slope; "
                 "add square waves with more distinct amplitudes.")
-        to_mb = dict(zip(map(id, cons_pq), cons_mb))
         if method == "algorithm":
             V, E, cons_mb = self._algorithm(factor)
-            return SidePolygon(V, E, cons_mb, factor, n_all)
-        return SidePolygon(self.to_mb(V), [to_mb[id(c)] for c in E], cons_mb, factor,
-                           len(pq))
+            return SidePolygon(V, E, cons_mb, factor, self.u.size)
+        to_mb = dict(zip(map(id, cons_pq), cons_mb))
+        return SidePolygon(self.to_mb(V), [to_mb[id(c)] for c in E], cons_mb, factor, n_used)
 
-    def _satisfies_all(self, V, zu, zl) -> bool:
-        lhs = V[:, :1] * self.t + V[:, 1:]
-        slop = 1e-12 * (np.abs(V).sum(axis=1)[:, None] * (1 + np.abs(self.t)) + np.abs(zu)
+    @staticmethod
+    def _satisfies_all(V, t, zu, zl) -> bool:
+        lhs = V[:, :1] * t + V[:, 1:]
+        slop = 1e-12 * (np.abs(V).sum(axis=1)[:, None] * (1 + np.abs(t)) + np.abs(zu)
                         + np.abs(zl))
         return bool(np.all(lhs <= zu + slop) and np.all(lhs >= zl - slop))
 
@@ -225,34 +236,52 @@ class SideProblem:
         Returns the labels of (at most) three constraints and their Farkas multipliers, or
         ``None``. The check is on the user's floats taken exactly (``Fraction``), with the
         bounds ``Delta_s + factor t_s``; candidates come from an LP in ``(p, q)`` that
-        minimises the largest violation (its dual support has at most three rows).
+        minimises the largest violation (its dual support has at most three rows), first
+        among the measurements on the convex hulls (an empty hull system has a certificate
+        of its own), then among all.
         """
+        hi, lo, zu, zl = self.bounds(factor)
+        local = np.arange(self.u.size)[sel]
+        keep = _hull_mask(self.t[local], zu[local]) | _hull_mask(self.t[local], zl[local])
+        for subset in ((local[keep], local) if not keep.all() else (local,)):
+            cert = self._certificate_among(subset, factor)
+            if cert is not None:
+                return cert
+        return None
+
+    def _certificate_among(self, local, factor):
         from scipy.optimize import linprog
 
-        pq, mb = self.pairs(sel, factor)
-        pos_pq, pos_mb = self.positivity()
-        rows_pq = [c for pr in pq for c in pr] + pos_pq
-        rows_mb = [c for pr in mb for c in pr] + pos_mb
-        A = np.array([c.a for c in rows_pq], dtype=float)
-        b = np.array([c.b for c in rows_pq], dtype=float)
-        w = np.r_[np.ones(2 * len(pq)), np.zeros(len(pos_pq))]
+        hi, lo, zu, zl = self.bounds(factor)
+        k = local.size
+        A = np.empty((2 * k + 2, 2))
+        b = np.empty(2 * k + 2)
+        A[0:2 * k:2, 0], A[0:2 * k:2, 1], b[0:2 * k:2] = self.t[local], 1.0, zu[local]
+        A[1:2 * k:2, 0], A[1:2 * k:2, 1], b[1:2 * k:2] = -self.t[local], -1.0, -zl[local]
+        pos_pq, _ = self.positivity()
+        A[2 * k:], b[2 * k:] = [c.a for c in pos_pq], [c.b for c in pos_pq]
+        w = np.r_[np.ones(2 * k), 0.0, 0.0]
         res = linprog([0.0, 0.0, 1.0], A_ub=np.column_stack([A, -w]), b_ub=b,
                       bounds=[(-_BOX, _BOX), (-_BOX, _BOX), (-_BOX, _BOX)], method="highs")
-        n = len(rows_pq)
+        n = 2 * k + 2
         if res.status == 0:
             marg = np.abs(res.ineqlin.marginals)
             slack = b + w * res.x[2] - A @ res.x[:2]
             cand = list(np.argsort(-marg)[:6]) + list(np.argsort(slack)[:6])
         else:  # pragma: no cover - the LP is feasible by construction (s large enough)
             cand = list(range(min(n, 12)))
-        cand = sorted(set(int(k) for k in cand) | {n - 2, n - 1})
-        local = np.arange(self.u.size)[sel]
-        exact = {k: self._exact_row(k, local, factor) for k in cand}
+        cand = sorted(set(int(r) for r in cand) | {n - 2, n - 1})
+        exact = {r: self._exact_row(r, local, factor) for r in cand}
         for trio in combinations(cand, 3):
-            lam = farkas_certificate([exact[k] for k in trio])
+            lam = farkas_certificate([exact[r] for r in trio])
             if lam is not None:
-                return tuple(rows_mb[k].label for k in trio), lam
+                return tuple(self._label(r, local) for r in trio), lam
         return None
+
+    def _label(self, r, local):
+        if r >= 2 * local.size:
+            return ("m>=0", "c>=0")[r - 2 * local.size]
+        return f"h{'+-'[r % 2]}[{int(self.idx[local[r // 2]])}]"
 
     def _exact_row(self, r, local, factor):
         """Row ``r`` of the certificate system exactly: ``(a0, a1, b)`` in ``Fraction``.

@@ -249,3 +249,72 @@ def test_identifier_extremal_noise_both_stages(pattern, su, sy):
     ).fit(u, y, steady_state=(u_ss, y_ss))
     theta = np.r_[A_TRUE[1:], B_TRUE[1:]]
     assert ident.contains(gamma, theta), (ident.gamma_bounds_, ident.theta_bounds_)
+
+
+# ----------------------------------------------------------------------------- inner signal
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("pattern", ["alternating", "constant", "over"])
+def test_inner_signal_bounds_contain_true_levels_at_the_boundary(method, pattern):
+    """The inner PRBS levels (22.25)-(22.30) from sets built with noise at +-Delta."""
+    rng = np.random.default_rng(11 + PATTERNS.index(pattern))
+    for su, sy in ((1e-6, 1.0), (1.0, 1e6), (1e3, 1e-3)):
+        for _ in range(5):
+            u, y, D, gamma = _case(rng, pattern, su, sy)
+            est = hb.BacklashSetEstimator(D, method=method).fit(u, y)
+            u_star = 0.9 * np.max(u)
+            ib = est.inner_signal_bounds(u_star)
+            ml, cl, mr, cr = gamma
+            x_hi, x_lo = mr * (u_star - cr), ml * (-u_star + cl)
+            assert ib.x_hi[0] <= x_hi <= ib.x_hi[1] and ib.x_lo[0] <= x_lo <= ib.x_lo[1]
+
+
+# ----------------------------------------------------------------------------- primitives
+def test_farkas_certificate_exact():
+    from fractions import Fraction
+
+    from hammerbound.feasible_set import farkas_certificate
+
+    # x <= 0, -x <= -1e-300 (x >= 1e-300), y <= 1: empty by the tiniest margin, exactly
+    lam = farkas_certificate([(1.0, 0.0, 0.0), (-1.0, 0.0, -1e-300), (0.0, 1.0, 1.0)])
+    assert lam is not None and all(x >= 0 for x in lam)
+    # touching (x <= 0, x >= 0): a point, not empty
+    assert farkas_certificate([(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 1.0)]) is None
+    # three lines through one point, as in the +D, -D, +D repro: not empty
+    assert farkas_certificate([(0.5, -1, Fraction(1, 3)), (-1.0, 1, Fraction(-2, 3)),
+                               (2.0, -1, Fraction(4, 3))]) is None
+
+
+def test_polygon_from_halfplanes_degenerate_sets_are_returned():
+    from hammerbound.feasible_set import Constraint, polygon_from_halfplanes
+
+    def box(x0, x1, y0, y1):
+        return [Constraint((1.0, 0.0), x1, 0, "+"), Constraint((-1.0, 0.0), -x0, 0, "-"),
+                Constraint((0.0, 1.0), y1, 1, "+"), Constraint((0.0, -1.0), -y0, 1, "-")]
+
+    V, E = polygon_from_halfplanes(box(0.0, 1.0, 0.0, 2.0))
+    assert len(V) == 4
+    V, _ = polygon_from_halfplanes(box(0.5, 0.5, 0.0, 2.0))  # a segment
+    assert 1 <= len(V) <= 2 and np.allclose(V[:, 0], 0.5)
+    assert np.isclose(V[:, 1].min(), 0.0) and np.isclose(V[:, 1].max(), 2.0)
+    V, _ = polygon_from_halfplanes(box(0.5, 0.5, 2.0, 2.0))  # a point
+    assert np.allclose(V, [[0.5, 2.0]])
+    assert polygon_from_halfplanes(box(0.5, 0.25, 0.0, 2.0)) is None  # empty
+
+
+def test_intersection_of_nearly_parallel_lines_has_small_residuals():
+    from hammerbound.feasible_set import Constraint, _intersect
+
+    rng = np.random.default_rng(0)
+    worst = 0.0
+    for _ in range(2000):
+        t = rng.uniform(-1, 1)
+        dt = 10.0 ** rng.uniform(-15, -1)
+        c1 = Constraint((t, 1.0), rng.uniform(-1, 1), 0, "+")
+        c2 = Constraint((t + dt, -1.0 if rng.random() < 0.5 else 1.0), rng.uniform(-1, 1), 1, "+")
+        p = _intersect(c1, c2)
+        if p is None:
+            continue
+        for c in (c1, c2):
+            r = abs(c.a[0] * p[0] + c.a[1] * p[1] - c.b)
+            worst = max(worst, r / ((abs(c.a[0]) + abs(c.a[1])) * np.abs(p).sum() + abs(c.b)))
+    assert worst < 1e-15

@@ -372,7 +372,10 @@ def farkas_certificate(rows):
 
 
 def algorithm_22_1(pairs, extra=()) -> np.ndarray:
-    """Vertices by the chapter's Algorithm 22.1 (Appendix), in ``(m, beta)`` coordinates.
+    """Vertices by the chapter's Algorithm 22.1 (Appendix), in the constraints' coordinates.
+
+    Stage 1 calls it on the outward-relaxed constraints in its centred, scaled ``(p, q)``
+    coordinates (``hammerbound.side_polygon``), like :func:`polygon_from_halfplanes`.
 
     ``pairs`` is a list of ``(h_plus, h_minus)`` constraint pairs, one per measurement, in
     processing order (the first two must have different amplitudes so that the initial
@@ -428,6 +431,6 @@ def algorithm_22_1(pairs, extra=()) -> np.ndarray:
     P = P[np.lexsort((P[:, 1], P[:, 0]))]
     out = [P[0]]
     for q in P[1:]:
-        if np.linalg.norm(q - out[-1]) > 1e-12 * (1 + np.linalg.norm(q)):
+        if np.linalg.norm(q - out[-1]) > 1e-14 * (1 + np.linalg.norm(q)):
             out.append(q)
     return np.array(out)

@@ -6,8 +6,9 @@ convex polygon. :class:`SideProblem` computes it by the policy of ``docs/toleran
 
 1. **Outward tolerance.** Every bound is relaxed to ``Delta_s + t_s`` with
    ``t_s = feasibility_tol(..., rtol=ARITHMETIC_RTOL)`` (1e-11) of the largest magnitudes
-   the terms of the constraint can take over the set (``|y_s|``, ``Delta_s``, ``m_ref |u_s|``, ``beta_ref``, and the centre
-   ``|y0|``, ``m_ref |u0|`` of the coordinates below), where ``m_ref`` and ``beta_ref`` are
+   the terms of the constraint can take over the set (``|y_s|``, ``Delta_s``,
+   ``m_ref |u_s|``, ``beta_ref``, and the centre ``|y0|``, ``m_ref |u0|`` of the
+   coordinates below), where ``m_ref`` and ``beta_ref`` are
    a priori bounds read off the two slabs of the extreme amplitudes. ``m >= 0`` and
    ``beta >= 0`` are exact model facts and are not relaxed.
 2. **Well-conditioned coordinates.** ``u = u0 + su t``, ``y = y0 + sy z`` with ``su``, ``sy``

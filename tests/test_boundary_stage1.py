@@ -318,3 +318,22 @@ def test_intersection_of_nearly_parallel_lines_has_small_residuals():
             r = abs(c.a[0] * p[0] + c.a[1] * p[1] - c.b)
             worst = max(worst, r / ((abs(c.a[0]) + abs(c.a[1])) * np.abs(p).sum() + abs(c.b)))
     assert worst < 1e-15
+
+
+@pytest.mark.parametrize("su, sy", [(1e-5, 1e-5), (0.1, 10.0), (1e4, 1e-4), (1e-3, 1e3)])
+def test_constant_noise_many_amplitudes_pencils_of_lines(su, sy):
+    """Noise +Delta on every sample of hundreds of random amplitudes: the lower bounds of
+    all measurements pass through the truth (a pencil of ~300 nearly concurrent lines, many
+    nearly parallel), the upper ones through a second point; the relaxed polygon has
+    rounding-size structure there. Sound and not empty, at the policy's tolerance."""
+    rng = np.random.default_rng(int(np.log10(su) * 10 + 100))
+    for drel in (1e-9, 1e-6, 1e-3):
+        gamma = _truth(rng, su, sy)
+        M = 300
+        amps = su * rng.uniform(0.4, 3.0, M)
+        u = np.concatenate([amps, -amps])
+        ml, cl, mr, cr = gamma
+        w = np.where(u > 0, mr * (u - cr), ml * (u + cl))
+        D = drel * sy
+        est = hb.BacklashSetEstimator(D).fit(u, w + D)
+        _assert_inside(est, gamma, (su, sy, drel))

@@ -28,7 +28,12 @@ from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
 from .systems import Backlash, HammersteinSystem, simulate_backlash
 
-__version__ = "0.1.0"
+try:
+    from importlib.metadata import PackageNotFoundError, version
+
+    __version__ = version("hammerbound")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree, not installed
+    __version__ = "0+unknown"
 
 __all__ = [
     "Backlash",

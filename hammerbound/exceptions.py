@@ -24,6 +24,28 @@ class NotEnoughAmplitudesError(DataValidationError):
     """A backlash side has fewer than two distinct input amplitudes (Remark 22.2)."""
 
 
+class OutputPathError(HammerboundError, OSError):
+    """An output path cannot be written (missing or read-only parent, directory or special
+    file in the way); raised before any work starts.
+
+    Attributes
+    ----------
+    path : str
+        The output path as given.
+    """
+
+    def __init__(self, message: str, *, path=None):
+        super().__init__(message)
+        self.path = None if path is None else str(path)
+
+    def __str__(self) -> str:  # OSError's own __str__ would format errno/strerror
+        return str(self.args[0]) if self.args else ""
+
+
+class OutputExistsError(OutputPathError, FileExistsError):
+    """An output file (or a report's file) exists already and overwriting was not asked for."""
+
+
 class EmptyFeasibleSetError(HammerboundError, ValueError):
     """No parameter of the model class explains the data within the noise bound.
 

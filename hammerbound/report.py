@@ -6,9 +6,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .cli_paths import check_output_dir
 from .experiments import snr_db
 
-__all__ = ["write_report", "interval_table"]
+__all__ = ["REPORT_FILES", "write_report", "interval_table"]
+
+#: The files :func:`write_report` writes into its directory (nothing else there is touched).
+REPORT_FILES = ("report.md", "backlash_sets.png", "intervals.png", "envelope.png")
 
 
 def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
@@ -30,14 +34,28 @@ def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
 
 
 def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_true=None,
-                 theta_true=None, title="hammerbound identification report") -> Path:
+                 theta_true=None, title="hammerbound identification report",
+                 overwrite=False) -> Path:
     """Write ``report.md`` and figures into ``outdir``; return the path of the report.
+
+    ``outdir`` is created if missing (its parent must exist). An existing report there
+    (any of :data:`REPORT_FILES`) is replaced only with ``overwrite=True``; other files in
+    ``outdir`` are never touched. The paths are checked before anything is computed.
+
+    Raises
+    ------
+    OutputExistsError
+        A report file exists in ``outdir`` and ``overwrite`` is false.
+    OutputPathError
+        ``outdir`` is a file, its parent is missing or it is not writable.
 
     The report lists the experiment (sizes, noise bounds, SNR of the PRBS output against
     the noise bound), the backlash feasible sets (vertices, orthotope, figure), the
     inner-signal bounds, the linear-block intervals with per-bound solver information,
     and the guaranteed one-step output envelope against the data.
     """
+    out = check_output_dir(outdir, REPORT_FILES, force=overwrite,
+                           force_hint="pass overwrite=True")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -45,8 +63,7 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
 
     from .plotting import plot_envelope, plot_feasible_set, plot_intervals
 
-    out = Path(outdir)
-    out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(exist_ok=True)
     bl, lin = ident.backlash_, ident.linear_
     lines = [f"# {title}", ""]
     deta = np.broadcast_to(np.asarray(lin.noise_bound, float), np.shape(prbs_y))

@@ -27,6 +27,8 @@ from hammerbound.exceptions import (
     DataValidationError,
     IllPosedBacklashError,
     NotEnoughAmplitudesError,
+    OutputExistsError,
+    OutputPathError,
     ParameterValidationError,
     ResultOneViolationError,
     SolverNotAvailableError,
@@ -524,7 +526,39 @@ CASES: list[ErrorCase] = [
       "diagnose(system, u_prbs, y_prbs, 0.05, candidates=['magic'])",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), 0.05, candidates=["magic"]),
       ParameterValidationError, "choose from"),
+    # ------------------------------------------------------------- output paths (CLI)
+    C("output-exists", "io", "output file that exists already (CLI without --force)",
+      "check_output_file('<tmp>/results.json', force=False)",
+      lambda: _check_output(csv_file("results.json", "{}")),
+      OutputExistsError, "pass --force"),
+    C("output-no-parent", "io", "output file in a directory that does not exist",
+      "check_output_file('<tmp>/no-dir/out.json')",
+      lambda: _check_output(CSV_DIR / "no-dir" / "out.json"),
+      OutputPathError, "create it first"),
+    C("output-is-dir", "io", "a directory given where an output file goes",
+      "check_output_file('<tmp>')",
+      lambda: _check_output(csv_file("x.csv", "u,y\n").parent),
+      OutputPathError, "give a file name"),
+    C("report-exists", "io", "report directory holding an earlier report",
+      "write_report(ident, ..., '<tmp>/report-dir') (or check_output_dir)",
+      lambda: _check_report_dir(),
+      OutputExistsError, "pass --force"),
 ]
+
+
+def _check_output(path, force=False):
+    from hammerbound.cli_paths import check_output_file
+
+    return check_output_file(path, force=force)
+
+
+def _check_report_dir():
+    from hammerbound.cli_paths import check_output_dir
+    from hammerbound.report import REPORT_FILES
+
+    (CSV_DIR / "report-dir").mkdir(parents=True, exist_ok=True)
+    csv_file("report-dir/report.md", "# earlier report\n")
+    return check_output_dir(CSV_DIR / "report-dir", REPORT_FILES)
 
 
 def run_case(case: ErrorCase) -> BaseException | None:

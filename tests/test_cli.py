@@ -111,3 +111,110 @@ def test_benchmark_suite_forwarding(monkeypatch, tmp_path, capsys):
     monkeypatch.chdir(Path(__file__).resolve().parents[1])
     assert main(["benchmark", "suite", "list"]) == 0
     assert "python -m benchmarks stage1" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ output paths (in-process)
+def test_check_output_file_cases(tmp_path):
+    import os
+
+    from hammerbound.cli_paths import check_output_file, write_output_text
+    from hammerbound.exceptions import OutputExistsError, OutputPathError
+
+    new = tmp_path / "new.json"
+    assert check_output_file(new) == new and not new.exists()  # the check writes nothing
+    assert [p.name for p in tmp_path.iterdir()] == []           # (its probe file is removed)
+    with pytest.raises(OutputPathError, match="does not exist; create it first"):
+        check_output_file(tmp_path / "no" / "x.json", option="--output")
+    with pytest.raises(OutputPathError, match="is a directory"):
+        check_output_file(tmp_path, force=True)
+    with pytest.raises(OutputPathError, match="empty output path"):
+        check_output_file("  ")
+    old = tmp_path / "old.json"
+    old.write_text("keep")
+    with pytest.raises(OutputExistsError, match="--output: .*old.json already exists; pass --force"):
+        check_output_file(old, option="--output")
+    assert check_output_file(old, force=True) == old and old.read_text() == "keep"
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(OutputPathError, match="not a regular file"):
+        check_output_file(fifo, force=True)
+    link = tmp_path / "dangling"
+    link.symlink_to(tmp_path / "missing")
+    with pytest.raises(OutputPathError, match="symbolic link to a missing file"):
+        check_output_file(link, force=True)
+    a_file = tmp_path / "plain"
+    a_file.write_text("")
+    with pytest.raises(OutputPathError, match="is not a directory"):
+        check_output_file(a_file / "x.json")
+    # a file that appears between the check and the write is not clobbered without force
+    late = check_output_file(tmp_path / "late.json")
+    late.write_text("someone else's")
+    with pytest.raises(OutputExistsError, match="left unchanged"):
+        write_output_text(late, "ours")
+    assert late.read_text() == "someone else's"
+    write_output_text(late, "ours", force=True)
+    assert late.read_text() == "ours"
+
+
+def test_check_output_dir_cases(tmp_path):
+    from hammerbound.cli_paths import check_output_dir
+    from hammerbound.exceptions import OutputExistsError, OutputPathError
+
+    files = ("report.md", "fig.png")
+    assert check_output_dir(tmp_path / "rep", files) == tmp_path / "rep"
+    assert not (tmp_path / "rep").exists()
+    with pytest.raises(OutputPathError, match="does not exist"):
+        check_output_dir(tmp_path / "a" / "b", files)
+    (tmp_path / "f").write_text("")
+    with pytest.raises(OutputPathError, match="not a directory"):
+        check_output_dir(tmp_path / "f", files, force=True)
+    d = tmp_path / "d"
+    d.mkdir()
+    (d / "other.txt").write_text("")
+    assert check_output_dir(d, files) == d  # unrelated files do not block a report
+    (d / "fig.png").write_text("")
+    with pytest.raises(OutputExistsError, match="already holds a report \\(fig.png\\); pass --force"):
+        check_output_dir(d, files, option="--report")
+    assert check_output_dir(d, files, force=True) == d
+    (d / "report.md").mkdir()
+    with pytest.raises(OutputPathError, match="is a directory"):
+        check_output_dir(d, files, force=True)
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["benchmark", "--output", "{tmp}"], "is a directory"),
+    (["benchmark", "--output", "/dev/null"], "not a regular file"),
+    (["identify", "--steady", "s.csv", "--prbs", "p.csv", "--steady-noise", "0.02",
+      "--prbs-noise", "0.02", "--report", "{tmp}/no/rep"], "does not exist"),
+    (["diagnose", "d.csv", "--num", "0 1", "--den", "1 -0.5", "--noise-bound", "0.1",
+      "--plot", "{tmp}/no/fig.png"], "does not exist"),
+    (["demo", "--report", "{tmp}/no/rep"], "does not exist"),
+])
+def test_bad_output_paths_fail_first(argv, fragment, tmp_path, capsys):
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    assert main(argv) == 2
+    cap = capsys.readouterr()
+    assert cap.out == ""  # nothing ran (the inputs s.csv, p.csv, d.csv do not even exist)
+    assert cap.err.count("\n") == 1 and fragment in cap.err and "error: Output" in cap.err
+
+
+def test_report_overwrite_is_explicit(csv_files, tmp_path):
+    from hammerbound import BacklashSetEstimator, HammersteinBacklashIdentifier
+    from hammerbound import LinearEIVSetEstimator
+    from hammerbound.exceptions import OutputExistsError
+    from hammerbound.report import REPORT_FILES, write_report
+
+    ex, _, _ = csv_files
+    ident = HammersteinBacklashIdentifier(
+        BacklashSetEstimator(0.02), LinearEIVSetEstimator(noise_bound=0.02, method="lp"))
+    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    rep = tmp_path / "rep"
+    args = (ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, rep)
+    assert write_report(*args) == rep / "report.md"
+    assert sorted(p.name for p in rep.iterdir()) == sorted(REPORT_FILES)
+    (rep / "report.md").write_text("edited by hand")
+    with pytest.raises(OutputExistsError, match="already holds a report .*overwrite=True"):
+        write_report(*args)
+    assert (rep / "report.md").read_text() == "edited by hand"
+    write_report(*args, overwrite=True)
+    assert "Stage 2" in (rep / "report.md").read_text()

@@ -14,10 +14,22 @@ Rigour (Neumaier & Shcherbina, 2004; same argument as :func:`.safe_lp.dual_bound
 evaluated in floating point and lowered by a rounding margin. With ``c = 0`` a positive
 value of the right-hand side is a Farkas certificate of infeasibility; HiGHS's dual ray
 is tried for that, and :func:`.safe_lp.certify_infeasible` (phase 1) is the fallback.
+
+Clean stdout: highspy's C++ code prints its banner ("Running HiGHS ... Copyright ...") to
+file descriptor 1 when the *first* ``Highs`` object of a process is constructed, before any
+option can be set, so neither ``output_flag=False`` nor :func:`contextlib.redirect_stdout`
+stops it. This module constructs that first object at import time with descriptor 1
+pointed at ``os.devnull`` (:func:`silence_highs_banner`); every later ``Highs()`` in the
+process, ours or not, prints nothing. Use :func:`new_highs` to create a quiet instance.
+(scipy's ``linprog(method="highs")`` uses scipy's own HiGHS build, which prints nothing.)
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+import threading
 from dataclasses import dataclass
 
 import highspy
@@ -28,6 +40,90 @@ from .safe_lp import certify_infeasible
 
 EPS = np.finfo(float).eps
 INF = highspy.kHighsInf
+
+_BANNER_LOCK = threading.Lock()
+_BANNER_DONE = False
+
+
+def _flush_c_stdio():
+    """Flush the C library's stdio buffers (text the C++ code wrote but did not flush)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).fflush(None)
+    except Exception:  # pragma: no cover - no C runtime reachable this way (e.g. Windows)
+        pass
+
+
+@contextlib.contextmanager
+def stdout_fd_to_devnull():
+    """Point file descriptor 1 at ``os.devnull`` inside the block (C-level output included).
+
+    Python's own ``sys.stdout`` is flushed first so that nothing already printed is lost;
+    if descriptor 1 is not open, the block runs unchanged.
+    """
+    with contextlib.suppress(Exception):
+        sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no descriptor 1 (e.g. closed by the caller): nothing to protect
+        yield
+        return
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, 1)
+        finally:
+            os.close(null)
+        yield
+    finally:
+        _flush_c_stdio()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def silence_highs_banner() -> None:
+    """Let HiGHS print its once-per-process banner into ``os.devnull`` (idempotent).
+
+    Called when this module is imported, so any ``highspy.Highs()`` created afterwards in
+    the process (including by code that does not use :func:`new_highs`) is silent.
+    """
+    global _BANNER_DONE
+    if _BANNER_DONE:
+        return
+    with _BANNER_LOCK:
+        if _BANNER_DONE:
+            return
+        with stdout_fd_to_devnull():
+            h = highspy.Highs()
+            h.setOptionValue("output_flag", False)
+            del h
+        _BANNER_DONE = True
+
+
+def new_highs(options=None):
+    """A ``highspy.Highs`` instance that prints nothing (banner silenced, ``output_flag`` off).
+
+    Parameters
+    ----------
+    options : dict, optional
+        HiGHS options (name -> value) set after ``output_flag=False``.
+
+    Raises
+    ------
+    ValueError
+        HiGHS rejected an option.
+    """
+    silence_highs_banner()
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    for name, value in (options or {}).items():
+        if h.setOptionValue(name, value) != highspy.HighsStatus.kOk:
+            raise ValueError(f"HiGHS rejected option {name}={value!r}")
+    return h
+
+
+silence_highs_banner()
 
 
 def row_dual_bound(c, A, rl, ru, lb, ub, y, *, with_reduced=False):
@@ -140,12 +236,7 @@ class HighsLP:
         self.lb = np.asarray(lb, dtype=float).copy()
         self.ub = np.asarray(ub, dtype=float).copy()
         self.c = np.zeros(n) if c is None else np.asarray(c, dtype=float).copy()
-        h = highspy.Highs()
-        h.setOptionValue("output_flag", False)
-        h.setOptionValue("threads", 1)
-        for name, value in (options or {}).items():
-            if h.setOptionValue(name, value) != highspy.HighsStatus.kOk:
-                raise ValueError(f"HiGHS rejected option {name}={value!r}")
+        h = new_highs({"threads": 1, **(options or {})})
         # unscaled solves are faster on well-scaled data, but if the certified bound then
         # trails HiGHS's own value, the duals are inaccurate: scaling goes back on for good
         self._unscaled = (options or {}).get("simplex_scale_strategy") == 0

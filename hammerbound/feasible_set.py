@@ -174,7 +174,7 @@ _EPS = np.finfo(float).eps
 
 
 def _intersect(c1: Constraint, c2: Constraint):
-    """Intersection of the boundary lines of two half-planes (``None`` if parallel).
+    """Intersection ``(x, y)`` of the boundary lines of two half-planes (``None`` if parallel).
 
     One coordinate comes from Cramer's rule, the other is substituted into the line with
     the larger coefficient for it. The point then satisfies that line to rounding and the
@@ -200,7 +200,7 @@ def _intersect(c1: Constraint, c2: Constraint):
     else:  # Cramer for x, then y from line 1
         x = (b1 * a21 - a11 * b2) / det
         y = (b1 - a10 * x) / a11
-    return np.array([x, y])
+    return (float(x), float(y))
 
 
 def _round_tol(cons: Constraint, p) -> float:

@@ -117,15 +117,13 @@ class SideProblem:
         """``(h+, h-)`` pairs of the selected samples: scaled ``(p, q)`` and original ``(m, beta)``."""
         hi, lo, zu, zl = self.bounds(factor)
         sel = np.arange(self.u.size)[sel]
-        s, t, u = self.sigma, self.t, self.u
-        slack = factor * self.tol
+        s = float(self.sigma)
+        cols = (self.idx[sel], self.t[sel], zu[sel], zl[sel], self.u[sel], hi[sel], lo[sel],
+                (factor * self.tol)[sel])
         pq, mb = [], []
-        for k in sel:
-            i = int(self.idx[k])
-            pq.append((Constraint((t[k], 1.0), zu[k], i, "+"),
-                       Constraint((-t[k], -1.0), -zl[k], i, "-")))
-            mb.append((Constraint((u[k], s), hi[k], i, "+", slack[k]),
-                       Constraint((-u[k], -s), -lo[k], i, "-", slack[k])))
+        for i, t, a, b, u, h, l, sl in zip(*(c.tolist() for c in cols)):  # Python floats
+            pq.append((Constraint((t, 1.0), a, i, "+"), Constraint((-t, -1.0), -b, i, "-")))
+            mb.append((Constraint((u, s), h, i, "+", sl), Constraint((-u, -s), -l, i, "-", sl)))
         return pq, mb
 
     def positivity(self):

@@ -9,6 +9,14 @@ same data -- together with the order-1 moment relaxation and the polytopic LP.
     python benchmarks/chapter_tables.py                # full: 6 levels x N = 100, 300
     python benchmarks/chapter_tables.py --quick        # N = 100 only
     python benchmarks/chapter_tables.py --methods exact,moment1,lp --N 100 300
+
+Over several noise draws, both stage-1 modes (hammerbound.chapter.reproduce_chapter; the
+chapter's delta = 2 numbers beside our exact intervals, median and spread over the seeds,
+ratio ours/chapter of the half-widths):
+
+    python benchmarks/chapter_tables.py --seeds 0 1 2 3 4 --stage1 chapter experiment \
+        --methods exact --n-jobs 1
+    # -> results/chapter_seeds_<stage1>_<method>.json / .csv
 """
 
 from __future__ import annotations
@@ -46,7 +54,16 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--time-limit", type=float, default=300.0, help="exact method, per bound")
+    ap.add_argument("--seeds", type=int, nargs="+", default=None,
+                    help="several noise draws through hammerbound.chapter (see above)")
+    ap.add_argument("--stage1", nargs="+", default=["chapter", "experiment"],
+                    choices=["chapter", "experiment"], help="with --seeds")
+    ap.add_argument("--rounding", default="outward", choices=["outward", "as-printed"],
+                    help="with --seeds --stage1 chapter: Table 22.1 ends moved outward by half "
+                         "a printed digit (default) or as printed (file suffix _as-printed)")
     args = ap.parse_args(argv)
+    if args.seeds is not None:
+        return main_seeds(args)
     Ns = args.N or ([100] if args.quick else [100, 300])
     methods = args.methods.split(",")
     ref = load_reference()
@@ -118,6 +135,41 @@ def main(argv=None):
     plot(t1_rows, table_rows, Ns, methods)
     bad = [r for r in t1_rows + table_rows if not r["inside"]]
     C.log(f"intervals not containing the true value: {len(bad)}")
+
+
+def main_seeds(args):
+    """Medians over seeds for each stage-1 mode and method (one results file per pair)."""
+    from hammerbound.chapter import reproduce_chapter, reproduction_misses
+
+    Ns = args.N or ([100] if args.quick else [100, 300])
+    env = C.environment()
+    for stage1 in args.stage1:
+        for m in args.methods.split(","):
+            kw = dict(C.METHODS[m])
+            inner = kw.pop("inner_signal", "independent")
+            C.log(f"stage1={stage1} method={m} N={Ns} levels={args.levels} seeds={args.seeds}")
+            recs = reproduce_chapter(stage1, Ns, args.levels, args.seeds, kw.pop("method"),
+                                     inner_signal=inner, n_jobs=args.n_jobs,
+                                     time_limit=args.time_limit, rounding=args.rounding,
+                                     progress=C.log, **kw)
+            miss = reproduction_misses(recs)
+            bad = [r for r in recs if not all(r["inside"])]
+            C.log(f"stage1={stage1} method={m}: rows outside ratio 0.7-1.5 or missing the "
+                  f"truth: {len(miss)}; intervals not containing the truth: {len(bad)}")
+            for r in recs:
+                if r["table"] != "22.1" or r["param"].startswith("x"):
+                    C.log(f"  {r['table']:5s} N={r['N']} deta={r['delta_eta']:<6} "
+                          f"{r['param']:7s} median hw {r['median_half_width']:.4f} "
+                          f"({r['half_width_min']:.4f}-{r['half_width_max']:.4f}) chapter "
+                          f"{r['chapter_half_width']} ratio "
+                          f"{'-' if r['ratio'] is None else round(r['ratio'], 3)} "
+                          f"inside {all(r['inside'])}")
+            name = f"chapter_seeds_{stage1}_{m}"
+            if args.rounding != "outward":
+                name += f"_{args.rounding}"
+            C.write_json({"environment": env, "args": vars(args), "stage1": stage1,
+                          "method": m, "records": recs}, C.RESULTS / f"{name}.json")
+            C.write_csv(recs, C.RESULTS / f"{name}.csv")
 
 
 def plot(t1_rows, rows, Ns, methods):

@@ -25,6 +25,7 @@ either precisely or generically:
 | hammerbound exception | built-in base | raised for |
 | --- | --- | --- |
 | `DataValidationError` | `ValueError` | malformed data: NaN/inf, shapes, lengths, dtypes, CSV files |
+| `DataScaleError` | `ValueError` | data magnitudes outside [1e-7, 1e9] (a `DataValidationError`): rescale |
 | `NotEnoughAmplitudesError` | `ValueError` | < 2 square-wave amplitudes on a side (Remark 22.2) |
 | `ParameterValidationError` | `ValueError` | a setting or model parameter out of range |
 | `ResultOneViolationError` | `ValueError` | u* in the dead zone or past the line crossing (Result 1) |

@@ -9,13 +9,16 @@ errors-in-variables problem; :class:`HammersteinBacklashIdentifier` runs both.
 from .backlash import BacklashSetEstimator, InnerSignalBounds
 from .eiv import LinearEIVSetEstimator
 from .exceptions import (
+    DataScaleError,
     DataValidationError,
     EmptyFeasibleSetError,
     HammerboundError,
     IllPosedBacklashError,
     NotEnoughAmplitudesError,
     ParameterValidationError,
+    RelaxationTooLargeError,
     ResultOneViolationError,
+    SearchLimitWarning,
     SolverError,
     SolverNotAvailableError,
     SolverOptionError,
@@ -38,6 +41,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree, n
 __all__ = [
     "Backlash",
     "BacklashSetEstimator",
+    "DataScaleError",
     "DataValidationError",
     "EIVProblem",
     "EmptyFeasibleSetError",
@@ -51,7 +55,9 @@ __all__ = [
     "NotEnoughAmplitudesError",
     "ParameterValidationError",
     "PolygonFeasibleSet",
+    "RelaxationTooLargeError",
     "ResultOneViolationError",
+    "SearchLimitWarning",
     "SolverError",
     "SolverNotAvailableError",
     "SolverOptionError",

@@ -24,6 +24,7 @@ from .exceptions import (
 )
 from .feasible_set import Edge, PolygonFeasibleSet
 from .side_polygon import SideProblem
+from .validation import as_bound, as_flag, as_real, check_scale
 
 __all__ = ["BacklashSetEstimator", "InnerSignalBounds"]
 
@@ -123,6 +124,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"method must be 'polygon' or 'algorithm'; got {self.method!r}."
             )
+        as_flag("well_posed_on_data", self.well_posed_on_data)
         import scipy.sparse as sp
         from sklearn.utils.validation import validate_data
 
@@ -147,30 +149,16 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
         X = X[:, 0].astype(float)
         y = np.asarray(y, dtype=float)
-        nb = self.noise_bound
-        if isinstance(nb, (str, bytes)) or nb is None:
-            raise ParameterValidationError("noise_bound must be a number or an array of numbers > 0.")
-        try:
-            nb = np.asarray(nb, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ParameterValidationError("noise_bound must be numeric.") from exc
-        if nb.ndim == 0:
-            nb = np.full(X.shape[0], float(nb))
-        if nb.shape != (X.shape[0],):
-            raise ParameterValidationError(
-                f"noise_bound must be a scalar or have one value per sample ({X.shape[0]}); "
-                f"got shape {nb.shape}."
-            )
-        if not np.all(np.isfinite(nb)) or np.any(nb <= 0):
-            raise ParameterValidationError(
-                "noise_bound must be finite and > 0 (a bound of 0 makes the set degenerate; "
-                "use the smallest bound you can guarantee)."
-            )
+        nb = as_bound("noise_bound", self.noise_bound, X.shape[0],
+                      shape_error=ParameterValidationError)
         if np.any(X == 0):
             raise DataValidationError(
                 f"X[{int(np.flatnonzero(X == 0)[0])}] = 0: steady-state inputs must be non-zero "
                 "(positive for the right line, negative for the left line)."
             )
+        check_scale("BacklashSetEstimator.fit", {"y": y, "X": X}, {"noise_bound": nb},
+                    slope=("y", "X"),
+                    hint=" (the slopes m are unchanged; multiply the bounds on c_l, c_r by s)")
         return X, y, nb
 
     # ------------------------------------------------------------------ fit
@@ -299,13 +287,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     def check_prbs_level(self, u_star: float) -> None:
         """Raise :class:`ResultOneViolationError` unless ``u*`` satisfies Result 1 for every
         feasible backlash (outside the dead zone, before the line crossing)."""
-        try:
-            u_val = float(u_star)
-        except (TypeError, ValueError):
-            u_val = np.nan
-        if not np.isfinite(u_val) or u_val <= 0:
-            raise ParameterValidationError(f"u_star must be a finite number > 0; got {u_star!r}.")
-        u_star = u_val
+        u_star = as_real("u_star", u_star, positive=True, example="1.0")
         u_lo, u_hi = self.admissible_prbs_range()
         if u_star <= u_lo:
             raise ResultOneViolationError(
@@ -326,8 +308,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         With an unbounded range (``m_l == m_r`` can be excluded on neither side) it returns
         ``(1 + margin) * 10 * u_lo``.
         """
-        if not 0 < margin < 1:
-            raise ParameterValidationError("margin must be in (0, 1).")
+        margin = as_real("margin", margin, lo=0.0, hi=1.0, example="0.25")
         u_lo, u_hi = self.admissible_prbs_range()
         if u_hi <= u_lo:
             raise ResultOneViolationError(
@@ -359,6 +340,37 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         X = _column(X, "X")
         ml, cl, mr, cr = self.gamma_center_
         return np.where(X > 0, mr * (X - cr), ml * (X + cl))
+
+    # ------------------------------------------------------------------ model set (issue 16)
+    def sample(self, n, random_state=None):
+        """``n`` backlashes ``(m_l, c_l, m_r, c_r)`` from the exact feasible polygons.
+
+        Uniform in ``(m, beta = m c)`` on each side (the sides are independent); each
+        sample is checked against every half-plane of its polygon. Returns
+        :class:`~hammerbound.modelset.BacklashSamples`.
+        """
+        check_is_fitted(self, "left_")
+        from .modelset.sampling import sample_backlash
+
+        return sample_backlash(self.left_, self.right_, n, random_state=random_state)
+
+    def inverse(self, v_range=None, x0=0.0):
+        """Backlash-inverse compensator from the central estimate, with a guaranteed error.
+
+        The classic right-inverse (rise: ``u = v/m_r + c_r``, fall: ``u = v/m_l - c_l``)
+        plus :meth:`~hammerbound.modelset.BacklashInverse.error_bounds`, the band of the
+        residual ``x - v`` valid for every backlash of the feasible set and every command
+        sequence in ``v_range`` (default: the inner-signal range of the experiment).
+
+        Raises
+        ------
+        IllPosedBacklashError
+            The compensator would drive some feasible backlash past its line crossing.
+        """
+        check_is_fitted(self, "left_")
+        from .modelset.compensation import build_inverse
+
+        return build_inverse(self, v_range=v_range, x0=x0)
 
 
 def _is_complex(X):

@@ -18,66 +18,6 @@ from .exceptions import HammerboundError
 __all__ = ["main"]
 
 
-def _fmt(v, w=8, d=4):
-    return f"{v:{w}.{d}f}"
-
-
-def _chapter_rows(table, n=None):
-    from .io import load_chapter_tables
-
-    rows = {}
-    for r in load_chapter_tables():
-        if r["table"] != table or (n is not None and r["N"] and int(r["N"]) != n):
-            continue
-        rows[(float(r["delta_eta"]), r["param"])] = r
-    return rows
-
-
-def _print_table(title, names, results, chapter, file=None):
-    file = sys.stdout if file is None else file
-    """results: list of (deta, snr, bounds (p,2), true (p,))."""
-    print(f"\n{title}", file=file)
-    print("  ours: lower / centre / upper (half-width), chapter's in [ ]; * = true value "
-          "inside our interval", file=file)
-    for deta, snr, bounds, true in results:
-        ch = chapter.get((deta, names[0]))
-        snr_ch = f", chapter {ch['snr_db']} dB" if ch else ""
-        print(f"  delta_eta = {deta:g}  (SNR {snr:.1f} dB{snr_ch})", file=file)
-        for k, name in enumerate(names):
-            lo, hi = bounds[k]
-            ok = "*" if lo <= true[k] <= hi else "!"
-            line = (f"    {name:3s} true {_fmt(true[k])}  ours {_fmt(lo)} {_fmt(0.5 * (lo + hi))} "
-                    f"{_fmt(hi)} ({0.5 * (hi - lo):.4f}){ok}")
-            c = chapter.get((deta, name))
-            if c:
-                line += (f"  [{float(c['lower']):.4f} {float(c['center']):.4f} "
-                         f"{float(c['upper']):.4f} ({float(c['half_width']):.4f})]")
-            print(line, file=file)
-
-
-def _table_json(names, results, chapter):
-    """The rows of one demo table as JSON-ready dicts (ours, the truth, the chapter's)."""
-    out = []
-    for deta, snr, bounds, true in results:
-        params = []
-        for k, name in enumerate(names):
-            lo, hi = float(bounds[k][0]), float(bounds[k][1])
-            row = {"parameter": name, "true": float(true[k]), "lower": lo,
-                   "centre": 0.5 * (lo + hi), "upper": hi, "half_width": 0.5 * (hi - lo),
-                   "true_inside": bool(lo <= true[k] <= hi)}
-            c = chapter.get((deta, name))
-            if c:
-                row["chapter"] = {"lower": float(c["lower"]), "centre": float(c["center"]),
-                                  "upper": float(c["upper"]),
-                                  "half_width": float(c["half_width"])}
-            params.append(row)
-        ch = chapter.get((deta, names[0]))
-        out.append({"delta_eta": deta, "snr_db": float(snr),
-                    "chapter_snr_db": float(ch["snr_db"]) if ch and ch["snr_db"] else None,
-                    "parameters": params})
-    return out
-
-
 class _Progress:
     """Progress lines on stderr (stdout stays the program's tables or JSON)."""
 
@@ -95,9 +35,11 @@ class _Progress:
 
 
 def cmd_demo(args) -> int:
-    """The chapter's example end to end (section 22.5) on the built-in default."""
-    from . import BacklashSetEstimator, HammersteinBacklashIdentifier, LinearEIVSetEstimator
-    from .experiments import CHAPTER_NOISE_LEVELS, chapter_example
+    """The chapter's example end to end (section 22.5): Tables 22.1-22.3 over several noise
+    draws beside the chapter's numbers (:func:`hammerbound.chapter.run_demo`)."""
+    from .chapter import DEMO_SEEDS, fit_example, records_json, run_demo, stdout_to_stderr
+    from .cli_paths import write_output_text
+    from .experiments import CHAPTER_NOISE_LEVELS
     from .report import REPORT_FILES
 
     # every output is checked before the (minutes long) computation
@@ -106,113 +48,46 @@ def cmd_demo(args) -> int:
                                    hint="choose another directory (--report DIR; --report '' "
                                         "for no report)")
                   if args.report else None)
+    json_stdout = args.json == "-"
+    json_path = (check_output_file(args.json, force=args.force, option="--json")
+                 if args.json and not json_stdout else None)
     levels = CHAPTER_NOISE_LEVELS if args.noise_levels is None else tuple(args.noise_levels)
-    text = None if args.json else sys.stdout
+    seeds = args.seeds if args.seeds is not None else (
+        [args.seed] if args.seed is not None else list(DEMO_SEEDS))
     progress = _Progress(not args.quiet)
-    method = (f"{args.method}" + (f" (order {args.order}, {args.solver})"
-                                  if args.method == "moment" else ""))
-    if text:
-        print("hammerbound demo: the simulated example of section 22.5 (Cerone, Piga & Regruto)")
-        print("  backlash m_l=0.25 c_l=0.0628 m_r=0.26 c_r=0.0489; G = (2.15 q^-1 - 1.09 q^-2) "
-              "/ (1 - 0.76 q^-1 + 0.82 q^-2), normalised to unit gain (22.8)")
-        print(f"  M = 50 square-wave amplitudes, PRBS N = {' and '.join(map(str, args.N))}, "
-              f"stage-2 method {method}, inner signal {args.inner_signal}", flush=True)
-    n_fits = len(args.N) * len(levels)
-    progress(f"{n_fits} fits ({len(args.N)} PRBS length(s) x {len(levels)} noise level(s)), "
-             f"each stage 1 (backlash, exact polygons) then stage 2 (linear block, method "
-             f"{method}); progress on stderr, --quiet to hide it")
-    t0 = time.perf_counter()
-    failures = 0
-    report_fit = None
-    doc = {"example": "Cerone, Piga & Regruto, section 22.5", "method": args.method,
-           "relaxation_order": args.order if args.method == "moment" else None,
-           "inner_signal": args.inner_signal, "seed": args.seed, "N": list(args.N),
-           "noise_levels": list(levels), "stage1": None, "inner_signal_bounds": None,
-           "stage2": []}
-    k_fit = 0
-    for n_idx, N in enumerate(args.N):
-        res1, res2, inner_rows, fitted = [], [], [], []
-        t_n = time.perf_counter()
-        for deta in levels:
-            k_fit += 1
-            progress(f"[{k_fit}/{n_fits}] N = {N}, delta_eta = {deta:g}: stage 1 + stage 2 ...")
-            ex = chapter_example(deta, N=N, random_state=args.seed)
-            ident = HammersteinBacklashIdentifier(
-                BacklashSetEstimator(deta),
-                LinearEIVSetEstimator(noise_bound=deta, method=args.method,
-                                      relaxation_order=args.order, solver=args.solver,
-                                      n_jobs=args.n_jobs, progress=args.progress),
-                inner_signal=args.inner_signal,
-            )
-            t = time.perf_counter()
-            ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
-            dt = time.perf_counter() - t
-            ok = ident.contains(ex.gamma_true, ex.theta_true)
-            progress(f"[{k_fit}/{n_fits}] N = {N}, delta_eta = {deta:g}: done in {dt:.1f} s "
-                     f"(true parameters inside: {'yes' if ok else 'NO'}; elapsed "
-                     f"{progress.elapsed():.1f} s)")
-            res1.append((deta, ex.steady.snr_db, ident.gamma_bounds_, ex.gamma_true))
-            res2.append((deta, ex.prbs.snr_db, ident.theta_bounds_, ex.theta_true))
-            inner_rows.append((deta, ident.u_star_, ident.inner_bounds_, ex.prbs.x))
-            failures += int(not ok)
-            fitted.append((ex, ident, dt))
-        progress(f"N = {N}: {len(levels)} noise level(s) in {time.perf_counter() - t_n:.1f} s")
-        if n_idx == 0:
-            ch1 = _chapter_rows("22.1")
-            doc["stage1"] = {"table": "22.1", "rows": _table_json(("ml", "cl", "mr", "cr"),
-                                                                  res1, ch1)}
-            doc["inner_signal_bounds"] = [
-                {"delta_eta": deta, "u_star": float(us),
-                 "x_plus": [float(ib.x_hi[0]), float(ib.x_hi[1])],
-                 "x_minus": [float(ib.x_lo[0]), float(ib.x_lo[1])],
-                 "x_true_plus": float(x.max()), "x_true_minus": float(x.min())}
-                for deta, us, ib, x in inner_rows]
-            if text:
-                _print_table("Table 22.1 - backlash parameter bounds (stage 1)",
-                             ("ml", "cl", "mr", "cr"), res1, ch1)
-                print("\nInner-signal bounds (22.25)-(22.30) for the PRBS level u*")
-                for deta, us, ib, x in inner_rows:
-                    print(f"  delta_eta = {deta:g}: u* = {us:g}, x(+u*) in [{ib.x_hi[0]:.5f}, "
-                          f"{ib.x_hi[1]:.5f}], x(-u*) in [{ib.x_lo[0]:.5f}, {ib.x_lo[1]:.5f}] "
-                          f"(true {x.max():.5f}, {x.min():.5f})")
-            report_fit = min(fitted, key=lambda f: abs(f[0].noise_bound - 0.05))
-        table = {100: "22.2", 300: "22.3"}.get(N)
-        ch2 = _chapter_rows(table, N) if table else {}
-        doc["stage2"].append({
-            "N": N, "table": table, "rows": _table_json(("a1", "a2", "b1", "b2"), res2, ch2),
-            "time_s": {f"{ex.noise_bound:g}": dt for ex, _, dt in fitted}})
-        if text:
-            _print_table(f"Table {table or '(N=' + str(N) + ')'} - linear block bounds "
-                         f"(stage 2, N = {N})", ("a1", "a2", "b1", "b2"), res2, ch2)
-            print(f"\ntime per noise level (N = {N}): "
-                  + ", ".join(f"{ex.noise_bound:g}: {dt:.1f} s" for ex, _, dt in fitted),
-                  flush=True)
-    total = time.perf_counter() - t0
-    doc["total_time_s"] = total
-    doc["all_true_inside"] = failures == 0
-    if text:
-        print(f"total {total:.1f} s; true parameters inside every interval: "
-              f"{'yes' if failures == 0 else f'NO ({failures} case(s))'}")
-        print("Note: the chapter does not state the square-wave amplitudes nor u*; our choices "
-              "(amplitudes 0.25..2.5, u* = 1) keep the backlash well posed (below the line "
-              "crossing at u = 2.84) and reproduce the chapter's transient SNRs; see "
-              "hammerbound.experiments and docs/benchmarks.md.", flush=True)
-    doc["report"] = None
-    if report_dir is not None:
-        from .report import write_report
+    # with JSON on stdout, nothing else goes there (a C library's banner included)
+    with stdout_to_stderr() if json_stdout else contextlib.nullcontext():
+        records = run_demo(args.stage1, tuple(args.N), levels, seeds, args.method,
+                           inner_signal=args.inner_signal, relaxation_order=args.order,
+                           solver=args.solver, n_jobs=args.n_jobs, progress=progress,
+                           linear_options={"progress": args.progress},
+                           file=False if json_stdout else sys.stdout)
+        if report_dir is not None:
+            from .report import write_report
 
-        ex, ident, _ = report_fit
-        progress(f"writing the report (delta_eta = {ex.noise_bound:g}) to {report_dir} ...")
-        path = write_report(ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, report_dir,
-                            gamma_true=ex.gamma_true, theta_true=ex.theta_true,
-                            title=f"Chapter example, delta_eta = {ex.noise_bound:g}, "
-                                  f"N = {ex.prbs.u.size}", overwrite=args.force)
-        doc["report"] = str(path)
-        print(f"hammerbound demo: report with figures written to {path}", file=sys.stderr)
+            deta = min(levels, key=lambda d: abs(d - 0.05))
+            progress(f"writing the report (delta_eta = {deta:g}, N = {args.N[0]}, seed "
+                     f"{seeds[0]}, our stage 1) to {report_dir} ...")
+            ex, ident = fit_example(deta, args.N[0], seeds[0], args.method,
+                                    inner_signal=args.inner_signal,
+                                    relaxation_order=args.order, solver=args.solver,
+                                    n_jobs=args.n_jobs)
+            path = write_report(ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y,
+                                report_dir, gamma_true=ex.gamma_true,
+                                theta_true=ex.theta_true, overwrite=args.force,
+                                title=f"Chapter example, delta_eta = {deta:g}, "
+                                      f"N = {args.N[0]}, seed {seeds[0]}")
+            print(f"hammerbound demo: report with figures written to {path}", file=sys.stderr)
     if args.json:
-        print(json.dumps(doc, indent=2))
+        if json_stdout:
+            print(records_json(records), flush=True)
+        else:
+            write_output_text(json_path, records_json(records) + "\n", force=args.force,
+                              option="--json")
+            print(f"hammerbound demo: {len(records)} records written to {json_path}",
+                  file=sys.stderr)
     progress(f"done in {progress.elapsed():.1f} s")
-    return 0 if failures == 0 else 1
+    return 0 if all(all(r["inside"]) for r in records) else 1
 
 
 def cmd_identify(args) -> int:
@@ -324,19 +199,26 @@ def build_parser() -> argparse.ArgumentParser:
                    help="PRBS length(s) (default: the chapter's 100 and 300)")
     p.add_argument("--noise-levels", type=float, nargs="+", default=None,
                    help="noise bounds (default: the chapter's six)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=None, help="one noise draw (= --seeds SEED)")
     p.add_argument("--report", default="demo-report", metavar="DIR",
                    help="directory of the Markdown report with figures for delta_eta = 0.05 "
                         f"(default demo-report; '' to skip; an existing report there is "
                         f"kept unless {FORCE_FLAG} is given)")
-    p.add_argument("--json", action="store_true",
-                   help="print the tables as JSON on stdout (nothing else goes to stdout)")
+    p.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH",
+                   help="write one JSON record per table row to PATH ('-' or no PATH: to "
+                        "stdout, and nothing else goes to stdout)")
+    p.add_argument("--stage1", default="experiment", choices=["experiment", "chapter"],
+                   help="inner-signal bounds for stage 2: from our stage 1 (default) or "
+                        "implied by the chapter's Table 22.1")
+    p.add_argument("--seeds", type=int, nargs="+", default=None,
+                   help="noise draws; rows give the median over them (default 0 1: a quick "
+                        "run; the benchmark uses 0 1 2 3 4)")
     p.add_argument("--quiet", "-q", action="store_true",
                    help="no progress lines on stderr")
     p.add_argument("--progress", action="store_true", help="progress bars (exact method)")
     add_force_option(p, "report files")
-    _add_stage2_options(p)
-    p.set_defaults(func=cmd_demo)
+    _add_stage2_options(p, method="exact")
+    p.set_defaults(func=cmd_demo, n_jobs=2)
 
     p = sub.add_parser("identify", help="identify from CSV files",
                        description="Bound backlash and linear block from a steady-state CSV "

@@ -11,10 +11,12 @@ Workflow (see ``docs/discrepancy.md``)
    where ``theta`` are the parameters the model is allowed to change ("parameter
    uncertainty": the numerator ``B`` of the linear block, or an output gain for a
    black-box model; see ``refit``). The data are consistent with the model class under
-   the noise bound ``Delta`` iff ``gap <= Delta``. Samples whose best-fit residual lies
-   outside ``+-Delta`` are flagged and grouped by operating condition (after input
-   reversals, after input changes, in steady state, at large / small amplitude), with
-   constant-shift and lag indicators.
+   the noise bound ``Delta`` iff ``gap <= Delta`` - in floating point, iff every scored
+   residual satisfies ``|y_t - yhat_t| <= Delta + 1e-9 (|y_t| + |yhat_t| + Delta)`` (the
+   outward tolerance of :mod:`hammerbound.tolerances`; the same rule counts the samples
+   "outside"). Samples whose best-fit residual lies outside that band are flagged and
+   grouped by operating condition (after input reversals, after input changes, in steady
+   state, at large / small amplitude), with constant-shift and lag indicators.
 2. **Name.** Each candidate effect adds *one* parameter to the model class:
 
    ==============  ===========================================================  =====
@@ -65,7 +67,9 @@ from scipy.signal import lfilter
 
 from .exceptions import DataValidationError, HammerboundError, ParameterValidationError
 from .relaxations.safe_lp import safe_minimize
+from .tolerances import feasibility_tol
 from .systems import Backlash, HammersteinSystem, as_polynomials, simulate_backlash
+from .validation import as_real, check_scale
 
 __all__ = [
     "CANDIDATES",
@@ -94,7 +98,30 @@ CANDIDATES: MappingProxyType = MappingProxyType(
 )
 
 _INPUT_OPS = ("backlash", "deadzone", "saturation")
-_REL_TOL = 1e-9  # relative slack when comparing an achieved error with the noise bound
+_LP_OPTIONS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
+
+
+# --------------------------------------------------------------------------------------
+# the consistency rule (tolerance policy, hammerbound.tolerances)
+# --------------------------------------------------------------------------------------
+def _outside(y, pred, nb, skip) -> np.ndarray:
+    """Scored samples outside the noise band, relaxed outward by the tolerance policy.
+
+    Sample ``t >= skip`` is *inside* when ``|y_t - yhat_t| <= nb + feasibility_tol(y_t,
+    yhat_t, nb)``, i.e. within ``1e-9 (|y_t| + |yhat_t| + nb)`` of the band: the rounding
+    of the residual itself is far below that, so a model whose error is exactly the noise
+    bound is consistent. The same rule decides ``consistent_*`` and every "% outside".
+    """
+    out = np.abs(y - pred) > nb + feasibility_tol(y, pred, nb)
+    out[:skip] = False
+    return out
+
+
+def _certified_above(lower, y, gap, nb, skip) -> bool:
+    """Whether a certified lower bound of the gap exceeds the relaxed band of every sample."""
+    ymax = float(np.max(np.abs(y[skip:]))) if y.size > skip else 0.0
+    # |yhat_t| <= |y_t| + gap, so every sample's relaxed band is below this
+    return lower > nb + feasibility_tol(2.0 * ymax + gap, nb)
 
 
 # --------------------------------------------------------------------------------------
@@ -416,14 +443,17 @@ class _Fit:
         return self.f + (self.Phi @ self.z if self.Phi.shape[1] else 0.0)
 
 
-def _minimax(y, f, Phi, skip, coef_box) -> _Fit:
+def _minimax(y, f, Phi, skip, coef_box, target=None) -> _Fit:
     """Chebyshev fit ``min_z max_{t>=skip} |y_t - f_t - (Phi z)_t|`` as a linear program.
 
     The free coefficients are boxed, ``|z_j| max_t |Phi_tj| <= coef_box (max|y - f| + 2)``
     (a column may contribute at most ``coef_box`` times the output scale), so that
     :func:`safe_minimize` can return a rigorous lower bound by weak duality. The returned
     ``error`` is recomputed from the returned ``z`` (it is achieved); ``lower`` is a
-    certified lower bound of the boxed minimum.
+    certified lower bound of the boxed minimum. When the error lands just above
+    ``target`` (within 1 %), the LP is solved again to HiGHS' finest tolerances: the
+    default ones (``1e-7``) leave the achieved error up to ~1e-6 relative above the
+    optimum, which decides "consistent" when the noise sits exactly at the bound.
     """
     r0 = (y - f)[skip:]
     k = Phi.shape[1]
@@ -443,17 +473,22 @@ def _minimax(y, f, Phi, skip, coef_box) -> _Fit:
     bounds = np.array([[-Z, Z]] * k + [[0.0, T]])
     c = np.zeros(k + 1)
     c[-1] = 1.0
-    res = safe_minimize(c, A_ub, b_ub, bounds=bounds)
-    if res.x is None:
-        z = np.zeros(k)
-    else:
-        z = res.x[:k] / scale
-    fit_pred = f + Phi @ z
-    e = float(np.max(np.abs((y - fit_pred)[skip:])))
     e0 = float(np.max(np.abs(r0)))
-    if e > e0:  # solver failure: z = 0 is always available
-        z, e = np.zeros(k), e0
-    lower = float(res.bound) if res.status == "optimal" else 0.0
+
+    def solve(options):
+        res = safe_minimize(c, A_ub, b_ub, bounds=bounds, options=options)
+        z = np.zeros(k) if res.x is None else res.x[:k] / scale
+        e = float(np.max(np.abs((y - f - Phi @ z)[skip:])))
+        if e > e0:  # solver failure: z = 0 is always available
+            z, e = np.zeros(k), e0
+        return z, e, (float(res.bound) if res.status == "optimal" else 0.0)
+
+    z, e, lower = solve(None)
+    if target is not None and target < e <= 1.01 * target:
+        z2, e2, lower2 = solve(_LP_OPTIONS)
+        lower = max(lower, lower2)  # both are certified lower bounds
+        if e2 < e:
+            z, e = z2, e2
     return _Fit(e, max(min(lower, e), 0.0), z, f, Phi)
 
 
@@ -551,7 +586,8 @@ class CandidateFit:
         Rigorous lower bound of the minimax error *at* ``value`` (for ``offset`` and
         ``delay`` - searched exhaustively - a bound over the whole candidate class).
     consistent : bool
-        ``minimax_error <= noise_bound``.
+        ``minimax_error <= noise_bound`` (every residual within the noise band, relaxed
+        outward by the tolerance policy: ``1e-9 (|y_t| + |yhat_t| + noise_bound)``).
     fraction_outside : float
         Fraction of samples whose residual exceeds the noise bound after the refit.
     improvement : float
@@ -685,9 +721,10 @@ class DiagnosisReport:
         (then ``consistent_after`` is False and the message says so).
     noise_bound : float
     consistent_before, consistent_after : bool
-        ``gap <= noise_bound`` before / after.
+        ``gap <= noise_bound`` before / after, up to the outward tolerance
+        ``1e-9 (|y_t| + |yhat_t| + noise_bound)`` per sample (hammerbound.tolerances).
     fraction_outside_before, fraction_outside_after : float
-        Fraction of samples outside the noise band before / after.
+        Fraction of samples outside the noise band before / after (same tolerance).
     refined_model : RefinedModel
         The model with the effect added and refitted (the refitted original model when
         ``effect is None``).
@@ -1024,7 +1061,7 @@ def _direction_correlation(s, u, y, f, Phi, skip):
 def _locate(s, u, y, nb, do_refit, skip, window, max_lag, coef_box=1e3):
     nominal = s.predict(u)
     f, Phi = _design(s, u, do_refit)
-    fit = _minimax(y, f, Phi, skip, coef_box)
+    fit = _minimax(y, f, Phi, skip, coef_box, target=nb)
     resid = y - fit.prediction
     nres = y - nominal
     # localisation residual: least-squares refit (errors concentrate where the model fails,
@@ -1035,7 +1072,7 @@ def _locate(s, u, y, nb, do_refit, skip, window, max_lag, coef_box=1e3):
     else:
         lres = y - f
     scored = np.arange(y.size) >= skip
-    flagged = (np.abs(lres) > nb) & scored
+    flagged = _outside(y, y - lres, nb, skip)
     # where are the *largest* disagreements? (top quintile of the out-of-band samples)
     worst = flagged.copy()
     if np.any(flagged):
@@ -1045,10 +1082,10 @@ def _locate(s, u, y, nb, do_refit, skip, window, max_lag, coef_box=1e3):
     dc = _direction_correlation(s, u, y, f, Phi, skip)
     lag = _best_lag(y[skip:], nominal[skip:], max_lag)
     hints = []
-    if fit.error <= nb * (1 + _REL_TOL):
+    if not np.any(_outside(y, fit.prediction, nb, skip)):
         hints.append("the data are consistent with the model class under the noise bound")
     else:
-        if fit.lower > nb:
+        if _certified_above(fit.lower, y, fit.error, nb, skip):
             hints.append(
                 f"certified: no refit of the model's parameters brings the error below "
                 f"{fit.lower:.4g} > noise bound {nb:.4g}"
@@ -1072,10 +1109,10 @@ def _locate(s, u, y, nb, do_refit, skip, window, max_lag, coef_box=1e3):
     d = Disagreement(
         gap=fit.error,
         gap_lower=fit.lower,
-        fraction_outside=float(np.mean(np.abs(resid[skip:]) > nb)),
-        ls_fraction_outside=float(np.mean(np.abs(lres[skip:]) > nb)),
+        fraction_outside=float(np.mean(_outside(y, fit.prediction, nb, skip)[skip:])),
+        ls_fraction_outside=float(np.mean(flagged[skip:])),
         nominal_gap=float(np.max(np.abs(nres[skip:]))),
-        nominal_fraction_outside=float(np.mean(np.abs(nres[skip:]) > nb)),
+        nominal_fraction_outside=float(np.mean(_outside(y, nominal, nb, skip)[skip:])),
         indices=np.flatnonzero(flagged),
         residual=resid,
         ls_residual=lres,
@@ -1098,8 +1135,13 @@ _PARAM_NAMES = {
 }
 
 
-def _search_1d(evaluate, lo, hi, grid_size, log=False):
-    """Grid search then bounded Brent refinement of a 1-D minimax error."""
+def _search_1d(evaluate, lo, hi, grid_size, log=False, target=None):
+    """Grid search then bounded Brent refinement of a 1-D minimax error.
+
+    When the error found lies just above ``target`` (the noise bound: within 1 %), a final
+    golden-section refinement brings it to the rounding level of the fit, so that data
+    whose noise sits exactly at the bound are recognised as consistent.
+    """
     grid = np.geomspace(lo, hi, grid_size) if log else np.linspace(lo, hi, grid_size)
     cache = {}
 
@@ -1113,34 +1155,69 @@ def _search_1d(evaluate, lo, hi, grid_size, log=False):
     i = int(np.argmin(errs))
     a = grid[max(i - 1, 0)]
     b = grid[min(i + 1, grid.size - 1)]
+    converged = False
     if b > a:
-        minimize_scalar(g, bounds=(a, b), method="bounded",
-                        options={"xatol": 1e-4 * (hi - lo), "maxiter": 25})
+        res = minimize_scalar(g, bounds=(a, b), method="bounded",
+                              options={"xatol": 1e-4 * (hi - lo), "maxiter": 25})
+        converged = bool(res.success)
     vbest = min(cache, key=lambda v: cache[v].error)
+    # final local refinement: the minimax error is V-shaped (non-smooth) at its minimum, so
+    # the first search leaves the parameter ~xatol off, i.e. an error above the optimum by
+    # ~slope * 1e-4 (hi - lo). Noise at exactly the bound makes the optimum *equal* to the
+    # bound, so shrink that excess to the rounding level of the fit itself (scipy's bounded
+    # Brent stops at ~1.5e-8 |v|, too coarse: golden section, on the grid bracket when the
+    # first search did not converge).
+    if target is not None and target < cache[vbest].error <= 1.01 * target:
+        span = 3e-4 * (hi - lo)
+        if converged:
+            a, b = max(a, vbest - span), min(b, vbest + span)
+        _golden(g, a, b, 1e-14 * (hi - lo), stop=target)
+        vbest = min(cache, key=lambda v: cache[v].error)
     return vbest, cache[vbest], len(cache)
 
 
-def _fit_candidate(name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay):
+def _golden(g, a, b, xtol, max_iter=90, stop=None):
+    """Golden-section search of ``g`` on ``[a, b]`` down to a bracket of width ``xtol``
+    (or until a value ``<= stop`` is found)."""
+    if not b > a:
+        return
+    r = 0.5 * (np.sqrt(5.0) - 1.0)
+    c, d = b - r * (b - a), a + r * (b - a)
+    fc, fd = g(c), g(d)
+    for _ in range(max_iter):
+        if b - a <= xtol or (stop is not None and min(fc, fd) <= stop):
+            break
+        if fc <= fd:
+            b, d, fd = d, c, fc
+            c = b - r * (b - a)
+            fc = g(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + r * (b - a)
+            fd = g(d)
+
+
+def _fit_candidate(name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay, target=None):
     U = float(np.max(np.abs(u)))
     if name == "offset":
         f, Phi = _design(s, u, do_refit, offset=True)
-        fit = _minimax(y, f, Phi, skip, coef_box)
+        fit = _minimax(y, f, Phi, skip, coef_box, target=target)
         return float(fit.z[-1]), fit, fit.lower, 1, True
     if name == "delay":
         best = None
         lows = []
         for d in range(1, max_delay + 1):
             f, Phi = _design(s, u, do_refit, delay=d)
-            fit = _minimax(y, f, Phi, skip, coef_box)
+            fit = _minimax(y, f, Phi, skip, coef_box, target=target)
             lows.append(fit.lower)
             if best is None or fit.error < best[1].error:
                 best = (d, fit)
         return float(best[0]), best[1], float(min(lows)), max_delay, True
     if name == "extra_pole":
         def ev(p):
-            return _minimax(y, *_design(s, u, do_refit, pole=p), skip, coef_box)
+            return _minimax(y, *_design(s, u, do_refit, pole=p), skip, coef_box, target=target)
 
-        v, fit, n = _search_1d(ev, -0.9, 0.98, grid_size)
+        v, fit, n = _search_1d(ev, -0.9, 0.98, grid_size, target=target)
         return v, fit, fit.lower, n, False
     if name in _INPUT_OPS:
         if U == 0:
@@ -1149,9 +1226,11 @@ def _fit_candidate(name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay
                   "saturation": (0.05, 0.999)}[name]
 
         def ev(v):
-            return _minimax(y, *_design(s, u, do_refit, op=(name, v)), skip, coef_box)
+            return _minimax(y, *_design(s, u, do_refit, op=(name, v)), skip, coef_box,
+                            target=target)
 
-        v, fit, n = _search_1d(ev, lo * U, hi * U, grid_size, log=(name != "saturation"))
+        v, fit, n = _search_1d(ev, lo * U, hi * U, grid_size, log=(name != "saturation"),
+                               target=target)
         return v, fit, fit.lower, n, False
     raise ParameterValidationError(f"unknown candidate {name!r}.")  # pragma: no cover
 
@@ -1199,15 +1278,10 @@ def _validate(model, u, y, noise_bound, refit, skip):
         raise DataValidationError(
             f"u has {u.size} samples but y has {y.size}; pass aligned input/output records."
         )
-    try:
-        if isinstance(noise_bound, (str, bytes)):
-            raise TypeError
-        nb = float(noise_bound)
-    except (TypeError, ValueError) as exc:
-        raise ParameterValidationError(
-            "noise_bound must be a single positive number (the bound |eta_t| <= noise_bound)."
-        ) from exc
-    if not np.isfinite(nb) or nb <= 0:
+    nb = as_real("noise_bound", noise_bound,
+                 want="noise_bound must be a single positive number (the bound "
+                      "|eta_t| <= noise_bound), e.g. noise_bound=0.05")
+    if nb <= 0:
         raise ParameterValidationError(
             f"noise_bound must be a finite number > 0; got {noise_bound!r}."
         )
@@ -1227,6 +1301,7 @@ def _validate(model, u, y, noise_bound, refit, skip):
             "cannot be compared with data that were not excited - record data with a "
             "varying input."
         )
+    check_scale("diagnose", {"u": u, "y": y}, {"noise_bound": nb})
     s = _as_structure(model)
     return s, u, y, nb, refit == "linear", skip
 
@@ -1327,13 +1402,12 @@ def diagnose(
         s, u, y, nb, do_refit, skip, window, max_delay, coef_box
     )
     gap_before = base_fit.error
-    tol = nb * (1 + _REL_TOL)
-    consistent_before = gap_before <= tol
+    consistent_before = not np.any(_outside(y, base_fit.prediction, nb, skip))
     base_model = _rebuild(s, do_refit, base_fit)
     frac_before = disagreement.fraction_outside
 
     def frac(pred):
-        return float(np.mean(np.abs((y - pred)[skip:]) > nb))
+        return float(np.mean(_outside(y, pred, nb, skip)[skip:]))
 
     # step 2: refit every candidate (also when the model is already consistent, so that
     # the report always carries the evidence for each of them)
@@ -1341,7 +1415,7 @@ def diagnose(
     cand_models = {}
     for name in names:
         value, fit, lower, n_ev, exhaustive = _fit_candidate(
-            name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay
+            name, s, u, y, do_refit, skip, coef_box, grid_size, max_delay, target=nb
         )
         refined = _rebuild(s, do_refit, fit, effect=name, value=value,
                            offset=(name == "offset"))
@@ -1357,7 +1431,7 @@ def diagnose(
                 value=float(value),
                 minimax_error=err,
                 lower_bound=min(lower, err),
-                consistent=err <= tol,
+                consistent=not np.any(_outside(y, pred, nb, skip)),
                 fraction_outside=frac(pred),
                 improvement=gap_before / err if err > 0 else float("inf"),
                 exhaustive=exhaustive,
@@ -1430,7 +1504,7 @@ def diagnose(
         gap_after=gap_after,
         noise_bound=nb,
         consistent_before=consistent_before,
-        consistent_after=gap_after <= tol,
+        consistent_after=not np.any(_outside(y, pred_after, nb, skip)),
         fraction_outside_before=frac_before,
         fraction_outside_after=frac(pred_after),
         refined_model=refined,

@@ -41,6 +41,7 @@ from .exceptions import (
 )
 from .feasible_set import FeasibleSet
 from .relaxations.problem import EIVProblem
+from .validation import as_bound, as_real, as_signal, as_theta, check_excited, check_scale
 
 __all__ = ["LinearEIVSetEstimator", "METHODS"]
 
@@ -48,82 +49,18 @@ METHODS = ("moment", "lp", "exact")
 
 
 def _positive_bound(name, value, n, *, allow_zero=False):
-    """Scalar or per-sample bound -> float array of shape (n,), validated."""
-    if value is None:
-        raise ParameterValidationError(
-            f"{name} must be a number or an array of {n} numbers; got None."
-        )
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ParameterValidationError(
-            f"{name} must be a number or an array of {n} numbers; got {value!r}."
-        ) from exc
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,):
-        raise DataValidationError(
-            f"{name} must be a scalar or have one value per sample (shape ({n},)); "
-            f"got shape {arr.shape}."
-        )
-    if not np.all(np.isfinite(arr)):
-        raise ParameterValidationError(f"{name} must be finite (no NaN or infinity).")
-    if allow_zero:
-        if np.any(arr < 0):
-            raise ParameterValidationError(f"{name} must be >= 0; got min {arr.min():g}.")
-    elif np.any(arr <= 0):
-        raise ParameterValidationError(
-            f"{name} must be > 0 (a bounded-error method needs a positive noise bound); "
-            f"got min {arr.min():g}."
-        )
-    return arr
+    """Scalar or per-sample bound -> float array of shape (n,) (see :mod:`.validation`)."""
+    return as_bound(name, value, n, allow_zero=allow_zero)
 
 
 def _as_signal(name, v):
-    """1-D float signal from a list/array of shape (N,) or (N, 1)."""
-    if hasattr(v, "toarray") or hasattr(v, "tocsr"):
-        raise DataValidationError(f"{name}: sparse input is not supported; pass a dense array.")
-    try:
-        arr = np.asarray(v)
-    except (TypeError, ValueError) as exc:  # ragged nested sequences
-        raise DataValidationError(
-            f"{name} must be a 1-D array of real numbers (shape (N,) or (N, 1)); got a "
-            f"ragged or non-array value ({exc})."
-        ) from exc
-    if arr.dtype == object or np.iscomplexobj(arr) or not (
-        np.issubdtype(arr.dtype, np.number) or arr.dtype == bool
-    ):
-        raise DataValidationError(
-            f"{name} must contain real numbers; got dtype {arr.dtype}."
-        )
-    arr = arr.astype(float)
-    if arr.ndim == 2 and arr.shape[1] == 1:
-        arr = arr[:, 0]
-    if arr.ndim != 1:
-        raise DataValidationError(
-            f"{name} must be a 1-D signal (shape (N,) or (N, 1)); got shape {arr.shape}."
-        )
-    if arr.size == 0:
-        raise DataValidationError(f"{name} is empty; pass at least one sample.")
-    if not np.all(np.isfinite(arr)):
-        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise DataValidationError(
-            f"{name} contains NaN or infinity (first at sample {bad}); remove or repair it."
-        )
-    return arr
+    """1-D float signal from a list/array of shape (N,) or (N, 1) (see :mod:`.validation`)."""
+    return as_signal(name, v)
 
 
 def _theta_vector(theta, p, names):
-    """``theta`` as a float vector of shape (p,), or a DataValidationError saying the order."""
-    try:
-        th = np.asarray(theta, dtype=float)
-    except (TypeError, ValueError):
-        th = None
-    if th is None or th.shape != (p,):
-        raise DataValidationError(
-            f"theta must be {p} numbers of shape ({p},) in order {names}; got {theta!r}."
-        )
-    return th
+    """``theta`` as a finite float vector of shape (p,), else a DataValidationError."""
+    return as_theta(theta, p, names)
 
 
 class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
@@ -147,6 +84,11 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
         cost (order 2 at N = 30 took ~290 s with Clarabel; see ``docs/benchmarks.md``).
+        The relaxation's size is estimated before it is built: above
+        ``rows x moments = 2.5e8`` (order 1 at N ~ 900) the fit raises
+        :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or
+        ``"exact"``), above ``2e7`` it warns (module
+        :mod:`hammerbound.relaxations.moment_size`).
     solver : {"clarabel", "cvxopt", "mosek"}, default "clarabel"
         Conic backend of the moment method.
     solver_options : dict or None
@@ -156,9 +98,21 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         lies in it) and ``|b_j| <= 1e4``.
     tol, max_nodes, time_limit : float, int, float
         Stopping rules of the exact method, per interval end (gap ``<= tol * max(1, |v|)``).
+        An end stopped by ``max_nodes`` or ``time_limit`` reports the best certified outer
+        bound found so far (never wider than the LP bound) with status ``"limit"``, and
+        the fit warns (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends.
+    total_time_limit : float or None, default None
+        Wall-time budget in seconds for the whole fit of the exact method, shared by the
+        ``2 p`` interval ends and the joblib workers (``time_limit`` is per end). It starts
+        when :meth:`fit` is called; the polytopic LP and the first OBBT round always run
+        (set-up, usually well under a second to a few seconds), then each end searches for
+        at most ``min(time_limit, time left)``; ends that find no time left report their
+        LP/OBBT bound with status ``"limit"``. The result is always finite and guaranteed
+        where the LP bound is. ``None``: no total budget. The LP method needs none; the
+        moment method is guarded by its size budget instead (see ``relaxation_order``).
     on_failure : {"box", "raise"}, default "raise"
         Moment method: when a bound cannot be certified, raise :class:`SolverError`
-        (default) or report the a priori (LP) bound for it.
+        (default) or report the LP bound for it (still guaranteed).
     n_jobs : int, default 1
         The ``2 p`` bound problems run in parallel (joblib).
     progress : bool, default False
@@ -205,7 +159,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     def __init__(self, na=2, nb=2, *, b0=False, noise_bound=0.05, steady_state_gain=1.0,
                  method="moment", relaxation_order=1, solver="clarabel", solver_options=None,
                  theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
-                 on_failure="raise", n_jobs=1, progress=False):
+                 total_time_limit=None, on_failure="raise", n_jobs=1, progress=False):
         self.na = na
         self.nb = nb
         self.b0 = b0
@@ -219,6 +173,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.tol = tol
         self.max_nodes = max_nodes
         self.time_limit = time_limit
+        self.total_time_limit = total_time_limit
         self.on_failure = on_failure
         self.n_jobs = n_jobs
         self.progress = progress
@@ -239,6 +194,12 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"time_limit must be a number of seconds >= 0; got {tl!r}."
             )
+        ttl = self.total_time_limit
+        if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
+                                or not ttl >= 0):
+            raise ParameterValidationError(
+                f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
+            )
         if self.nb == 0 and not self.b0:
             raise ParameterValidationError(
                 "B has no coefficient: use nb >= 1 or b0=True."
@@ -256,11 +217,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
             )
-        g = self.steady_state_gain
-        if g is not None and (not isinstance(g, numbers.Real) or not np.isfinite(g) or g == 0):
-            raise ParameterValidationError(
-                f"steady_state_gain must be a finite non-zero number or None; got {g!r}."
-            )
+        as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
+                example="1.0")
         if not (isinstance(self.tol, numbers.Real) and self.tol > 0):
             raise ParameterValidationError(f"tol must be > 0; got {self.tol!r}.")
         if not (isinstance(self.n_jobs, numbers.Integral) and (self.n_jobs >= 1 or self.n_jobs == -1)):
@@ -283,6 +241,11 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         n = x.size
         deta = _positive_bound("noise_bound", self.noise_bound, n)
         dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
+        check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
+        check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
+                    {"noise_bound": deta, "input_bound": dx},
+                    hint=" (scaling X, y and both bounds by the same factor leaves theta "
+                         "unchanged)")
         if n <= max(self.na, self.nb) + 1:
             raise DataValidationError(
                 f"need more than max(na, nb) + 1 = {max(self.na, self.nb) + 1} samples; got {n}."
@@ -327,6 +290,23 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                     "smaller noise bound if justified, or a theta_box with prior knowledge."
                 )
 
+    @staticmethod
+    def _warn_limits(res):
+        """Warn, naming the interval ends, when a search stopped at a node/time limit."""
+        import warnings
+
+        from .exceptions import SearchLimitWarning
+
+        ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in res.infos
+                if i.status == "limit"]
+        if ends:
+            warnings.warn(
+                f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "
+                f"ends ({', '.join(ends)}): their bounds are guaranteed outer bounds (never "
+                "wider than the LP bound) but may be looser than the exact ones; raise "
+                "time_limit / total_time_limit / max_nodes for tighter ones (bound_info_ "
+                "gives each end's status and certified gap).", SearchLimitWarning, stacklevel=3)
+
     # ------------------------------------------------------------------ fit
     def fit(self, X, y, input_bound=0.0, groups=None):
         """Bound the linear block from central input ``X`` and measured output ``y``.
@@ -358,8 +338,21 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
             The data do not bound some parameter inside ``theta_box``.
         SolverError, SolverNotAvailableError, SolverOptionError
             Moment-method backend problems.
+        RelaxationTooLargeError
+            Moment method: the relaxation's estimated size exceeds its budget (checked
+            before any work; use ``method="lp"`` or ``"exact"``).
+
+        Warns
+        -----
+        SearchLimitWarning
+            Exact method: some interval ends stopped at ``max_nodes``, ``time_limit`` or
+            ``total_time_limit``; they are named, and their bounds are still guaranteed.
         """
+        import time
+
+        t_fit = time.time()
         self._check_params()
+        deadline = None if self.total_time_limit is None else t_fit + float(self.total_time_limit)
         problem = self._build_problem(X, y, input_bound, groups)
         from .relaxations.lp import lp_bounds
 
@@ -372,19 +365,29 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
                 res = exact_bounds(problem, tol=self.tol, max_nodes=self.max_nodes,
                                    time_limit=self.time_limit, n_jobs=self.n_jobs,
-                                   progress=self.progress, check_box=False)
+                                   progress=self.progress, check_box=False,
+                                   deadline=deadline)
                 self._check_box(problem, res)
+                self._warn_limits(res)
             else:
                 from .relaxations.moment import moment_bounds
                 from .solvers import get_solver
 
+                from .relaxations.moment_size import (
+                    check_moment_budget,
+                    estimate_moment_relaxation,
+                )
+
                 backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
                 backend.check_options(self.solver_options)
+                # memory/time guard before any work (refuses with the estimate, or warns)
+                check_moment_budget(estimate_moment_relaxation(problem, self.relaxation_order))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
                                     solver_options=self.solver_options, n_jobs=self.n_jobs,
-                                    theta_box=lp.bounds, on_failure=self.on_failure)
+                                    theta_box=lp.bounds, on_failure=self.on_failure,
+                                    fallback=lp.bounds, max_work=float("inf"))
                 res.extra["lp"] = lp
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
             hint = self._box_hint(problem)
@@ -396,7 +399,13 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.problem_ = problem
         self.result_ = res
         self.bounds_ = np.array(res.bounds, dtype=float)
-        self.center_ = self.bounds_.mean(axis=1)
+        if not np.all(np.isfinite(self.bounds_)):  # pragma: no cover - every method clips
+            from .exceptions import SolverError
+
+            raise SolverError(f"internal error: non-finite bounds {self.bounds_.tolist()}; "
+                              "please report it.")
+        # halves first: no overflow for bounds near the float range
+        self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
         self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
         self.coef_ = self.center_
         self.param_names_ = tuple(problem.param_names)
@@ -520,3 +529,117 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         tags.input_tags.one_d_array = True
         tags.target_tags.single_output = True
         return tags
+
+    # ------------------------------------------------------------------ model set (issue 16)
+    def _b_lags(self):
+        return list(range(0 if self.b0 else 1, self.nb + 1))
+
+    def sample(self, n, random_state=None, *, thin=1, seeds=None):
+        """``n`` parameter vectors of the feasible set (22.34), each *certified* feasible.
+
+        Hit-and-run with shrinkage inside :attr:`bounds_` (on the gain hyperplane when
+        ``steady_state_gain`` is set), seeded at the exact method's witnesses and the
+        centre; every sample carries its witness noise sequences. The samples are spread
+        over the set but neither uniform nor independent, and a nonconvex set's
+        components without a seed are missed: see :mod:`hammerbound.modelset.sampling`.
+
+        Parameters
+        ----------
+        n : int
+        random_state : None, int or numpy Generator
+        thin : int, default 1
+            Record one move out of ``thin``.
+        seeds : array of shape (k, p), optional
+            Extra starting points (each is verified first).
+
+        Returns
+        -------
+        CertifiedSamples
+            ``theta`` (n, p) with the certificates ``eta``, ``dx``, ``max_violation``.
+
+        Raises
+        ------
+        SolverError
+            No feasible starting point (fit with ``method="exact"`` or pass ``seeds``).
+        """
+        check_is_fitted(self, "bounds_")
+        from .modelset.sampling import sample_eiv
+
+        starts = [] if seeds is None else [np.asarray(s, float) for s in np.atleast_2d(seeds)]
+        starts += [i.witness for i in self.bound_info_ if getattr(i, "witness", None) is not None]
+        starts.append(self.center_)
+        return sample_eiv(self.problem_, self.bounds_, n, seeds=starts,
+                          random_state=random_state, thin=thin, param_names=self.param_names_)
+
+    def to_transfer_functions(self, n, dt=1.0, random_state=None):
+        """``n`` certified members of the set as discrete ``control.TransferFunction`` (period ``dt``)."""
+        smp = self.sample(n, random_state=random_state)
+        return [self.to_transfer_function(dt=dt, theta=th) for th in smp.theta]
+
+    def frequency_response_bounds(self, omega=None, dt=1.0, *, on_gain_plane=False):
+        """Guaranteed magnitude/phase bounds of every model in :attr:`bounds_`.
+
+        Exact over the orthotope at each frequency (zonotope value sets of ``A`` and
+        ``B``), with guaranteed bounds between grid frequencies as well; see
+        :mod:`hammerbound.modelset.frequency`.
+
+        Parameters
+        ----------
+        omega : array of rad/s, optional
+            Strictly increasing, >= 0. Default: 512 log-spaced points up to ``pi/dt``.
+        dt : float, default 1.0
+            Sampling time of the data (``z = e^{j omega dt}``).
+        on_gain_plane : bool, default False
+            Tighten the magnitude bounds to the orthotope *intersected with the gain
+            equality* (22.8) (every feasible model satisfies it; the box alone cannot
+            express it, which makes the plain envelope wide at low frequencies). The
+            bounds then no longer cover box points off that hyperplane. Needs
+            ``steady_state_gain``.
+
+        Returns
+        -------
+        FrequencyEnvelope
+        """
+        check_is_fitted(self, "bounds_")
+        from .modelset.frequency import check_omega, frequency_envelope
+
+        w = check_omega(omega, dt)
+        if on_gain_plane and self.steady_state_gain is None:
+            raise ParameterValidationError(
+                "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
+                "(or use the plain envelope, on_gain_plane=False)."
+            )
+        gain = float(self.steady_state_gain) if on_gain_plane else None
+        return frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=float(dt),
+                                  gain=gain)
+
+    def uncertainty_weight(self, kind="multiplicative", order=2, dt=1.0, *, margin=0.05,
+                           omega=None, n_grid=8192):
+        """A stable, minimum-phase weight ``W`` bounding the set around the central model.
+
+        ``kind="multiplicative"``: ``|G/G0 - 1| <= |W|``; ``"additive"``: ``|G - G0| <= |W|``,
+        for every ``theta`` in :attr:`bounds_` and *every* frequency (proved on a grid of
+        ``n_grid`` points over ``[0, pi/dt]`` with Lipschitz bounds in between; the proof is
+        returned in ``.certificate``). See :mod:`hammerbound.modelset.uncertainty`.
+
+        Returns
+        -------
+        UncertaintyWeight
+            ``.W`` (control.TransferFunction), ``.central`` (G0), ``.certificate``.
+
+        Raises
+        ------
+        UnboundedSetError
+            Some ``A`` in the box vanishes on the unit circle: no finite weight exists.
+        """
+        check_is_fitted(self, "bounds_")
+        from .modelset.frequency import check_omega
+        from .modelset.uncertainty import KINDS, fit_weight
+
+        if kind not in KINDS:
+            raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
+        check_omega(None, dt)
+        w = None if omega is None else check_omega(omega, dt)
+        return fit_weight(self.bounds_, self.na, self._b_lags(), self.to_transfer_function(dt),
+                          dt=float(dt), kind=kind, order=order, omega=w, margin=margin,
+                          n_grid=n_grid)

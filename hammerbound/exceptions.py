@@ -20,6 +20,11 @@ class ParameterValidationError(HammerboundError, ValueError):
     """A hyper-parameter or model parameter is out of its valid range."""
 
 
+class DataScaleError(DataValidationError):
+    """The data's magnitudes lie outside the range the arithmetic can certify (see
+    :func:`hammerbound.validation.check_scale`); rescale the signals and bounds."""
+
+
 class NotEnoughAmplitudesError(DataValidationError):
     """A backlash side has fewer than two distinct input amplitudes (Remark 22.2)."""
 
@@ -85,3 +90,12 @@ class SolverNotAvailableError(HammerboundError, ValueError):
 
 class SolverOptionError(HammerboundError, TypeError):
     """Unknown or ill-typed solver options."""
+
+
+class RelaxationTooLargeError(HammerboundError, ValueError):
+    """The moment relaxation would exceed its size budget; use method "lp" or "exact"."""
+
+
+class SearchLimitWarning(UserWarning):
+    """A bound search stopped at a node/time limit; the reported bound is still guaranteed
+    (an outer bound, never wider than the LP bound) but may be looser than the exact one."""

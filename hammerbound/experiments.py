@@ -15,6 +15,7 @@ from sklearn.utils import check_random_state
 
 from .exceptions import DataValidationError, ParameterValidationError
 from .systems import Backlash, HammersteinSystem
+from .validation import as_bound, as_real
 
 __all__ = [
     "CHAPTER_AMPLITUDES",
@@ -76,19 +77,9 @@ def _check_system(system):
 
 
 def _noise_bounds(noise_bound, n):
-    """Scalar or per-sample noise bound -> float array of shape (n,)."""
-    try:
-        nb = np.asarray(noise_bound, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ParameterValidationError(
-            f"noise_bound must be a number or an array of {n} numbers; got {noise_bound!r}."
-        ) from exc
-    if nb.ndim != 0 and nb.shape != (n,):
-        raise ParameterValidationError(
-            f"noise_bound must be a scalar or have one value per measured sample ({n}); "
-            f"got shape {nb.shape}."
-        )
-    return np.broadcast_to(nb, (n,)).copy()
+    """Scalar or per-sample noise bound (shape (n,) or (n, 1)) -> float array of shape (n,)."""
+    return as_bound("noise_bound", noise_bound, n, allow_zero=True,
+                    shape_error=ParameterValidationError)
 
 
 def uniform_noise(n: int, bound, random_state=None) -> np.ndarray:
@@ -202,12 +193,7 @@ def prbs(n: int, u_star: float, *, hold: int = 1, random_state=None) -> np.ndarr
         ) from exc
     if n < 1 or hold < 1:
         raise ParameterValidationError("n and hold must be positive integers.")
-    try:
-        u_star = float(u_star)
-    except (TypeError, ValueError) as exc:
-        raise ParameterValidationError(f"u_star must be a finite number > 0; got {u_star!r}.") from exc
-    if not np.isfinite(u_star) or u_star <= 0:
-        raise ParameterValidationError("u_star must be a finite number > 0.")
+    u_star = as_real("u_star", u_star, positive=True, example="1.0")
     draws = _rng(random_state).random(int(np.ceil(n / hold))) < 0.5
     return np.repeat(np.where(draws, u_star, -u_star), hold)[:n]
 

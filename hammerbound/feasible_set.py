@@ -20,6 +20,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from .validation import as_theta
+
 __all__ = [
     "Constraint",
     "Edge",
@@ -99,7 +101,7 @@ class FeasibleSet:
 
     def contains(self, params, tol: float = 0.0) -> bool:
         """Whether ``params`` lies in the orthotope (exact sets override this)."""
-        p = np.asarray(params, dtype=float)
+        p = as_theta(params, self.orthotope.shape[0], self.param_names, name="params")
         return bool(np.all(p >= self.orthotope[:, 0] - tol) and np.all(p <= self.orthotope[:, 1] + tol))
 
 
@@ -125,7 +127,7 @@ class PolygonFeasibleSet(FeasibleSet):
         (``docs/tolerances.md``); ``tol`` is a further relative allowance for the rounding
         of ``a . (m, m c) - b``, relative to the magnitudes of its terms.
         """
-        m, c = np.asarray(params, dtype=float)
+        m, c = as_theta(params, 2, self.param_names, name="params")
         p = np.array([m, m * c])
         A = np.array([k.a for k in self.constraints], dtype=float)
         b = np.array([k.b for k in self.constraints], dtype=float)

@@ -21,9 +21,10 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .backlash import BacklashSetEstimator
-from .eiv import LinearEIVSetEstimator, _as_signal
+from .eiv import LinearEIVSetEstimator
 from .exceptions import DataValidationError, ParameterValidationError
 from .systems import Backlash, HammersteinSystem
+from .validation import as_real, as_signal, as_theta, check_scale
 
 __all__ = ["HammersteinBacklashIdentifier"]
 
@@ -84,7 +85,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     linear : LinearEIVSetEstimator or None
         Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``, unit
         steady-state gain (22.8), order-1 moment relaxation); its ``noise_bound`` bounds
-        the PRBS output errors.
+        the PRBS output errors. To bound the time of stage 2, give it a total budget:
+        ``linear=LinearEIVSetEstimator(method="exact", total_time_limit=60)`` or
+        ``set_params(linear__total_time_limit=60)`` (seconds, shared by all interval ends;
+        ends stopped by it report guaranteed bounds, never wider than the LP ones).
     inner_signal : {"independent", "two-level"}, default "independent"
         How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
         chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
@@ -162,12 +166,16 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 "backlash must be a BacklashSetEstimator and linear a LinearEIVSetEstimator."
             )
-        u = _as_signal("X (PRBS input)", X)
-        yy = _as_signal("y (PRBS output)", y)
+        u = as_signal("X (PRBS input)", X)
+        yy = as_signal("y (PRBS output)", y)
         if u.shape != yy.shape:
             raise DataValidationError(
                 f"X and y must have the same number of samples; got {u.size} and {yy.size}."
             )
+        check_scale("HammersteinBacklashIdentifier.fit", {"X (PRBS input)": u,
+                                                          "y (PRBS output)": yy},
+                    hint=" (the slopes m_l, m_r and theta are unchanged; multiply the bounds "
+                         "on c_l, c_r by s)")
         u_ss, y_ss = _steady_pair(steady_state)
         bl.fit(u_ss, y_ss)
         if self.prbs_level is None:
@@ -182,13 +190,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 )
             u_star = float(levels[1])
         else:
-            try:
-                u_star = float(self.prbs_level)
-            except (TypeError, ValueError) as exc:
-                raise ParameterValidationError(
-                    f"prbs_level must be a number u* > 0 (or None to read it from X); got "
-                    f"{self.prbs_level!r}."
-                ) from exc
+            u_star = as_real("prbs_level", self.prbs_level, positive=True,
+                             want="prbs_level must be a number u* > 0 (or None to read it "
+                                  "from X), e.g. prbs_level=1.0")
         inner = bl.inner_signal_bounds(u_star)  # checks Result 1
         xc, dx = inner.transform(u)
         groups = (u < 0).astype(int) if self.inner_signal == "two-level" else None
@@ -220,16 +224,14 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     def contains(self, gamma, theta) -> bool:
         """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals."""
         check_is_fitted(self, "bounds_")
-        g = np.asarray(gamma, dtype=float)
-        if g.shape != (4,):
-            raise DataValidationError("gamma must be (m_l, c_l, m_r, c_r).")
+        g = as_theta(gamma, 4, ("m_l", "c_l", "m_r", "c_r"), name="gamma")
         in_gamma = np.all((g >= self.gamma_bounds_[:, 0]) & (g <= self.gamma_bounds_[:, 1]))
         return bool(in_gamma) and self.linear_.contains(theta)
 
     def predict(self, X):
         """Output of the central model simulated on input ``X`` from rest."""
         check_is_fitted(self, "bounds_")
-        u = _as_signal("X", X)
+        u = as_signal("X", X)
         return self.system_.simulate(u)
 
     def score(self, X, y, sample_weight=None):
@@ -243,7 +245,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         stage 2 (see :meth:`LinearEIVSetEstimator.one_step_envelope`).
         """
         check_is_fitted(self, "bounds_")
-        u = _as_signal("X", X)
+        u = as_signal("X", X)
         xc, dx = self.inner_bounds_.transform(u)
         return self.linear_.one_step_envelope(xc, y, input_bound=dx)
 
@@ -251,3 +253,31 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         tags = super().__sklearn_tags__()
         tags.input_tags.one_d_array = True
         return tags
+
+    # ------------------------------------------------------------------ model set (issue 16)
+    def sample(self, n, random_state=None):
+        """Certified samples of both blocks: ``(backlash_samples, linear_samples)``.
+
+        The stage-2 set does not depend on which feasible backlash is true (it accounts
+        for all of them through the inner-signal bounds), so the joint set is the product
+        and any pairing of the two sample sets is feasible.
+        """
+        check_is_fitted(self, "bounds_")
+        rng = np.random.default_rng(random_state) if not isinstance(
+            random_state, np.random.Generator) else random_state
+        return self.backlash_.sample(n, random_state=rng), self.linear_.sample(n, random_state=rng)
+
+    def frequency_response_bounds(self, omega=None, dt=1.0, *, on_gain_plane=False):
+        """Envelope of the linear block (see :meth:`LinearEIVSetEstimator.frequency_response_bounds`)."""
+        check_is_fitted(self, "bounds_")
+        return self.linear_.frequency_response_bounds(omega, dt=dt, on_gain_plane=on_gain_plane)
+
+    def uncertainty_weight(self, kind="multiplicative", order=2, dt=1.0, **kwargs):
+        """Weight of the linear block (see :meth:`LinearEIVSetEstimator.uncertainty_weight`)."""
+        check_is_fitted(self, "bounds_")
+        return self.linear_.uncertainty_weight(kind, order, dt, **kwargs)
+
+    def inverse(self, v_range=None, x0=0.0):
+        """Backlash compensator (see :meth:`BacklashSetEstimator.inverse`)."""
+        check_is_fitted(self, "bounds_")
+        return self.backlash_.inverse(v_range=v_range, x0=x0)

@@ -24,12 +24,14 @@ from sklearn.exceptions import NotFittedError
 
 import hammerbound as hb
 from hammerbound.exceptions import (
+    DataScaleError,
     DataValidationError,
     IllPosedBacklashError,
     NotEnoughAmplitudesError,
     OutputExistsError,
     OutputPathError,
     ParameterValidationError,
+    RelaxationTooLargeError,
     ResultOneViolationError,
     SolverNotAvailableError,
     SolverOptionError,
@@ -85,6 +87,12 @@ def stage1():
 @functools.cache
 def stage2():
     return hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, method="lp").fit(x_inner(), y_prbs())
+
+
+@functools.cache
+def identified():
+    return hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05), lin()).fit(
+        u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss()))
 
 
 def lin(**kw):
@@ -455,7 +463,7 @@ CASES: list[ErrorCase] = [
     C("exp-noise-shape", "experiments", "noise bound of the wrong length",
       "square_wave_experiment(system, [1.0, 2.0], [0.1, 0.2, 0.3])",
       lambda: hb.square_wave_experiment(SYS, [1.0, 2.0], [0.1, 0.2, 0.3]),
-      ParameterValidationError, "one value per measured sample"),
+      ParameterValidationError, "one value per sample"),
     C("exp-noise-negative", "experiments", "negative noise bound",
       "prbs_experiment(system, 50, 1.0, -0.05)",
       lambda: hb.prbs_experiment(SYS, 50, 1.0, -0.05),
@@ -526,6 +534,19 @@ CASES: list[ErrorCase] = [
       "diagnose(system, u_prbs, y_prbs, 0.05, candidates=['magic'])",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), 0.05, candidates=["magic"]),
       ParameterValidationError, "choose from"),
+    # ------------------------------------------------------------- stage 2: budgets
+    C("s2-total-time-negative", "stage 2", "negative total time budget",
+      "LinearEIVSetEstimator(method='exact', total_time_limit=-1, ...).fit(x, y)",
+      lambda: lin(method="exact", total_time_limit=-1).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "seconds >= 0"),
+    C("s2-total-time-text", "stage 2", "total time budget given as text",
+      "LinearEIVSetEstimator(method='exact', total_time_limit='10', ...).fit(x, y)",
+      lambda: lin(method="exact", total_time_limit="10").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "None or a number of seconds"),
+    C("s2-moment-too-large", "stage 2", "moment relaxation above its size budget",
+      "LinearEIVSetEstimator(method='moment', relaxation_order=3, ...).fit(x, y)",
+      lambda: lin(method="moment", relaxation_order=3).fit(x_inner(), y_prbs()),
+      RelaxationTooLargeError, "method='lp'"),
     # ------------------------------------------------------------- output paths (CLI)
     C("output-exists", "io", "output file that exists already (CLI without --force)",
       "check_output_file('<tmp>/results.json', force=False)",
@@ -543,6 +564,138 @@ CASES: list[ErrorCase] = [
       "write_report(ident, ..., '<tmp>/report-dir') (or check_output_dir)",
       lambda: _check_report_dir(),
       OutputExistsError, "pass --force"),
+    # ------------------------------------------------------------- model set (issue 16)
+    C("modelset-sample-n", "modelset", "zero samples requested",
+      "LinearEIVSetEstimator(...).fit(x, y).sample(0)",
+      lambda: stage2().sample(0),
+      ParameterValidationError, "integer >= 1"),
+    C("modelset-omega-order", "modelset", "frequencies not increasing",
+      "est.frequency_response_bounds([1.0, 0.5])",
+      lambda: stage2().frequency_response_bounds([1.0, 0.5]),
+      DataValidationError, "np.unique"),
+    C("modelset-dt", "modelset", "sampling time zero",
+      "est.frequency_response_bounds(dt=0)",
+      lambda: stage2().frequency_response_bounds(dt=0),
+      ParameterValidationError, "sampling time > 0"),
+    C("modelset-weight-kind", "modelset", "unknown uncertainty kind",
+      "est.uncertainty_weight('relative')",
+      lambda: stage2().uncertainty_weight("relative"),
+      ParameterValidationError, "multiplicative"),
+    C("modelset-inverse-range", "modelset", "compensator range past the line crossing",
+      "BacklashSetEstimator(0.05).fit(u_ss, y_ss).inverse(v_range=(-50, 50))",
+      lambda: stage1().inverse(v_range=(-50.0, 50.0)),
+      IllPosedBacklashError, "Narrow v_range"),
+    C("modelset-inverse-command", "modelset", "command outside the compensator's range",
+      "inv = est.inverse(); inv.compensate([100.0])",
+      lambda: stage1().inverse().compensate([100.0]),
+      DataValidationError, "wider range"),
+    # ------------------------------------------------------------- issue 13: silent inputs
+    C("s1-well-posed-text", "stage 1", "well_posed_on_data given as text",
+      "BacklashSetEstimator(0.05, well_posed_on_data='no').fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05, well_posed_on_data="no").fit(u_ss(), y_ss()),
+      ParameterValidationError, "True or False"),
+    C("s1-ustar-text", "stage 1", "PRBS level u* given as numeric text",
+      "stage1.check_prbs_level('1.0')",
+      lambda: stage1().check_prbs_level("1.0"),
+      ParameterValidationError, "without quotes"),
+    C("s1-margin-text", "stage 1", "margin given as numeric text",
+      "stage1.suggest_prbs_level(margin='0.5')",
+      lambda: stage1().suggest_prbs_level(margin="0.5"),
+      ParameterValidationError, "without quotes"),
+    C("s1-noise-bool", "stage 1", "noise bound given as a boolean",
+      "BacklashSetEstimator(noise_bound=True).fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator(True).fit(u_ss(), y_ss()),
+      ParameterValidationError, "pass a number"),
+    C("s1-contains-nan", "stage 1", "membership of a NaN parameter in a backlash set",
+      "stage1.left_.contains([nan, 0.06])",
+      lambda: stage1().left_.contains([np.nan, 0.06]),
+      DataValidationError, "pass finite numbers"),
+    C("s2-gain-bool", "stage 2", "steady-state gain given as a boolean",
+      "LinearEIVSetEstimator(steady_state_gain=True, ...).fit(x, y)",
+      lambda: lin(steady_state_gain=True).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "True is not taken as 1"),
+    C("s2-noise-bool", "stage 2", "noise bound given as a boolean",
+      "LinearEIVSetEstimator(noise_bound=True, ...).fit(x, y)",
+      lambda: lin(noise_bound=True).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "pass a number"),
+    C("s2-noise-two-columns", "stage 2", "per-sample noise bound with two columns",
+      "LinearEIVSetEstimator(noise_bound=np.full((N, 2), 0.05), ...).fit(x, y)",
+      lambda: lin(noise_bound=np.full((x_inner().size, 2), 0.05)).fit(x_inner(), y_prbs()),
+      DataValidationError, "one value per sample"),
+    C("s2-contains-nan", "stage 2", "membership of a NaN parameter vector",
+      "stage2.contains([nan, 0.82, 2.15, -1.09])",
+      lambda: stage2().contains([np.nan, 0.82, 2.15, -1.09]),
+      DataValidationError, "pass finite numbers"),
+    C("s2-zero-output", "stage 2", "an all-zero output record with a PRBS input",
+      "LinearEIVSetEstimator(...).fit(x, np.zeros(N))",
+      lambda: lin().fit(x_inner(), np.zeros(x_inner().size)),
+      DataValidationError, "no information"),
+    C("h-zero-output", "identifier", "an all-zero PRBS output",
+      "HammersteinBacklashIdentifier(...).fit(u_prbs, np.zeros(N), steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05), lin()).fit(
+          u_prbs(), np.zeros(u_prbs().size), steady_state=(u_ss(), y_ss())),
+      DataValidationError, "no information"),
+    C("h-contains-nan", "identifier", "membership of a NaN backlash parameter",
+      "identifier.contains([0.25, nan, 0.26, 0.05], theta)",
+      lambda: identified().contains([0.25, np.nan, 0.26, 0.05], [-0.76, 0.82, 2.15, -1.09]),
+      DataValidationError, "pass finite numbers"),
+    C("h-prbs-level-bool", "identifier", "prbs_level given as a boolean",
+      "HammersteinBacklashIdentifier(prbs_level=True).fit(u_prbs, y_prbs, steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier(prbs_level=True).fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "True is not taken as 1"),
+    C("exp-prbs-level-numeric-text", "experiments", "PRBS level given as numeric text",
+      "prbs_experiment(system, 50, '1.0', 0.05)",
+      lambda: hb.prbs_experiment(SYS, 50, "1.0", 0.05),
+      ParameterValidationError, "without quotes"),
+    C("diag-noise-bool", "discrepancy", "noise bound given as a boolean",
+      "diagnose(system, u_prbs, y_prbs, True)",
+      lambda: _diagnose(SYS, u_prbs(), y_prbs(), True),
+      ParameterValidationError, "True is not taken as 1"),
+    C("diag-noise-text", "discrepancy", "noise bound given as numeric text",
+      "diagnose(system, u_prbs, y_prbs, '0.05')",
+      lambda: _diagnose(SYS, u_prbs(), y_prbs(), "0.05"),
+      ParameterValidationError, "without quotes"),
+    # ------------------------------------------------------------- issue 20: data scale
+    C("s1-scale-huge", "stage 1", "data scaled by 1e300",
+      "BacklashSetEstimator(0.05e300).fit(1e300 * u_ss, 1e300 * y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05e300).fit(1e300 * u_ss(), 1e300 * y_ss()),
+      DataScaleError, "rescale"),
+    C("s1-scale-tiny", "stage 1", "data scaled by 1e-300",
+      "BacklashSetEstimator(0.05e-300).fit(1e-300 * u_ss, 1e-300 * y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05e-300).fit(1e-300 * u_ss(), 1e-300 * y_ss()),
+      DataScaleError, "rescale"),
+    C("s1-slope-tiny", "stage 1", "outputs 1e-9 times the inputs (slopes ~1e-10)",
+      "BacklashSetEstimator(0.05e-6).fit(1e3 * u_ss, 1e-6 * y_ss)",
+      lambda: hb.BacklashSetEstimator(0.05e-6).fit(1e3 * u_ss(), 1e-6 * y_ss()),
+      DataScaleError, "slopes are too small"),
+    C("s2-scale-huge", "stage 2", "data scaled by 1e300",
+      "LinearEIVSetEstimator(noise_bound=0.05e300, ...).fit(1e300 * x, 1e300 * y)",
+      lambda: lin(noise_bound=0.05e300).fit(1e300 * x_inner(), 1e300 * y_prbs()),
+      DataScaleError, "leaves theta unchanged"),
+    C("s2-scale-tiny", "stage 2", "data scaled by 1e-300",
+      "LinearEIVSetEstimator(noise_bound=0.05e-300, ...).fit(1e-300 * x, 1e-300 * y)",
+      lambda: lin(noise_bound=0.05e-300).fit(1e-300 * x_inner(), 1e-300 * y_prbs()),
+      DataScaleError, "leaves theta unchanged"),
+    C("h-scale-huge", "identifier", "PRBS data scaled by 1e300",
+      "HammersteinBacklashIdentifier().fit(1e300 * u_prbs, 1e300 * y_prbs, steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier().fit(
+          1e300 * u_prbs(), 1e300 * y_prbs(), steady_state=(u_ss(), y_ss())),
+      DataScaleError, "rescale"),
+    C("diag-scale-tiny", "discrepancy", "data scaled by 1e-300",
+      "diagnose(system, 1e-300 * u_prbs, 1e-300 * y_prbs, 0.05e-300)",
+      lambda: _diagnose(SYS, 1e-300 * u_prbs(), 1e-300 * y_prbs(), 0.05e-300),
+      DataScaleError, "rescale"),
+    # ------------------------------------------------------------- chapter reproduction
+    C("chapter-stage1", "chapter", "unknown stage-1 mode",
+      "reproduce_chapter(stage1='table')",
+      lambda: _chapter().reproduce_chapter("table", N=40, noise_levels=(0.05,), seeds=[0],
+                                           method="lp"),
+      ParameterValidationError, "stage1 must be one of"),
+    C("chapter-level", "chapter", "noise level without a row in Table 22.1",
+      "chapter_inner_bounds(0.1)",
+      lambda: _chapter().chapter_inner_bounds(0.1),
+      ParameterValidationError, "stage1='experiment'"),
 ]
 
 
@@ -559,6 +712,12 @@ def _check_report_dir():
     (CSV_DIR / "report-dir").mkdir(parents=True, exist_ok=True)
     csv_file("report-dir/report.md", "# earlier report\n")
     return check_output_dir(CSV_DIR / "report-dir", REPORT_FILES)
+
+
+def _chapter():
+    import hammerbound.chapter as chapter
+
+    return chapter
 
 
 def run_case(case: ErrorCase) -> BaseException | None:

@@ -151,29 +151,24 @@ def test_identify_json_exact_two_jobs_stdout_is_only_json(data):
 
 def test_demo_json_stdout_is_only_json_and_progress_on_stderr(tmp_path):
     res = run_cli("demo", "--N", 30, 40, "--noise-levels", 0.02, 0.05, "--method", "lp",
-                  "--n-jobs", 2, "--json", cwd=tmp_path)
+                  "--n-jobs", 2, "--seeds", 0, 1, "--json", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert "HiGHS" not in res.stdout
-    doc = json.loads(res.stdout)
-    assert doc["N"] == [30, 40] and doc["noise_levels"] == [0.02, 0.05]
-    assert [r["delta_eta"] for r in doc["stage1"]["rows"]] == [0.02, 0.05]
-    assert [s["N"] for s in doc["stage2"]] == [30, 40]
-    for table in [doc["stage1"]] + doc["stage2"]:
-        for row in table["rows"]:
-            for p in row["parameters"]:
-                assert p["lower"] <= p["true"] <= p["upper"]
-                assert p["true_inside"]
-    assert doc["all_true_inside"] is True
-    # the default report directory was created (it did not exist) and named in the JSON
-    assert Path(tmp_path, doc["report"]).is_file()
-    # progress: one start and one end line per fit, in order, on stderr
+    recs = json.loads(res.stdout)  # one record per table row, nothing else on stdout
+    assert sorted({r["N"] for r in recs if r["N"]}) == [30, 40]
+    assert sorted({r["delta_eta"] for r in recs}) == [0.02, 0.05]
+    assert {r["table"] for r in recs} == {"22.1", "N=30", "N=40"}
+    assert len(recs) == 2 * (6 + 4 + 4)
+    for r in recs:
+        assert r["seeds"] == [0, 1] and len(r["widths"]) == 2
+        assert all(r["inside"]) and r["lower"] <= r["true"] <= r["upper"]
+    # the default report directory was created (it did not exist)
+    assert Path(tmp_path, "demo-report", "report.md").is_file()
+    # progress: one line per fit (2 levels x 2 seeds x 2 N), in order, on stderr
     err = res.stderr.splitlines()
-    starts = [s for s in err if "stage 1 + stage 2 ..." in s]
-    ends = [s for s in err if ": done in " in s and "[" in s]
-    assert [s.split("]")[0] for s in starts] == ["hammerbound demo: [1/4", "hammerbound demo: [2/4",
-                                                 "hammerbound demo: [3/4", "hammerbound demo: [4/4"]
-    assert len(ends) == 4 and "N = 40, delta_eta = 0.05" in ends[-1]
-    assert err.index(starts[1]) > err.index(ends[0])
+    ends = [s for s in err if s.startswith("hammerbound demo: [")]
+    assert [s.split("]")[0] for s in ends] == [f"hammerbound demo: [{k}/8" for k in range(1, 9)]
+    assert "delta_eta=0.05 N=40 seed=1" in ends[-1]
 
 
 def test_demo_text_tables_on_stdout_quiet(tmp_path):

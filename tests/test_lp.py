@@ -283,7 +283,7 @@ def _bad(**kw):
     (_bad(y=np.where(np.arange(12) == 3, np.nan, Y)), DataValidationError),
     (_bad(x=np.where(np.arange(12) == 3, np.inf, X)), DataValidationError),
     (_bad(x=X[:-1]), DataValidationError),
-    (_bad(y=Y[:, None]), DataValidationError),
+    (_bad(y=np.c_[Y, Y]), DataValidationError),
     (_bad(y=["a"] * 12), DataValidationError),
     (_bad(deta=np.full(11, 0.05)), DataValidationError),
     (_bad(deta=-0.05), ParameterValidationError),

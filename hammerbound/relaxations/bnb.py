@@ -40,7 +40,7 @@ import numpy as np
 from ..exceptions import EmptyFeasibleSetError, SolverError
 from .lp import lp_bounds, raise_if_box_limited
 from .mccormick import McCormickRelaxation
-from .problem import EIVProblem, check_theta
+from .problem import EIVProblem, check_theta, equation_scale
 from .result import BoundInfo, IntervalResult
 
 __all__ = ["exact_bounds"]
@@ -48,6 +48,25 @@ __all__ = ["exact_bounds"]
 _SPLIT_CLIP = 0.05
 # after a line search that does not improve the incumbent, wait up to this many nodes
 _MAX_SEARCH_GAP = 16
+
+
+def _limit_lp(lp, seconds):
+    """Let the next solves of ``lp`` (a :class:`._highs.HighsLP`) stop after ``seconds``.
+
+    HiGHS compares its ``time_limit`` with the run clock accumulated over all solves of the
+    object, hence the offset. A solve stopped this way still yields a rigorous (maybe weak)
+    bound from its current duals (:meth:`._highs.HighsLP.solve`).
+    """
+    h = lp.h
+    limit = np.inf if seconds is None or not np.isfinite(seconds) else \
+        h.getRunTime() + max(float(seconds), 1e-3)
+    h.setOptionValue("time_limit", float(min(limit, _highs_inf())))
+
+
+def _highs_inf():
+    from ._highs import INF
+
+    return INF
 
 
 @dataclass
@@ -80,7 +99,6 @@ class _Screen:
         self.na1, self.nbp = na + 1, dx_idx.shape[1]
         self.lb = np.concatenate([-pr.deta, -pr.dx_group, [0.0]])
         self.ub = np.concatenate([pr.deta, pr.dx_group, [highspy.kHighsInf]])
-        self.tol = 1e-9 * (1.0 + float(np.max(np.abs(pr.y))))
         # fixed sparsity of A = [[M, -1], [M, 1]] (column-major, duplicates summed): only the
         # values depend on theta, gathered from the contributions with one bincount
         nc = self.rows.size
@@ -136,8 +154,14 @@ class _Screen:
         self.basis = self.h.getBasis()
         return float(self.h.getInfo().objective_function_value)
 
+    def tol_at(self, theta) -> float:
+        """Screening tolerance: the strictest equation tolerance of :func:`check_theta`."""
+        from ..tolerances import FEASIBILITY_RTOL
+
+        return FEASIBILITY_RTOL * float(np.min(equation_scale(self.problem, theta)))
+
     def screens(self, theta) -> bool:
-        return self.violation(theta) <= self.tol
+        return self.violation(theta) <= self.tol_at(theta)
 
 
 @dataclass
@@ -148,6 +172,10 @@ class _Pool:
     points: list = field(default_factory=list)
     screen: _Screen | None = None
     checks: int = 0
+    stop_at: float | None = None  # time.perf_counter() after which heuristics give up
+
+    def _out_of_time(self) -> bool:
+        return self.stop_at is not None and time.perf_counter() > self.stop_at
 
     def verify(self, theta) -> _Point | None:
         """Accept ``theta`` only if :func:`check_theta` says it is feasible."""
@@ -167,20 +195,23 @@ class _Pool:
             self.screen = _Screen(self.problem)
 
     def add(self, theta) -> _Point | None:
-        """Screen, then verify."""
+        """Screen, then verify (nothing once ``stop_at`` has passed)."""
+        if self._out_of_time():
+            return None
         self._ensure_screen()
         if not self.screen.screens(theta):
             return None
         return self.verify(theta)
 
-    def seek(self, starts, box, max_evals=800) -> _Point | None:
+    def seek(self, starts, box, max_evals=800, deadline=None) -> _Point | None:
         """Look for a first verified point when none of the LP points is feasible.
 
         Thin feasible sets (the two-level inner signal, high noise) may contain none of the
         relaxation's points. Starting from ``starts`` (projected onto the gain equality
         (22.8), if any), Nelder-Mead minimises the screening violation (zero on the set)
         plus the distance outside ``box``, in the coordinates of the gain hyperplane; the
-        first screened point that :func:`check_theta` accepts is returned.
+        first screened point that :func:`check_theta` accepts is returned. The search gives
+        up (returns None) at ``deadline`` (a :func:`time.time` timestamp), if given.
         """
         from scipy.optimize import minimize
 
@@ -197,16 +228,21 @@ class _Pool:
         class _Found(Exception):
             pass
 
+        class _Stop(Exception):
+            pass
+
         for start in starts:
             th0 = _on_gain_plane(pr, start)
 
             def f(z, th0=th0):
+                if deadline is not None and time.time() > deadline:
+                    raise _Stop
                 th = th0 + basis @ z
                 out = np.maximum(box[:, 0] - th, 0.0) + np.maximum(th - box[:, 1], 0.0)
                 if out.any():
                     return float(np.sum(out)) + 1.0
                 v = self.screen.violation(th)
-                if v <= self.screen.tol and self.verify(th) is not None:
+                if v <= self.screen.tol_at(th) and self.verify(th) is not None:
                     raise _Found
                 return v
 
@@ -216,6 +252,8 @@ class _Pool:
                                   "initial_simplex": None})
             except _Found:
                 return self.points[-1]
+            except _Stop:
+                return None
         return None
 
     def line_search(self, inside, outside, steps=20, k=None, resolution=0.0) -> _Point | None:
@@ -230,7 +268,7 @@ class _Pool:
         d = outside - inside
         span = abs(float(d[k])) if k is not None else np.inf
         for _ in range(steps):
-            if (hi - lo) * span <= resolution:
+            if (hi - lo) * span <= resolution or self._out_of_time():
                 break
             mid = 0.5 * (lo + hi)
             if self.screen.screens(inside + mid * d):
@@ -238,7 +276,7 @@ class _Pool:
             else:
                 hi = mid
         for _ in range(3):
-            if lo <= 0.0:
+            if lo <= 0.0 or self._out_of_time():
                 return None
             pt = self.verify(inside + lo * d)
             if pt is not None:
@@ -256,15 +294,22 @@ def _on_gain_plane(problem, theta):
     return theta + g[0] * (g[1] - g[0] @ theta) / float(g[0] @ g[0])
 
 
-def _obbt_task(problem, box, tasks, bases):
+def _obbt_task(problem, box, tasks, bases, deadline=None):
     """Solve the OBBT LPs ``tasks`` (list of (k, sense)) on one McCormick model.
 
     Returns a list of ``(bound, theta (p,) or None, x or None, basis)`` where ``bound``
-    is a rigorous lower bound of ``min sense * theta_k`` over the relaxation.
+    is a rigorous lower bound of ``min sense * theta_k`` over the relaxation (``-inf``
+    for a task skipped or cut short at ``deadline``, a :func:`time.time` timestamp).
     """
     relax = McCormickRelaxation(problem, box)
     out = []
     for (k, s), basis in zip(tasks, bases, strict=True):
+        if deadline is not None:
+            left = deadline - time.time()
+            if left <= 0:
+                out.append((-np.inf, None, basis, 0))
+                continue
+            _limit_lp(relax.lp, left)
         c = np.zeros(relax.ncol)
         c[k] = s
         relax.lp.set_cost(c)
@@ -279,11 +324,14 @@ def _obbt_task(problem, box, tasks, bases):
     return out
 
 
-def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
+def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, deadline=None):
     """Optimality-based bound tightening of the theta box on the McCormick relaxation.
 
     Each round solves ``min/max theta_k`` (k = 1..p) over the relaxation on the current
     box (in parallel when ``n_jobs > 1``) and shrinks the box with the rigorous bounds.
+    Every LP stops at ``deadline`` (a :func:`time.time` timestamp, if given) with the
+    rigorous bound of its current duals; no further round starts after it. Every round's
+    box is a valid outer box.
 
     Returns
     -------
@@ -305,12 +353,13 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
     for _ in range(rounds):
         old = box.copy()
         if nj == 1:
-            res = _obbt_task(problem, box, tasks, [bases[t] for t in tasks])
+            res = _obbt_task(problem, box, tasks, [bases[t] for t in tasks], deadline)
             res = dict(zip(tasks, res, strict=True))
         else:
             from joblib import delayed
 
-            outs = parallel(delayed(_obbt_task)(problem, box, ch, [bases[t] for t in ch])
+            outs = parallel(delayed(_obbt_task)(problem, box, ch, [bases[t] for t in ch],
+                                                deadline)
                             for ch in chunks)
             res = {t: o for ch, oc in zip(chunks, outs, strict=True)
                    for t, o in zip(ch, oc, strict=True)}
@@ -332,6 +381,8 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None):
         w_old = old[:, 1] - old[:, 0]
         w_new = box[:, 1] - box[:, 0]
         if np.all(w_new >= (1 - rel_improve) * w_old):
+            break
+        if deadline is not None and time.time() >= deadline:
             break
     return box, roots, thetas
 
@@ -397,28 +448,90 @@ class _Search:
     solver_value: float
 
 
+def _box_end(box, k, sense):
+    """The end of ``box`` that bounds ``min sense * theta_k`` from below."""
+    return float(box[k, 0]) if sense > 0 else -float(box[k, 1])
+
+
+class _GapBar:
+    """Progress bar of one interval end: the fraction of its initial certified gap closed.
+
+    The gap is "best verified value minus certified outer bound" (before a verified point
+    exists, the width of the root box in ``theta_k`` stands for the value); the search is
+    done when the gap is below ``tol``, so 100 % means done. The postfix shows the gap,
+    the nodes and the time left before the time limit stops the search.
+    """
+
+    def __init__(self, label, position, gap0, stop_at):
+        from tqdm.auto import tqdm
+
+        self.gap0 = max(float(gap0), 1e-300)
+        self.stop_at = stop_at
+        self.shown = 0.0
+        self.bar = tqdm(total=100.0, position=position, leave=False, desc=label,
+                        bar_format="{desc}: {percentage:3.0f}% of gap closed |{bar}| "
+                                   "{elapsed} {postfix}")
+
+    def update(self, gap, target, nodes):
+        gap = max(float(gap), 0.0)
+        done = 1.0 - max(gap - target, 0.0) / max(self.gap0 - target, 1e-300)
+        pct = 100.0 * min(max(done, 0.0), 1.0)
+        left = self.stop_at - time.perf_counter()
+        self.bar.set_postfix_str(f"gap {gap:.3g}, {nodes} nodes, stops within {max(left, 0):.0f} s"
+                                 if np.isfinite(left) else f"gap {gap:.3g}, {nodes} nodes",
+                                 refresh=False)
+        if pct > self.shown:
+            self.bar.update(pct - self.shown)
+            self.shown = pct
+        else:
+            self.bar.update(0)
+
+    def close(self):
+        self.bar.close()
+
+
 def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, progress,
-            position):
+            position, deadline=None):
     """Minimise ``sense * theta_k`` over the EIV set by branch-and-bound (one interval end).
 
-    ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None).
+    ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None). ``box0`` is the
+    OBBT box, a certified outer box: the returned bound is never below its end (monotone
+    knowledge), also when a limit stops the search. The search runs for at most
+    ``time_limit`` seconds and stops at ``deadline`` (a :func:`time.time` timestamp, the
+    total budget of the fit); an end whose budget is used up before it starts reports the
+    box end with status ``"limit"``.
     """
     t0 = time.perf_counter()
     p = problem.p
     box0 = np.array(box0, dtype=float)
-    relax = McCormickRelaxation(problem, box0)
-    c = np.zeros(relax.ncol)
-    c[k] = sense
-    relax.lp.set_cost(c)
-    pool = _Pool(problem, list(points))
+    end0 = _box_end(box0, k, sense)
 
     def val(theta):
         return sense * float(theta[k])
 
+    limit = float(time_limit)
+    by_budget = False
+    if deadline is not None and deadline - time.time() < limit:
+        limit, by_budget = deadline - time.time(), True
+    if limit <= 0 and by_budget:
+        inc = min(points, key=lambda q: val(q.theta), default=None)
+        ub = val(inc.theta) if inc is not None else np.inf
+        bound = min(end0, ub)
+        return _Search(bound, ub, inc, 0, time.perf_counter() - t0, "limit",
+                       "not searched: the total time budget (total_time_limit) was used up "
+                       "before this end started; the LP/OBBT outer bound is reported",
+                       0, np.nan)
+    stop_at = t0 + limit
+    relax = McCormickRelaxation(problem, box0)
+    c = np.zeros(relax.ncol)
+    c[k] = sense
+    relax.lp.set_cost(c)
+    pool = _Pool(problem, list(points), stop_at=stop_at)
+
     inc = min(pool.points, key=lambda q: val(q.theta), default=None)
     ub = val(inc.theta) if inc is not None else np.inf
     interior = np.mean([q.theta for q in pool.points], axis=0) if pool.points else None
-    if interior is not None and pool.verify(interior) is None:
+    if interior is not None and (pool._out_of_time() or pool.verify(interior) is None):
         interior = inc.theta
     width0 = box0[:, 1] - box0[:, 0]
     min_w = 1e-12 * np.maximum(1.0, np.abs(box0).max(axis=1))
@@ -427,9 +540,9 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     pending = None  # (lb, box, precomputed LPSolve-like (bound, x))
     if root is not None and root[1] is not None:
         relax.lp.set_basis(root[2])
-        pending = (max(-np.inf, root[0]), box0, root[1])
+        pending = (max(end0, root[0]), box0, root[1])
     else:
-        heap.append((-np.inf, counter, box0))
+        heap.append((end0, counter, box0))
         counter += 1
     closed_lb = np.inf  # min bound over leaves closed by bound (not by infeasibility)
     last_try, try_gap = -1, 1
@@ -438,11 +551,10 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     status = "optimal"
     root_value = np.nan
     bar = None
+    top = end0 + float(width0[k])  # sup of sense * theta_k over the root box
     if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=max_nodes, position=position, leave=False,
-                   desc=f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}")
+        bar = _GapBar(f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}", position,
+                      min(ub, top) - end0, stop_at)
     while heap or pending is not None:
         tol_eff = tol * max(1.0, abs(ub)) if np.isfinite(ub) else 0.0
         rc = None
@@ -454,7 +566,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         else:
             if heap[0][0] >= ub - tol_eff:
                 break
-            if nodes >= max_nodes or time.perf_counter() - t0 > time_limit:
+            if nodes >= max_nodes or time.perf_counter() > stop_at:
                 status = "limit"
                 break
             lb_parent, _, box = heapq.heappop(heap)
@@ -466,6 +578,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                     continue
             relax.set_box(box)
             relax.lp.set_cutoff(ub - tol_eff if np.isfinite(ub) else None)
+            _limit_lp(relax.lp, stop_at - time.perf_counter())
             res = relax.lp.solve()
             nodes += 1
             iters += res.iterations
@@ -478,7 +591,8 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             if nodes == 1 and x is not None:
                 root_value = res.value
         if bar is not None:
-            bar.update(1)
+            lb_now = max(end0, min(closed_lb, lb, heap[0][0] if heap else np.inf))
+            bar.update(min(ub, top) - lb_now, tol_eff, nodes)
         if lb >= ub - tol_eff:
             closed_lb = min(closed_lb, lb)
             continue
@@ -539,12 +653,21 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         bar.close()
     open_lb = min((h[0] for h in heap), default=np.inf)
     bound = min(closed_lb, open_lb, ub)
-    gap = ub - bound
+    # monotone knowledge: the OBBT box end is a certified bound as well (a leaf LP that
+    # failed, or the root of a search stopped at once, may carry -inf); +inf (every leaf
+    # certified infeasible, no verified point) is kept: exact_bounds reports the empty set
+    bound = max(bound, min(end0, ub))
+    gap = max(ub - bound, 0.0)
     elapsed = time.perf_counter() - t0
     if status == "limit":
-        msg = (f"stopped by the {'node' if nodes >= max_nodes else 'time'} limit "
-               f"({nodes} nodes, {elapsed:.1f} s): the bound is a valid outer bound, "
-               f"certified gap {gap:.3g}")
+        if nodes >= max_nodes:
+            why = "node limit (max_nodes)"
+        elif by_budget:
+            why = "total time budget (total_time_limit)"
+        else:
+            why = "time limit (time_limit)"
+        msg = (f"stopped by the {why} ({nodes} nodes, {elapsed:.1f} s): the bound is a valid "
+               f"outer bound, certified gap {gap:.3g}")
     elif not np.isfinite(ub):
         status = "limit"
         msg = "no verified-feasible point found: only the outer bound is certified"
@@ -563,8 +686,14 @@ def exact_bounds(
     theta_box=None,
     *,
     check_box: bool = True,
+    total_time_limit: float | None = None,
+    deadline: float | None = None,
 ) -> IntervalResult:
     """Tight parameter uncertainty intervals (22.35)-(22.37) with a certificate.
+
+    Every end starts from, and never reports wider than, the polytopic LP bound
+    (:func:`.lp.lp_bounds`) shrunk by OBBT: a node or time limit returns the best certified
+    outer bound found so far (status ``"limit"``), never a wider or infinite one.
 
     Parameters
     ----------
@@ -585,6 +714,15 @@ def exact_bounds(
         A priori box replacing ``problem.theta_box``.
     check_box : bool, default True
         Raise :class:`UnboundedSetError` when a bound coincides with the a priori box.
+    total_time_limit : float or None, default None
+        Wall-time budget (s) of the whole call, shared by the ``2 p`` ends and the joblib
+        workers: each end searches for at most ``min(time_limit, time left)``; the LP and
+        the first OBBT round always run (set-up), further OBBT rounds and the search for a
+        first feasible point only while time is left; an end that has no time left when it
+        starts reports its LP/OBBT bound with status ``"limit"``.
+    deadline : float or None, default None
+        The same budget as an absolute :func:`time.time` timestamp (e.g. shared with other
+        steps of a fit); with both, the earlier one counts.
 
     Returns
     -------
@@ -604,6 +742,13 @@ def exact_bounds(
         An exact bound coincides with the a priori box.
     """
     t0 = time.perf_counter()
+    if total_time_limit is not None:
+        end = time.time() + float(total_time_limit)
+        deadline = end if deadline is None else min(deadline, end)
+
+    def time_left():
+        return deadline is None or time.time() < deadline
+
     if theta_box is not None:
         problem = problem.with_theta_box(theta_box)
     lp = lp_bounds(problem, check_box=False)
@@ -616,17 +761,19 @@ def exact_bounds(
         parallel = Parallel(n_jobs=n_jobs)
         parallel.__enter__()
     try:
-        box, roots, thetas = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel)
+        box, roots, thetas = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel,
+                                   deadline=deadline)
         pool = _Pool(problem)
-        for th in thetas:
-            pool.add(th)
         starts = ([np.mean(thetas, axis=0)] if thetas else []) + [box.mean(axis=1)]
-        for th in starts:
-            pool.add(_on_gain_plane(problem, th))
-        if not pool.points:
-            pool.seek(starts, box)
+        for th in list(thetas) + [_on_gain_plane(problem, th) for th in starts]:
+            if not time_left():
+                break
+            pool.add(th)
+        if not pool.points and time_left():
+            pool.seek(starts, box, deadline=deadline)
         pts = pool.points
-        args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress)
+        args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
+                    deadline=deadline)
         if parallel is None:
             outs = [_search(problem, box, k, s, pts, roots.get((k, s)), position=i, **args)
                     for i, (k, s) in enumerate(jobs)]
@@ -653,14 +800,17 @@ def exact_bounds(
     for (k, s), o in zip(jobs, outs, strict=True):
         e = 0 if s > 0 else 1
         bounds[k, e] = s * o.bound
+        # never wider than the LP bound (the OBBT box lies inside it; kept explicit)
+        bounds[k, e] = max(bounds[k, e], lp.bounds[k, 0]) if e == 0 else \
+            min(bounds[k, e], lp.bounds[k, 1])
         wit = o.witness
         if wit is not None:
             inner[k, e] = wit.theta[k]
         infos.append(BoundInfo(
-            param=names[k], sense="min" if s > 0 else "max", bound=float(s * o.bound),
+            param=names[k], sense="min" if s > 0 else "max", bound=float(bounds[k, e]),
             solver_value=float(s * o.solver_value), status=o.status, certified=True,
             time=o.time, iterations=o.iterations,
-            gap=float(o.value - o.bound) if np.isfinite(o.value) else None,
+            gap=max(float(o.value - o.bound), 0.0) if np.isfinite(o.value) else None,
             witness=None if wit is None else wit.theta.copy(), nodes=o.nodes, message=o.message,
             extra={} if wit is None else {"eta": wit.eta, "dx": wit.dx,
                                           "value": float(wit.theta[k])},

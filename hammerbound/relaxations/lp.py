@@ -12,7 +12,9 @@ values are linear, so the orthant's part of the outer set is the polytope::
     (phi_t - q_t) . theta <= deta_t - y_t,   (-phi_t - q_t) . theta <= deta_t + y_t,
     q_t = [s_i deta_{t-i} (i = 1..na), s_j dx_{g(t-j)} (j in b_lags)],
 
-intersected with ``theta_box``, the orthant and the gain equality (22.8). The parameter
+intersected with ``theta_box``, the orthant and the gain equality (22.8); every row's
+right-hand side is relaxed outward by ``FEASIBILITY_RTOL`` times the magnitudes of its
+terms (:mod:`hammerbound.tolerances`). The parameter
 uncertainty intervals (22.35) of the union are the min/max over the feasible orthants.
 Every reported number is a *guaranteed* bound (dual bound, see :mod:`._highs`).
 """
@@ -26,6 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
+from ..tolerances import feasibility_tol
 from ._highs import HighsLP
 from .problem import EIVProblem
 from .result import BoundInfo, IntervalResult
@@ -71,8 +74,12 @@ def orthant_polytope(problem: EIVProblem, signs, n_eq: int | None = None):
     dx_idx = problem.dx_index()[:m]
     q = np.hstack([problem.deta[eta_idx[:, 1:]], problem.dx_group[dx_idx]]) * s[None, :]
     d = problem.deta[eta_idx[:, 0]]
+    # tolerance policy (hammerbound.tolerances): every row is relaxed outward by the
+    # relative tolerance of the magnitudes of its terms (at unit coefficients), so that
+    # rounding in the data (e.g. noise exactly at +-deta) never cuts a consistent theta
+    tol = feasibility_tol(yt, np.abs(phi).sum(axis=1), d, np.abs(q).sum(axis=1))
     A_ub = np.vstack([phi - q, -phi - q])
-    b_ub = np.concatenate([d - yt, d + yt])
+    b_ub = np.concatenate([d - yt + tol, d + yt + tol])
     g = problem.gain_row()
     if g is None:
         A_eq, b_eq = np.zeros((0, problem.p)), np.zeros(0)

@@ -348,6 +348,8 @@ def moment_bounds(
     theta_box=None,
     *,
     on_failure: str = "box",
+    fallback=None,
+    max_work: float | None = None,
 ) -> IntervalResult:
     """Guaranteed parameter uncertainty intervals (22.35) from the sparse moment relaxation.
 
@@ -370,8 +372,21 @@ def moment_bounds(
         A priori box (default ``problem.theta_box``), e.g. from the polytopic LP bounds. The
         reported intervals always lie inside it.
     on_failure : {"box", "raise"}
-        When no certificate can be computed for a bound: report the box end
-        (``certified=False``) or raise :class:`SolverError`.
+        When no certificate can be computed for a bound: report the fallback end
+        (``certified=False``: the bound is still guaranteed, by the fallback's certificate)
+        or raise :class:`SolverError`.
+    fallback : ndarray, shape (p, 2), optional
+        Certified outer bounds already known (e.g. the polytopic LP result): every reported
+        interval is intersected with it, and it is what ``on_failure="box"`` falls back to.
+        Default: ``theta_box`` when one is given (the estimator passes the LP bounds),
+        else the polytopic LP bounds computed here, so a failed certificate never reports
+        the (wider) a priori box where the LP bound is tighter.
+    max_work : float, optional
+        Size budget ``rows x moments`` of the relaxation, checked *before* it is built
+        (:mod:`.moment_size`); default ``MOMENT_MAX_WORK = 2.5e8`` (about 1 GB and ten
+        minutes of build time; order 1 with ``na = nb = 2`` reaches it at N ~ 900).
+        Above ``MOMENT_WARN_WORK = 2e7`` a :class:`RuntimeWarning` is issued; ``inf``
+        skips the check (and the warning).
 
     Returns
     -------
@@ -385,12 +400,40 @@ def moment_bounds(
         Unknown/missing solver or options.
     SolverError
         With ``on_failure="raise"`` when a bound cannot be certified.
+    RelaxationTooLargeError
+        The relaxation's estimated size exceeds ``max_work`` (the message gives the
+        estimate and the alternatives ``method="lp"`` / ``"exact"``).
     """
+    from .moment_size import check_moment_budget, estimate_moment_relaxation
+
     if on_failure not in ("box", "raise"):
         raise ParameterValidationError("on_failure must be 'box' or 'raise'.")
     t_start = time.perf_counter()
     backend = get_solver(solver)
     opts = backend.check_options(solver_options)
+    if theta_box is not None:
+        tb = np.asarray(theta_box, dtype=float)
+        if tb.shape != (problem.p, 2) or not np.all(np.isfinite(tb)) or np.any(
+            tb[:, 0] > tb[:, 1]
+        ):
+            raise ParameterValidationError(
+                f"theta_box must be a finite ({problem.p}, 2) array with lower <= upper."
+            )
+    if int(order) == order and order >= 1 and not max_work == np.inf:
+        # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
+        size = estimate_moment_relaxation(problem, order, theta_box)
+        check_moment_budget(size, max_work=max_work)
+    if fallback is None:
+        if theta_box is not None:
+            fallback = np.asarray(theta_box, dtype=float)
+        else:
+            from .lp import lp_bounds
+
+            fallback = lp_bounds(problem, check_box=False).bounds
+    fallback = np.asarray(fallback, dtype=float)
+    if fallback.shape != (problem.p, 2):
+        raise ParameterValidationError(
+            f"fallback must be an array of shape ({problem.p}, 2); got {fallback.shape}.")
     relax = MomentRelaxation(problem, order, theta_box)
     t_build = time.perf_counter() - t_start
     box = relax.box
@@ -414,7 +457,9 @@ def moment_bounds(
     infos = []
     for (jid, sol, vb, err), (k, sense, _q, _q0) in zip(results, objs, strict=True):
         assert jid == len(infos)
-        lo_box, hi_box = box[k]
+        # monotone knowledge: never wider than the a priori box or the fallback bounds
+        lo_box = max(box[k, 0], fallback[k, 0])
+        hi_box = min(box[k, 1], fallback[k, 1])
         if vb is not None and np.isfinite(vb.bound):
             # vb.bound <= min of (+-theta_k); add a rounding margin for the sign flip
             lb = vb.bound - 2 * EPS * abs(vb.bound)
@@ -449,7 +494,7 @@ def moment_bounds(
         if sol is not None:
             msg = f"{backend.name}: {sol.native_status}" + (f"; {err}" if err else "")
         if not certified:
-            msg += "; no certificate, a priori box end reported"
+            msg += "; no certificate, the fallback (LP / a priori box) end reported"
         infos.append(
             BoundInfo(
                 param=names[k], sense=sense, bound=float(bnd), solver_value=float(sv),

@@ -34,30 +34,20 @@ from math import comb
 import numpy as np
 
 from ..exceptions import DataValidationError, ParameterValidationError
+from ..validation import as_bound, as_signal
 
 DEFAULT_B_BOUND = 1.0e4
 
 
 def _as_1d(name, v, n=None, *, positive=False, nonneg=False):
-    try:
-        a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataValidationError(f"{name} must be numeric; got {type(v).__name__}.") from exc
-    if a.ndim == 0 and n is not None:
-        a = np.full(n, float(a))
-    if a.ndim != 1:
-        raise DataValidationError(
-            f"{name} must be one-dimensional (or a scalar); got shape {a.shape}. "
-            "Use np.ravel() on a column vector."
-        )
+    """A signal (shape (N,) or (N, 1)) or, with ``positive``/``nonneg``, a scalar or
+    per-sample bound, validated by :mod:`hammerbound.validation`."""
+    if positive or nonneg:
+        return as_bound(name, v, n, allow_zero=nonneg, shape_error=DataValidationError,
+                        error=DataValidationError, sign_error=ParameterValidationError)
+    a = as_signal(name, v)
     if n is not None and a.shape[0] != n:
         raise DataValidationError(f"{name} has length {a.shape[0]} but the data have length {n}.")
-    if not np.all(np.isfinite(a)):
-        raise DataValidationError(f"{name} contains NaN or inf; remove or repair those samples.")
-    if positive and np.any(a <= 0):
-        raise ParameterValidationError(f"{name} must be > 0 everywhere; got min {a.min():g}.")
-    if nonneg and np.any(a < 0):
-        raise ParameterValidationError(f"{name} must be >= 0 everywhere; got min {a.min():g}.")
     return a
 
 
@@ -219,23 +209,56 @@ class EIVProblem:
 
 @dataclass(frozen=True)
 class FeasibilityCheck:
-    """Result of :func:`check_theta`: is ``theta`` in the EIV set (22.34)?"""
+    """Result of :func:`check_theta`: is ``theta`` in the EIV set (22.34)?
+
+    ``max_violation`` is the largest absolute equation residual of the witness,
+    ``max_rel_violation`` the largest residual divided by that equation's tolerance
+    (``<= 1`` for every accepted point).
+    """
 
     feasible: bool
     max_violation: float
     eta: np.ndarray
     dx: np.ndarray
     gain_residual: float
+    max_rel_violation: float = float("nan")
 
 
-def check_theta(problem: EIVProblem, theta, tol: float = 1e-9) -> FeasibilityCheck:
+def equation_scale(problem: EIVProblem, theta) -> np.ndarray:
+    """Magnitude of the terms of every equation of (22.34) at ``theta`` (shape (n_eq,)).
+
+    ``|y_t| + sum_i |a_i| |y_{t-i}| + sum_j |b_j| |x_{t-j}|`` (the nominal residual) plus
+    ``deta_t + sum_i |a_i| deta_{t-i} + sum_j |b_j| dx_{g(t-j)}`` (the largest error term):
+    the scale the tolerance policy (:mod:`hammerbound.tolerances`) is relative to.
+    """
+    theta = np.abs(np.asarray(theta, dtype=float))
+    phi, yt = problem.regressors()
+    a, b = theta[: problem.na], theta[problem.na :]
+    err = problem.deta[problem.eta_index()] @ np.concatenate([[1.0], a])
+    if b.size:
+        err = err + problem.dx_group[problem.dx_index()] @ b
+    return np.abs(yt) + np.abs(phi) @ theta + err
+
+
+def check_theta(problem: EIVProblem, theta, tol: float | None = None) -> FeasibilityCheck:
     """Decide whether ``theta`` belongs to the EIV feasible set (22.34).
 
     At fixed theta the constraints are linear in (eta, dx), so this solves the LP
     ``min s  s.t. |r_t(theta) - eta_t - sum a_i eta_{t-i} + sum b_j dx_g| <= s`` over the boxes.
-    ``feasible`` is ``s <= tol * scale`` (and the gain equality holds to ``tol``); ``eta`` and
-    ``dx`` are the witness noise sequences.
+    The witness (``eta``, ``dx``) is clipped into its boxes (``|eta_t| <= deta_t`` and
+    ``|dx| <= dx_group`` hold exactly) and its residuals are recomputed. Tolerance policy
+    (:mod:`hammerbound.tolerances`): ``feasible`` when every equation's residual is at
+    most ``tol * equation_scale`` (:func:`equation_scale`, the magnitudes of its terms),
+    the gain equality holds to ``tol`` times the magnitudes of its terms, and ``theta`` is
+    inside ``theta_box``. ``tol`` defaults to ``FEASIBILITY_RTOL`` (1e-9): far above the
+    rounding of the residuals (~1e-16 per term) and far below any meaningful noise bound.
+    Witnesses only ever *accept* points (inner values of the exact method); no outer bound
+    depends on this decision.
     """
+    from ..tolerances import FEASIBILITY_RTOL
+
+    if tol is None:
+        tol = FEASIBILITY_RTOL
     import scipy.sparse as sp
     from scipy.optimize import linprog
 
@@ -259,15 +282,18 @@ def check_theta(problem: EIVProblem, theta, tol: float = 1e-9) -> FeasibilityChe
          np.concatenate([eta_cols, dx_cols]))),
         shape=(m, n + k),
     )
+    # the LP is solved in scaled units (every error in [-1, 1], every equation divided by
+    # the magnitude of its terms), so HiGHS's absolute tolerances act relative to the data
+    scale = equation_scale(problem, theta)
+    zmax = np.concatenate([problem.deta, problem.dx_group])
+    Ms = sp.diags(1.0 / scale) @ M @ sp.diags(zmax)
+    rs = r / scale
     s_col = -np.ones((m, 1))
-    A_ub = sp.vstack([sp.hstack([M, s_col]), sp.hstack([-M, s_col])]).tocsr()
-    b_ub = np.concatenate([r, -r])
+    A_ub = sp.vstack([sp.hstack([Ms, s_col]), sp.hstack([-Ms, s_col])]).tocsr()
+    b_ub = np.concatenate([rs, -rs])
     c = np.zeros(n + k + 1)
     c[-1] = 1.0
-    bounds = np.vstack(
-        [np.column_stack([-problem.deta, problem.deta]),
-         np.column_stack([-problem.dx_group, problem.dx_group]), [[0.0, np.inf]]]
-    )
+    bounds = np.vstack([np.column_stack([-np.ones(n + k), np.ones(n + k)]), [[0.0, np.inf]]])
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs",
                   options={"primal_feasibility_tolerance": 1e-10})
     for method in ("highs-ds", "highs-ipm"):
@@ -283,13 +309,15 @@ def check_theta(problem: EIVProblem, theta, tol: float = 1e-9) -> FeasibilityChe
     # HiGHS may violate the variable bounds by its feasibility tolerance: clip, so that the
     # witness satisfies |eta| <= deta and |dx| <= dx_group exactly (the violation below is
     # recomputed from the clipped witness)
-    z = np.clip(res.x, bounds[:, 0], bounds[:, 1])
+    z = np.clip(res.x[: n + k], -1.0, 1.0) * zmax
     eta, dxv = z[:n], z[n : n + k]
     # recompute the violation exactly from the witness rather than trusting the LP value
-    viol = float(np.max(np.abs(M @ z[: n + k] - r))) if m else 0.0
+    resid = np.abs(M @ z - r) if m else np.zeros(0)
+    viol = float(np.max(resid)) if m else 0.0
+    rel = float(np.max(resid / (tol * scale))) if m else 0.0
     g = problem.gain_row()
     gres = 0.0 if g is None else float(abs(g[0] @ theta - g[1]))
-    scale = 1.0 + float(np.max(np.abs(problem.y)))
+    gscale = 0.0 if g is None else float(np.abs(g[0]) @ np.abs(theta) + abs(g[1]))
     in_box = np.all(theta >= problem.theta_box[:, 0]) and np.all(theta <= problem.theta_box[:, 1])
-    feas = bool(in_box and viol <= tol * scale and gres <= tol * (1 + abs(problem.gain or 0)))
-    return FeasibilityCheck(feas, viol, eta, dxv, gres)
+    feas = bool(in_box and rel <= 1.0 and gres <= tol * gscale)
+    return FeasibilityCheck(feas, viol, eta, dxv, gres, rel)

@@ -82,5 +82,8 @@ class IntervalResult:
         return self.bounds[:, 1] - self.bounds[:, 0]
 
     def contains(self, theta, tol: float = 0.0) -> bool:
-        theta = np.asarray(theta, dtype=float)
+        """Whether ``theta`` lies in every interval (a NaN entry raises DataValidationError)."""
+        from ..validation import as_theta
+
+        theta = as_theta(theta, self.bounds.shape[0], self.param_names)
         return bool(np.all(theta >= self.bounds[:, 0] - tol) and np.all(theta <= self.bounds[:, 1] + tol))

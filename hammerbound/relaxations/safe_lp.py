@@ -78,11 +78,13 @@ def dual_bound(c, A_ub, b_ub, A_eq, b_eq, lb, ub, y_ub, y_eq) -> float:
     return total - 4.0 * width * EPS * (mag + 1e-300) - 1e-300
 
 
-def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None) -> SafeLPResult:
+def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None,
+                  options=None) -> SafeLPResult:
     """Minimise ``c'z`` with a rigorous lower bound. ``bounds`` must be a finite ``(n, 2)`` array.
 
     Uses HiGHS through :func:`scipy.optimize.linprog` for the numbers and weak duality for
-    the guarantee.
+    the guarantee. ``options`` (e.g. tighter ``primal_feasibility_tolerance``) go to HiGHS;
+    they change the accuracy of the primal point, never the validity of ``bound``.
     """
     c = np.asarray(c, dtype=float)
     n = c.size
@@ -104,6 +106,7 @@ def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None) ->
         b_eq=b_eq if A_eq.shape[0] else None,
         bounds=bounds,
         method="highs",
+        options=options,
     )
     if res.status == 0:
         y_ub = res.ineqlin.marginals if A_ub.shape[0] else np.zeros(0)

@@ -1,0 +1,111 @@
+"""Figures of the model set: Bode envelope and backlash compensation (matplotlib)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_bode_envelope", "plot_compensation"]
+
+
+def _axes(ax, n):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, ax = plt.subplots(n, 1, figsize=(7, 2.6 * n), sharex=(n > 1), squeeze=False)
+        return fig, list(ax[:, 0])
+    ax = list(np.ravel(ax))
+    if len(ax) != n:
+        from ..exceptions import ParameterValidationError
+
+        raise ParameterValidationError(f"pass {n} axes (magnitude, phase); got {len(ax)}.")
+    return ax[0].figure, ax
+
+
+def plot_bode_envelope(env, ax=None, *, samples=None, max_samples=200, db=True):
+    """Magnitude and phase envelope, the central model and (optionally) sampled responses.
+
+    ``samples``: complex responses of shape (k, n) at ``env.omega`` (e.g. from certified
+    samples), drawn thin and grey. Returns the figure.
+    """
+    fig, (am, ap) = _axes(ax, 2)
+    w = env.omega
+
+    def mag(x):
+        with np.errstate(divide="ignore"):
+            return 20 * np.log10(x) if db else x
+
+    up = np.where(np.isfinite(env.mag_upper), env.mag_upper, np.nan)
+    am.fill_between(w, mag(np.maximum(env.mag_lower, 1e-300)), mag(up), color="C0", alpha=0.25,
+                    lw=0, label="guaranteed envelope")
+    ph0 = env.phase_central
+    ap.fill_between(w, np.degrees(env.phase_lower), np.degrees(env.phase_upper), color="C0",
+                    alpha=0.25, lw=0)
+    if samples is not None:
+        s = np.asarray(samples)[:max_samples]
+        rel = np.angle(s / env.central)
+        for k, r in enumerate(s):
+            am.plot(w, mag(np.abs(r)), color="0.4", lw=0.3, alpha=0.5,
+                    label="certified samples" if k == 0 else None)
+            ap.plot(w, np.degrees(ph0 + rel[k]), color="0.4", lw=0.3, alpha=0.5)
+    am.plot(w, mag(env.mag_central), color="C3", lw=1.2, label="central model")
+    ap.plot(w, np.degrees(ph0), color="C3", lw=1.2)
+    for a in (am, ap):
+        a.set_xscale("log")
+        a.grid(True, which="both", alpha=0.3)
+    am.set_ylabel("magnitude [dB]" if db else "magnitude")
+    ap.set_ylabel("phase [deg]")
+    ap.set_xlabel("frequency [rad/s]")
+    am.legend(loc="best", fontsize=8)
+    return fig
+
+
+def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):
+    """Left: backlash lines with their feasible bands. Right: residual ``x - v`` of the
+    compensated backlash vs the command ``v``, its guaranteed band, the uncompensated
+    error for reference, and simulated cycles for backlash ``samples`` of shape (k, 4),
+    if given. Returns the figure."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    fig = np.ravel(ax)[0].figure
+    a1, a2 = np.ravel(ax)[:2]
+    ml, cl, mr, cr = inv.gamma
+    u = np.linspace(inv.u_range[0], inv.u_range[1], n)
+    R, L = inv.right_vertices, inv.left_vertices
+    r_all = R[None, :, 0] * u[:, None] - R[None, :, 1]
+    l_all = L[None, :, 0] * u[:, None] + L[None, :, 1]
+    a1.fill_between(u, r_all.min(1), r_all.max(1), color="C0", alpha=0.3, lw=0,
+                    label="right line, feasible band")
+    a1.fill_between(u, l_all.min(1), l_all.max(1), color="C1", alpha=0.3, lw=0,
+                    label="left line, feasible band")
+    a1.plot(u, mr * (u - cr), "C0", lw=1)
+    a1.plot(u, ml * (u + cl), "C1", lw=1)
+    a1.set_xlabel("u")
+    a1.set_ylabel("x")
+    a1.set_title("backlash characteristic")
+    a1.legend(fontsize=8)
+    v = np.linspace(inv.v_range[0], inv.v_range[1], n)
+    lo, hi = inv.error_bounds(v)
+    a2.fill_between(v, lo, hi, color="C2", alpha=0.3, lw=0, label="guaranteed band of x - v")
+    a2.axhline(0.0, color="k", lw=0.8)
+    # slopes inverted but no dead-band compensation (u = v / m): x trails by m c
+    a2.axhline(-mr * cr, color="k", ls="--", lw=0.8, label="no dead-band inverse, rising")
+    a2.axhline(ml * cl, color="k", ls=":", lw=0.8, label="no dead-band inverse, falling")
+    if samples is not None:
+        from ..systems import simulate_backlash
+
+        cyc = np.concatenate([np.linspace(inv.x0, inv.v_range[1], n // 2),
+                              np.linspace(inv.v_range[1], inv.v_range[0], n),
+                              np.linspace(inv.v_range[0], inv.v_range[1], n)])
+        uu = inv.compensate(cyc)
+        for k, g in enumerate(np.asarray(samples)[:max_samples]):
+            x = simulate_backlash(uu, *g, x0=inv.x0)
+            a2.plot(cyc, x - cyc, color="0.3", lw=0.4, alpha=0.6,
+                    label="compensated, feasible backlashes" if k == 0 else None)
+    a2.set_xlabel("commanded v")
+    a2.set_ylabel("residual x - v")
+    a2.set_title("compensated characteristic: residual error")
+    a2.legend(fontsize=7)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,178 @@
+"""Size of a sparse moment relaxation, estimated *before* it is built (memory/time guard).
+
+Building the relaxation in PICOS costs time and memory roughly proportional to
+``rows x moments`` (every constraint is converted against the whole moment vector), so it
+grows quadratically with the record length N: at order 1 and ``na = nb = 2``, N = 400
+took ~100 s and ~170 MB to build, N = 2000 ran past 150 s at 1.9 GB and would need ~4 GB.
+:func:`estimate_moment_relaxation` counts the cliques, conic rows and moment variables
+from the problem's structure (cheap: no polynomial is formed) and :func:`check_moment_budget`
+refuses (:class:`~hammerbound.exceptions.RelaxationTooLargeError`) or warns against the
+module budgets below.
+
+Budgets (change them at module level, e.g. ``moment_size.MOMENT_MAX_WORK = float("inf")``
+to lift the refusal):
+
+``MOMENT_WARN_WORK = 2e7``
+    ``rows x moments`` above which a :class:`RuntimeWarning` says the relaxation will take
+    minutes (order 1 at N ~ 250, order 2 at N ~ 15 with ``na = nb = 2``).
+``MOMENT_MAX_WORK = 2.5e8``
+    ``rows x moments`` above which the moment method refuses (order 1 at N ~ 900; about
+    1 GB and 10 minutes to build on a 2-core machine). Use ``method="lp"`` (seconds) or
+    ``method="exact"`` (tight, with ``total_time_limit``) instead.
+"""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+from dataclasses import dataclass
+from math import comb
+
+import numpy as np
+
+from ..exceptions import RelaxationTooLargeError
+from .problem import EIVProblem
+
+__all__ = ["MOMENT_MAX_WORK", "MOMENT_WARN_WORK", "MomentSize", "check_moment_budget",
+           "estimate_moment_relaxation"]
+
+#: ``rows x moments`` above which building the relaxation is refused.
+MOMENT_MAX_WORK = 2.5e8
+#: ``rows x moments`` above which a warning says the build will take minutes.
+MOMENT_WARN_WORK = 2.0e7
+# rough cost model of the PICOS build, fitted at N = 100..400, order 1 (2-core machine)
+_SEC_PER_CLIQUE = 0.1
+_SEC_PER_WORK = 1.5e-6
+_BYTES_PER_WORK = 4.5
+# enumerate monomials to count the moments exactly up to this many tuples
+_MAX_ENUMERATE = 2_000_000
+
+
+@dataclass(frozen=True)
+class MomentSize:
+    """Estimated size of a sparse moment relaxation (see :func:`estimate_moment_relaxation`).
+
+    Attributes
+    ----------
+    order : int
+    n_cliques : int
+        Distinct cliques (one moment matrix each).
+    clique_vars : int
+        Largest number of variables in a clique.
+    psd_side : int
+        Side of the largest moment matrix, ``binom(clique_vars + order, order)``.
+    n_rows : int
+        Conic rows (symmetric-vectorised PSD blocks, localizing and equality rows).
+    n_moments : int
+        Moment variables (exact when ``moments_exact``, else an upper bound).
+    moments_exact : bool
+    work : float
+        ``n_rows * n_moments``, the measure the budgets apply to.
+    est_seconds, est_bytes : float
+        Rough build time and memory (2-core reference machine); the conic solve comes on top.
+    """
+
+    order: int
+    n_cliques: int
+    clique_vars: int
+    psd_side: int
+    n_rows: int
+    n_moments: int
+    moments_exact: bool
+    work: float
+    est_seconds: float
+    est_bytes: float
+
+    def describe(self) -> str:
+        """One sentence with the sizes and the rough build cost (used in messages)."""
+        return (f"order {self.order}: {self.n_cliques} cliques of up to {self.clique_vars} "
+                f"variables (moment matrices {self.psd_side} x {self.psd_side}), "
+                f"{self.n_rows} conic rows x {'' if self.moments_exact else '<= '}"
+                f"{self.n_moments} moments = {self.work:.3g}; building it would take about "
+                f"{self.est_seconds:.0f} s and {self.est_bytes / 2**20:.0f} MB")
+
+
+def _clique_sets(problem: EIVProblem, theta_box) -> tuple[int, int, list]:
+    """``(q, n_extra, [(variables, n_equations)])`` as :class:`.moment._ScaledPOP` builds them."""
+    box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+    half = 0.5 * (box[:, 1] - box[:, 0])
+    fixed = half <= 0
+    g = problem.gain_row()
+    elim = None
+    if g is not None and np.any(np.abs(g[0]) * half > 0):
+        elim = int(np.argmax(np.abs(g[0]) * half))
+    q = sum(1 for k in range(problem.p) if k != elim and not fixed[k])
+    n = problem.N
+    eta = problem.eta_index() + q  # variable ids: theta 0..q-1, eta q.., dx q+N..
+    dxi = problem.dx_index()
+    dx_ok = problem.dx_group[dxi] > 0
+    dxv = np.where(dx_ok, dxi + q + n, -1)
+    counts: dict = {}
+    base = tuple(range(q))
+    for e in range(eta.shape[0]):
+        key = base + tuple(sorted(set(eta[e].tolist()) | {v for v in dxv[e].tolist() if v >= 0}))
+        counts[key] = counts.get(key, 0) + 1
+    return q, (1 if elim is not None else 0), list(counts.items())
+
+
+def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None) -> MomentSize:
+    """Estimate the size of :class:`.moment.MomentRelaxation` without building it.
+
+    The rows are counted exactly (PSD blocks in symmetric vectorisation); the moments are
+    counted exactly by enumerating the cliques' monomials when that is cheap (up to
+    ``2e6`` monomials), else bounded from above.
+    """
+    d = int(order)
+    q, n_extra, cliques = _clique_sets(problem, theta_box)
+    if not cliques:
+        cliques = [(tuple(range(q)), 0)]
+    rows = 0
+    nv_max = 0
+    for cv, nh in cliques:
+        nv = len(cv)
+        nv_max = max(nv_max, nv)
+        s = comb(nv + d, d)
+        sl = comb(nv + d - 1, d - 1)
+        rows += s * (s + 1) // 2 + (nv + n_extra) * sl * (sl + 1) // 2
+        rows += nh * comb(nv + 2 * d - 2, 2 * d - 2)
+    per = comb(nv_max + 2 * d, 2 * d)
+    exact = len(cliques) * per <= _MAX_ENUMERATE
+    if exact:
+        seen = set()
+        for cv, _ in cliques:
+            for deg in range(1, 2 * d + 1):
+                seen.update(itertools.combinations_with_replacement(cv, deg))
+        moments = len(seen)
+    else:
+        theta_only = comb(q + 2 * d, 2 * d)
+        moments = len(cliques) * (per - theta_only) + theta_only - 1
+    work = float(rows) * float(moments)
+    return MomentSize(order=d, n_cliques=len(cliques), clique_vars=nv_max,
+                      psd_side=comb(nv_max + d, d), n_rows=int(rows), n_moments=int(moments),
+                      moments_exact=exact, work=work,
+                      est_seconds=_SEC_PER_CLIQUE * len(cliques) + _SEC_PER_WORK * work,
+                      est_bytes=_BYTES_PER_WORK * work)
+
+
+def check_moment_budget(size: MomentSize, max_work: float | None = None,
+                        warn_work: float | None = None) -> None:
+    """Refuse or warn when a relaxation of ``size`` exceeds the budgets.
+
+    Raises
+    ------
+    RelaxationTooLargeError
+        ``size.work > max_work`` (default :data:`MOMENT_MAX_WORK`).
+    """
+    max_work = MOMENT_MAX_WORK if max_work is None else max_work
+    warn_work = MOMENT_WARN_WORK if warn_work is None else warn_work
+    if size.work > max_work:
+        raise RelaxationTooLargeError(
+            f"the moment relaxation is too large: {size.describe()}, above the budget "
+            f"rows x moments <= {max_work:.3g} (hammerbound.relaxations.moment_size."
+            "MOMENT_MAX_WORK). Use method='lp' (polytopic outer bounds, seconds) or "
+            "method='exact' (tight bounds; bound its time with total_time_limit), a shorter "
+            "record, or a lower relaxation_order.")
+    if size.work > warn_work:
+        warnings.warn(
+            f"large moment relaxation: {size.describe()}. method='lp' or method='exact' "
+            "(with total_time_limit) may be faster.", RuntimeWarning, stacklevel=3)

@@ -29,6 +29,9 @@ from hammerbound.tolerances import FEASIBILITY_RTOL
 METHODS = ("polygon", "algorithm")
 PATTERNS = ("alternating", "random", "constant", "over", "under")
 SCALES = (1e-6, 1e-3, 1.0, 1e3, 1e6)
+# every (input, output) scale pair the estimator accepts: slopes ~ sy / su >= 1e-9 is the
+# data-scale guard of BacklashSetEstimator (DataScaleError below; not a tolerance matter)
+SCALE_PAIRS = [(su, sy) for su in SCALES for sy in SCALES if sy / su > 1e-9]
 
 
 # ----------------------------------------------------------------------------- simulation
@@ -139,25 +142,24 @@ def test_inconsistent_beyond_the_tolerance_is_certified_empty(method):
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("pattern", PATTERNS)
 def test_extremal_noise_grid_truth_inside_never_empty(method, pattern):
-    """100 runs per (pattern, method), 1000 in all: every pair of input/output scales in
-    1e-6..1e6, 2-6 amplitudes per side, Delta from 1e-9 to 1e-2 of the output scale."""
+    """110 runs per (pattern, method), 1100 in all: every accepted pair of input/output
+    scales in 1e-6..1e6, 2-6 amplitudes per side, Delta from 1e-9 to 1e-2 of the output."""
     rng = np.random.default_rng(10 * METHODS.index(method) + PATTERNS.index(pattern))
     runs = 0
-    for su in SCALES:
-        for sy in SCALES:
-            for _ in range(4):
-                u, y, D, gamma = _case(rng, pattern, su, sy)
-                est = hb.BacklashSetEstimator(D, method=method).fit(u, y)
-                _assert_inside(est, gamma, (pattern, su, sy, D))
-                runs += 1
-    assert runs == 100
+    for su, sy in SCALE_PAIRS:
+        for _ in range(5):
+            u, y, D, gamma = _case(rng, pattern, su, sy)
+            est = hb.BacklashSetEstimator(D, method=method).fit(u, y)
+            _assert_inside(est, gamma, (pattern, su, sy, D))
+            runs += 1
+    assert runs == 110
 
 
 @pytest.mark.parametrize("pattern", PATTERNS)
 def test_both_methods_agree_on_extremal_noise(pattern):
     """Algorithm 22.1 and the half-plane intersection give the same relaxed set."""
     rng = np.random.default_rng(7)
-    for su, sy in ((1e-6, 1e6), (1.0, 1.0), (1e6, 1e-6), (1e3, 1e3)):
+    for su, sy in ((1e-6, 1e6), (1.0, 1.0), (1e6, 1e-2), (1e3, 1e3)):
         for _ in range(3):
             u, y, D, _ = _case(rng, pattern, su, sy)
             a = hb.BacklashSetEstimator(D).fit(u, y)
@@ -172,8 +174,7 @@ def test_both_methods_agree_on_extremal_noise(pattern):
 def extremal_stage1_data(draw):
     """Steady-state data with extremal noise: (u, y, Delta, true gamma)."""
     M = draw(st.integers(2, 8))
-    su = 10.0 ** draw(st.integers(-6, 6))
-    sy = 10.0 ** draw(st.integers(-6, 6))
+    su, sy = draw(st.sampled_from(SCALE_PAIRS))
     drel = 10.0 ** draw(st.floats(-9.0, -2.0))
     pattern = draw(st.sampled_from(PATTERNS))
     seed = draw(st.integers(0, 2**32 - 1))

@@ -22,7 +22,8 @@ from .exceptions import (
     ResultOneViolationError,
     UnboundedSetError,
 )
-from .feasible_set import Constraint, Edge, PolygonFeasibleSet, algorithm_22_1, polygon_from_halfplanes
+from .feasible_set import Edge, PolygonFeasibleSet
+from .side_polygon import SideProblem
 from .validation import as_bound, as_flag, as_real, check_scale
 
 __all__ = ["BacklashSetEstimator", "InnerSignalBounds"]
@@ -69,21 +70,6 @@ class InnerSignalBounds:
             )
         (ch, cl), (rh, rl) = self.center, self.radius
         return np.where(hi, ch, cl), np.where(hi, rh, rl)
-
-
-def _hull_mask(u, v) -> np.ndarray:
-    """Points ``(u_k, v_k)`` that are vertices of their convex hull (all if degenerate)."""
-    mask = np.zeros(u.size, dtype=bool)
-    if u.size <= 8:
-        mask[:] = True
-        return mask
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        mask[ConvexHull(np.column_stack([u, v])).vertices] = True
-    except (QhullError, ValueError):
-        mask[:] = True
-    return mask
 
 
 class BacklashSetEstimator(RegressorMixin, BaseEstimator):
@@ -212,74 +198,38 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
                 "feasible set is unbounded with fewer than two (Remark 22.2). Add square waves "
                 "with at least two different amplitudes."
             )
-        def make_pairs(sel):
-            return [
-                (Constraint((ui, sigma), yi + di, int(k), "+"),
-                 Constraint((-ui, -sigma), -(yi - di), int(k), "-"))
-                for ui, yi, di, k in zip(u[sel], y[sel], nb[sel], idx[sel], strict=True)
-            ]
-
-        # only measurements on the convex hulls of (u, y + d) and (u, y - d) can carry an
-        # edge (the others are implied by their neighbours): a C-speed pre-filter that
-        # leaves the set unchanged (checked below against every measurement)
-        keep = _hull_mask(u, y + nb) | _hull_mask(u, y - nb)
-        pairs = make_pairs(keep) if self.method == "polygon" else make_pairs(slice(None))
-        positivity = [Constraint((-1.0, 0.0), 0.0, None, "m>=0"),
-                      Constraint((0.0, -1.0), 0.0, None, "c>=0")]
-        # a finite box far outside any sensible set keeps the half-plane algorithm bounded;
-        # it is checked afterwards never to carry an edge.
-        big_m = 1e6 * (1.0 + np.max(np.abs(y)) / np.min(np.abs(u)))
-        big_b = big_m * np.max(np.abs(u)) + np.max(np.abs(y))
-        box = [Constraint((1.0, 0.0), big_m, None, "box"), Constraint((0.0, 1.0), big_b, None, "box")]
-        cons = [c for pr in pairs for c in pr] + positivity + box
-        res = polygon_from_halfplanes(cons)
+        # the measured slabs relaxed outward by the tolerance policy, in centred and scaled
+        # coordinates; "empty" only with an exact certificate (docs/tolerances.md)
+        problem = SideProblem(side, u, y, nb, idx)
+        res = problem.solve(self.method)
         if res is None:
-            raise self._empty_error(side, make_pairs(slice(None)), positivity + box)
-        verts_mb, edge_cons = res
-        # exactness of the pre-filter: every vertex satisfies every measurement
-        lhs = verts_mb @ np.vstack([u, np.full_like(u, sigma)])  # (n_vertices, M)
-        tol = 1e-9 * (np.abs(y) + np.abs(u) * np.abs(verts_mb[:, :1]) + np.abs(verts_mb[:, 1:]) + 1)
-        if np.any(lhs > y + nb + tol) or np.any(lhs < y - nb - tol):
-            pairs = make_pairs(slice(None))
-            cons = [c for pr in pairs for c in pr] + positivity + box
-            res = polygon_from_halfplanes(cons)
-            if res is None:
-                raise self._empty_error(side, pairs, positivity + box)
-            verts_mb, edge_cons = res
-        if any(c.sign == "box" for c in edge_cons):
-            raise UnboundedSetError(
-                f"the {side} feasible set is unbounded: the data do not bound the slope; add "
-                "square waves with more distinct amplitudes."
-            )
-        if self.method == "algorithm":
-            order = _processing_order(u)
-            v = algorithm_22_1([pairs[i] for i in order], extra=positivity)
-            if v.shape[0] < 3:
-                raise self._empty_error(side, pairs, positivity + box)
-            # order the algorithm's vertices counter-clockwise and relabel edges with the
-            # constraint active on both endpoints
-            c0 = v.mean(axis=0)
-            v = v[np.argsort(np.arctan2(v[:, 1] - c0[1], v[:, 0] - c0[0]))]
-            verts_mb, edge_cons = v, [_common_constraint(v[k], v[(k + 1) % len(v)], cons)
-                                      for k in range(len(v))]
-        return _make_polygon_set(side, sigma, verts_mb, edge_cons, cons)
+            raise self._empty_error(side, problem)
+        fs = _make_polygon_set(side, sigma, res.verts_mb, res.edge_cons, res.constraints)
+        fs.extra.update({"tolerance_factor": res.factor,
+                         "max_tolerance": float(res.factor * problem.tol.max())})
+        return fs
 
-    def _empty_error(self, side, pairs, fixed):
-        # the smallest prefix (in the caller's order) whose set is empty: binary search
-        lo, hi = 1, len(pairs)
+    def _empty_error(self, side, problem):
+        # the smallest prefix (in the caller's order) whose relaxed set is certified empty
+        lo, hi = 1, problem.u.size - 1
+        cert = problem.certificate()
         while lo < hi:
             mid = (lo + hi) // 2
-            cons = [c for pr in pairs[: mid + 1] for c in pr] + list(fixed)
-            if polygon_from_halfplanes(cons) is None and _empty_by_lp(cons):
-                hi = mid
+            sel = slice(0, mid + 1)
+            c = problem.certificate(sel) if problem.filtered_polygon(sel)[0] is None else None
+            if c is not None:
+                hi, cert = mid, c
             else:
                 lo = mid + 1
-        k = pairs[lo][0].index if lo < len(pairs) else pairs[-1][0].index
+        k = int(problem.idx[lo])
+        which = ", ".join(cert[0]) if cert is not None else "?"
         return EmptyFeasibleSetError(
             f"no backlash parameters (m, c) > 0 explain the {side}-side steady-state data within "
             f"the noise bound: the set becomes empty at measurement index {k}. Check that "
-            "sample, the noise bound (too small?) and that the data are at steady state.",
-            side=side, first_index=int(k),
+            "sample, the noise bound (too small?) and that the data are at steady state. "
+            f"(Certified in exact arithmetic by the constraints {which}, with the tolerance "
+            "of docs/tolerances.md.)",
+            side=side, first_index=k,
         )
 
     # ------------------------------------------------------------------ results
@@ -468,36 +418,6 @@ def _column(X, name):
             f"{name} contains NaN or inf (first at index {int(np.flatnonzero(~np.isfinite(X))[0])})."
         )
     return X
-
-
-def _processing_order(u):
-    """Measurement order for Algorithm 22.1: the first two must differ in amplitude."""
-    order = list(range(len(u)))
-    j = next(k for k in range(1, len(u)) if u[k] != u[0])
-    order.insert(1, order.pop(j))
-    return order
-
-
-def _common_constraint(p, q, cons):
-    best, bv = None, np.inf
-    for c in cons:
-        v = abs(np.dot(c.a, p) - c.b) + abs(np.dot(c.a, q) - c.b)
-        v /= abs(c.b) + np.hypot(*c.a)
-        if v < bv:
-            best, bv = c, v
-    return best
-
-
-def _empty_by_lp(cons) -> bool:
-    from scipy.optimize import linprog
-
-    A = np.array([c.a for c in cons])
-    b = np.array([c.b for c in cons])
-    # Chebyshev-style: maximise the slack s of A p + s |a| <= b; empty iff s* < 0
-    norms = np.hypot(A[:, 0], A[:, 1])[:, None]
-    res = linprog([0, 0, -1], A_ub=np.hstack([A, norms]), b_ub=b,
-                  bounds=[(None, None), (None, None), (None, 1.0)], method="highs")
-    return res.status == 2 or (res.status == 0 and -res.fun <= 1e-13 * (1 + np.max(np.abs(b))))
 
 
 def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons) -> PolygonFeasibleSet:

@@ -15,20 +15,29 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FEASIBILITY_RTOL", "feasibility_tol"]
+__all__ = ["ARITHMETIC_RTOL", "FEASIBILITY_RTOL", "feasibility_tol"]
 
-#: Relative outward tolerance of every feasibility decision.
+#: Relative outward tolerance of every feasibility decision that passes through a
+#: numerical solver (LP/SDP: their own feasibility tolerances are ~1e-9 of scaled data).
 FEASIBILITY_RTOL = 1e-9
 
+#: Relative outward tolerance of decisions computed directly in double precision with a
+#: bounded number of operations and an exact (rational) check before "empty" -- the
+#: stage-1 polygons. ~5e4 unit roundoffs: far above the rounding of the data and of the
+#: computation, and small enough that the widening stays below 1e-9 of the parameters.
+ARITHMETIC_RTOL = 1e-11
 
-def feasibility_tol(*magnitudes) -> float | np.ndarray:
+
+def feasibility_tol(*magnitudes, rtol: float = FEASIBILITY_RTOL) -> float | np.ndarray:
     """Outward tolerance for a constraint whose terms have the given magnitudes.
 
-    ``feasibility_tol(|y|, |m u|, |beta|, D)`` is ``FEASIBILITY_RTOL * (|y| + |m u| + |beta| + D)``
-    (element-wise for arrays). Pass every term that enters the constraint, including the
-    bound itself, so the tolerance follows the data's scale.
+    ``feasibility_tol(|y|, |m u|, |beta|, D)`` is ``rtol * (|y| + |m u| + |beta| + D)``
+    (element-wise for arrays), ``rtol`` being :data:`FEASIBILITY_RTOL` unless given (use
+    :data:`ARITHMETIC_RTOL` for solver-free double-precision decisions). Pass every term
+    that enters the constraint, including the bound itself, so the tolerance follows the
+    data's scale.
     """
     total = 0.0
     for m in magnitudes:
         total = total + np.abs(m)
-    return FEASIBILITY_RTOL * total
+    return rtol * total

@@ -43,6 +43,11 @@ class InnerSignalBounds:
     u_star: float
     x_hi: tuple
     x_lo: tuple
+    #: Largest slope ``max(m_l, m_r)`` of every feasible backlash (``None``: unknown). A PRBS
+    #: sample within ``1e-9 u*`` of a level, but not exactly on it, has an inner value up to
+    #: ``slope_max |u - level|`` away from the bounds at the level; the radius is widened
+    #: by that much, and with ``slope_max=None`` only exact levels are accepted.
+    slope_max: float | None = None
 
     @property
     def center(self) -> tuple[float, float]:
@@ -59,7 +64,7 @@ class InnerSignalBounds:
         u = np.asarray(u, dtype=float)
         if u.ndim != 1:
             raise DataValidationError("u must be a 1-D PRBS signal.")
-        tol = 1e-9 * self.u_star
+        tol = 1e-9 * self.u_star if self.slope_max is not None else 0.0
         hi = np.abs(u - self.u_star) <= tol
         lo = np.abs(u + self.u_star) <= tol
         if not np.all(hi | lo):
@@ -69,7 +74,12 @@ class InnerSignalBounds:
                 "bounds (22.31)-(22.33) hold only for a two-level input."
             )
         (ch, cl), (rh, rl) = self.center, self.radius
-        return np.where(hi, ch, cl), np.where(hi, rh, rl)
+        radius = np.where(hi, rh, rl)
+        if self.slope_max is not None:
+            # outward: the inner value at u differs from the one at the level by <= m |du|
+            off = np.where(hi, np.abs(u - self.u_star), np.abs(u + self.u_star))
+            radius = radius + self.slope_max * off
+        return np.where(hi, ch, cl), radius
 
 
 class BacklashSetEstimator(RegressorMixin, BaseEstimator):
@@ -324,7 +334,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         self.check_prbs_level(u_star)
         x_hi = self.right_.linear_range(u_star, -1.0)  # m_r u* - beta_r
         x_lo = self.left_.linear_range(-u_star, 1.0)  # -m_l u* + beta_l
-        return InnerSignalBounds(float(u_star), x_hi, x_lo)
+        slope_max = float(max(self.left_.orthotope[0, 1], self.right_.orthotope[0, 1]))
+        return InnerSignalBounds(float(u_star), x_hi, x_lo, slope_max)
 
     def inner_signal(self, u, u_star: float | None = None):
         """Central inner signal and radius ``(x^c, Delta x)`` for a PRBS ``u`` (22.31)-(22.33)."""

@@ -155,7 +155,7 @@ def chapter_inner_bounds(delta_eta: float, u_star: float = CHAPTER_U_STAR, *,
             f"{delta_eta:g} (c_l <= {cl[1]:.5g}, c_r <= {cr[1]:.5g}) for Result 1 to hold.")
     x_hi = (mr[0] * (u - cr[1]), mr[1] * (u - cr[0]))
     x_lo = (-ml[1] * (u - cl[0]), -ml[0] * (u - cl[1]))
-    return InnerSignalBounds(u, x_hi, x_lo)
+    return InnerSignalBounds(u, x_hi, x_lo, float(max(ml[1], mr[1])))
 
 
 # --------------------------------------------------------------------------- validation
@@ -273,12 +273,15 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
                 ex = ex0 if n == Ns[0] else chapter_example(deta, N=n, random_state=seed)
                 xc, dx = inner.transform(ex.prbs.u)
                 groups = (ex.prbs.u < 0).astype(int) if inner_signal == "two-level" else None
+                # stage 2 of the chapter: the unit-gain normalisation (22.8) is imposed, as
+                # the identifier does
+                opts = {"time_limit": time_limit, **(linear_options or {})}
                 lin = LinearEIVSetEstimator(noise_bound=deta, method=method,
+                                            steady_state_gain=1.0,
                                             relaxation_order=relaxation_order, solver=solver,
-                                            n_jobs=n_jobs, time_limit=time_limit,
-                                            **(linear_options or {}))
+                                            n_jobs=n_jobs, **opts)
                 t0 = time.perf_counter()
-                lin.fit(xc, ex.prbs.y, input_bound=dx, groups=groups)
+                lin.fit(xc, ex.prbs.y, input_bound=dx, input_groups=groups)
                 dt = time.perf_counter() - t0
                 fits[n].append((lin.bounds_, ex.prbs.snr_db, dt,
                                 all(i.certified for i in lin.bound_info_)))

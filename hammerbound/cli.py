@@ -60,7 +60,9 @@ def cmd_demo(args) -> int:
         records = run_demo(args.stage1, tuple(args.N), levels, seeds, args.method,
                            inner_signal=args.inner_signal, relaxation_order=args.order,
                            solver=args.solver, n_jobs=args.n_jobs, progress=progress,
-                           linear_options={"progress": args.progress},
+                           linear_options={"progress": args.progress,
+                                           "time_limit": args.time_limit,
+                                           "total_time_limit": args.total_time_limit},
                            file=False if json_stdout else sys.stdout)
         if report_dir is not None:
             from .report import write_report
@@ -104,7 +106,9 @@ def cmd_identify(args) -> int:
         BacklashSetEstimator(args.steady_noise),
         LinearEIVSetEstimator(na=args.na, nb=args.nb, noise_bound=args.prbs_noise,
                               method=args.method, relaxation_order=args.order,
-                              solver=args.solver, n_jobs=args.n_jobs, progress=args.progress),
+                              solver=args.solver, n_jobs=args.n_jobs, progress=args.progress,
+                              time_limit=args.time_limit,
+                              total_time_limit=args.total_time_limit),
         inner_signal=args.inner_signal,
     )
     ident.fit(pr[args.u_column], pr[args.y_column],
@@ -140,7 +144,8 @@ def cmd_eiv(args) -> int:
     est = LinearEIVSetEstimator(
         na=args.na, nb=args.nb, nk=args.nk, noise_bound=args.output_noise,
         steady_state_gain=args.gain, method=args.method, relaxation_order=args.order,
-        solver=args.solver, n_jobs=args.n_jobs, progress=args.progress)
+        solver=args.solver, n_jobs=args.n_jobs, progress=args.progress,
+        time_limit=args.time_limit, total_time_limit=args.total_time_limit)
     est.fit(data, input_bound=args.input_noise)
     tf = est.to_transfer_function()
     num = np.ravel(tf.num[0][0]).tolist()
@@ -191,6 +196,16 @@ def _poly_z(coefs) -> str:
     return " ".join(terms)
 
 
+def _add_time_options(p):
+    """Exact-method stopping rules: per interval end and for the whole fit."""
+    p.add_argument("--time-limit", type=float, default=600.0,
+                   help="exact method: seconds per interval end (default 600)")
+    p.add_argument("--total-time-limit", type=float, default=None,
+                   help="exact method: seconds for the whole stage-2 fit, shared by every "
+                        "interval end and job; ends it stops report their certified LP/OBBT "
+                        "bound with status 'limit' (default: none)")
+
+
 def _add_eiv_parser(sub):
     p = sub.add_parser(
         "eiv", help="bound a linear model from one CSV record (errors in variables)",
@@ -222,6 +237,7 @@ def _add_eiv_parser(sub):
     p.add_argument("--order", type=int, default=1, help="moment relaxation order (default 1)")
     p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
     p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
+    _add_time_options(p)
     p.add_argument("--progress", action="store_true",
                    help="progress bars on stderr (exact method)")
     p.add_argument("--json", action="store_true",
@@ -282,6 +298,7 @@ def _add_stage2_options(p, method="moment"):
     p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
     p.add_argument("--inner-signal", default="independent", choices=["independent", "two-level"])
     p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
+    _add_time_options(p)
 
 
 def build_parser() -> argparse.ArgumentParser:

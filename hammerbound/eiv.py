@@ -502,6 +502,17 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
             raise SolverError(f"internal error: non-finite bounds {self.bounds_.tolist()}; "
                               "please report it.")
+        crossed = np.flatnonzero(self.bounds_[:, 0] > self.bounds_[:, 1])
+        if crossed.size:
+            # both ends are certified outer bounds (lower <= min, max <= upper over the set,
+            # relaxed outward by the tolerance policy): if they cross, no parameter vector
+            # is feasible, beyond the tolerance
+            k = int(crossed[0])
+            name = problem.param_names[k]
+            raise EmptyFeasibleSetError(
+                f"no parameters explain the data within the bounds: the certified bounds on "
+                f"{name} cross ({self.bounds_[k, 0]:.6g} > {self.bounds_[k, 1]:.6g}). "
+                f"{self._assumptions(problem)}")
         # halves first: no overflow for bounds near the float range
         self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
         self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])

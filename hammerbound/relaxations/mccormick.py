@@ -23,8 +23,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..tolerances import FEASIBILITY_RTOL
 from ._highs import HighsLP, round_down, round_up
-from .problem import EIVProblem
+from .problem import EIVProblem, equation_scale
 
 
 def _prod_bounds(xl, xu, el, eu):
@@ -114,16 +115,23 @@ class McCormickRelaxation:
             rows.append(eqr)
             cols.append(w0 + npa + inv[:, j])
             vals.append(np.ones(m))
-        rl = [-yt]
-        ru = [-yt]
+        # tolerance policy: every equation is relaxed outward by FEASIBILITY_RTOL times the
+        # magnitudes of its terms over the initial (largest) box, so node certificates of
+        # "empty" and of bounds hold beyond the tolerance, never for the data taken exactly
+        thmax = np.max(np.abs(np.asarray(box, dtype=float)), axis=1)
+        thmax = np.where(np.isfinite(thmax), thmax, np.max(np.abs(pr.theta_box), axis=1))
+        tau = FEASIBILITY_RTOL * equation_scale(pr, thmax)
+        rl = [-yt - tau]
+        ru = [-yt + tau]
         nrow = m
         g = pr.gain_row()
         if g is not None:
+            gtau = FEASIBILITY_RTOL * (float(np.abs(g[0]) @ thmax) + abs(g[1]))
             rows.append(np.full(p, nrow))
             cols.append(np.arange(p))
             vals.append(g[0])
-            rl.append([g[1]])
-            ru.append([g[1]])
+            rl.append([g[1] - gtau])
+            ru.append([g[1] + gtau])
             nrow += 1
         self.mc0 = nrow
         qi = np.arange(P)

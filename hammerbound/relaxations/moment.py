@@ -434,7 +434,12 @@ def moment_bounds(
     if fallback.shape != (problem.p, 2):
         raise ParameterValidationError(
             f"fallback must be an array of shape ({problem.p}, 2); got {fallback.shape}.")
-    relax = MomentRelaxation(problem, order, theta_box)
+    # tolerance policy: the relaxation (and its dual certificate) is built on the data with
+    # every equation relaxed outward by FEASIBILITY_RTOL x the magnitudes of its terms
+    from .problem import outward_problem
+
+    scale_box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+    relax = MomentRelaxation(outward_problem(problem, scale_box), order, theta_box)
     t_build = time.perf_counter() - t_start
     box = relax.box
     objs = relax.objectives()

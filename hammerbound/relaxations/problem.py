@@ -265,6 +265,31 @@ def equation_scale(problem: EIVProblem, theta) -> np.ndarray:
     return np.abs(yt) + np.abs(phi) @ theta + err
 
 
+def outward_problem(problem: EIVProblem, box) -> EIVProblem:
+    """A copy of ``problem`` whose output-error bounds are relaxed outward (tolerance policy).
+
+    Equation ``t`` of (22.34) holds ``eta_t`` with coefficient one, so widening
+    ``|eta_t| <= deta_t`` by ``tau_t = FEASIBILITY_RTOL * equation_scale_t`` (the magnitudes
+    of the equation's terms over ``box``) gives every equation a slack of ``tau_t``: the
+    relaxed set contains the exact one and every point whose equations hold up to rounding.
+    Used by the relaxations whose "empty" and bound certificates are exact for the data they
+    are given (moment); the LP and McCormick relaxations relax their rows instead.
+    """
+    import dataclasses
+
+    from ..tolerances import FEASIBILITY_RTOL
+
+    box = np.asarray(box, dtype=float)
+    thmax = np.max(np.abs(box), axis=1)
+    if not np.all(np.isfinite(thmax)):
+        thmax = np.where(np.isfinite(thmax), thmax, np.max(np.abs(problem.theta_box), axis=1))
+    tau = FEASIBILITY_RTOL * equation_scale(problem, thmax)
+    deta = problem.deta.copy()
+    cur = problem.eta_index()[:, 0]
+    deta[cur] = deta[cur] + tau
+    return dataclasses.replace(problem, deta=deta)
+
+
 def check_theta(problem: EIVProblem, theta, tol: float | None = None) -> FeasibilityCheck:
     """Decide whether ``theta`` belongs to the EIV feasible set (22.34).
 

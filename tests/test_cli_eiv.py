@@ -116,3 +116,20 @@ def test_eiv_missing_column_and_gain_error(tmp_path, capsys):
     cap = capsys.readouterr()
     assert rc == 2 and cap.out == ""
     assert "EmptyFeasibleSetError" in cap.err and "B(1)/A(1) = 3" in cap.err
+
+
+def test_eiv_total_time_limit_zero_reports_lp_bounds_with_status_limit(capsys):
+    """A spent total budget: every end keeps its certified LP bound, status 'limit'."""
+    args = ["eiv", str(example_data_path()), *LRIC_ARGS, "--json"]
+    assert main([*args, "--method", "lp"]) == 0
+    lp = json.loads(capsys.readouterr().out)
+    with pytest.warns(Warning, match="stopped early"):
+        rc = main([*args, "--method", "exact", "--total-time-limit", "0"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    lo, hi = np.array(out["lower"]), np.array(out["upper"])
+    assert np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
+    # never wider than the LP bound, and still around the exact intervals
+    assert np.all(lo >= np.array(lp["lower"]) - 1e-12) and np.all(hi <= np.array(lp["upper"]) + 1e-12)
+    assert np.all(lo <= LRIC_EXACT[:, 0] + 2e-4) and np.all(hi >= LRIC_EXACT[:, 1] - 2e-4)
+    assert all("limit" in r["status"] for r in out["intervals"])

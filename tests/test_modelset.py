@@ -124,12 +124,9 @@ def lric_fit():
 
 
 def _lric():
-    from pathlib import Path
+    from hammerbound.io import example_data_path
 
-    p = Path("/work/shared/data/lric/eiv_first_order_2017.csv")
-    if not p.exists():
-        pytest.skip("third-party LRIC data not available")
-    return np.loadtxt(p, delimiter=",", skiprows=1)
+    return np.loadtxt(example_data_path(), delimiter=",", skiprows=1)
 
 
 # ----------------------------------------------------------------------------- zonotopes

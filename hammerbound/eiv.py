@@ -493,6 +493,10 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                             if h)
             kw = {"side": exc.side, "first_index": exc.first_index} \
                 if isinstance(exc, EmptyFeasibleSetError) else {}
+            if isinstance(exc, EmptyFeasibleSetError) and data is None:
+                hint += (" If these samples were cut by a cross-validation splitter (e.g. "
+                         "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
+                         "IOData, which refuses such cuts.")
             raise type(exc)(f"{exc} {hint}", **kw) from exc
         self.problem_ = problem
         self.result_ = res

@@ -222,3 +222,17 @@ def test_iodata_from_frame_and_backlash_tables():
     assert list(fr["parameter"]) == ["ml", "cl", "mr", "cr"]
     np.testing.assert_allclose(fr["upper"], bl.gamma_bounds_[:, 1])
     assert bl.summary().splitlines()[2].startswith("ml ")
+
+
+def test_plain_array_kfold_splice_message_names_the_cause():
+    """Plain arrays carry no sample index: the splice is found as an inconsistency, and the
+    message says that a cross-validation cut is the likely cause."""
+    from hammerbound.exceptions import EmptyFeasibleSetError
+
+    ex = hb.chapter_example(0.05, N=200, random_state=0)
+    keep = np.r_[0:40, 80:200]  # what KFold(5)'s second training set looks like
+    est = hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp", steady_state_gain=1.0)
+    with pytest.raises(EmptyFeasibleSetError, match="TimeSeriesSplit"):
+        est.fit(ex.prbs.x[keep], ex.prbs.y[keep], input_bound=1e-9)
+    # the same record, not cut, is consistent
+    est.fit(ex.prbs.x, ex.prbs.y, input_bound=1e-9)

@@ -22,21 +22,10 @@ __all__ = ["IOData"]
 
 
 def _signal(name, v):
-    try:
-        a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataValidationError(f"{name} must be a 1-D array of real numbers.") from exc
-    if a.ndim == 2 and a.shape[1] == 1:
-        a = a[:, 0]
-    if a.ndim != 1 or a.size == 0:
-        raise DataValidationError(
-            f"{name} must be a non-empty 1-D signal (shape (N,) or (N, 1)); got shape "
-            f"{a.shape}.")
-    if not np.all(np.isfinite(a)):
-        bad = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise DataValidationError(
-            f"{name} contains NaN or infinity (first at sample {bad}); remove or repair it.")
-    return a
+    """One validation of signals for the whole package (:func:`validation.as_signal`)."""
+    from .validation import as_signal
+
+    return as_signal(name, v)
 
 
 def _check_dt(dt):

@@ -34,8 +34,8 @@ def test_mccormick_rows_are_relaxed_outward_by_the_policy(scale):
     rl, ru = np.asarray(relax.lp.rl[:m]), np.asarray(relax.lp.ru[:m])
     assert np.all(rl < -yt) and np.all(ru > -yt)
     np.testing.assert_allclose(ru - rl, 2 * tau, rtol=1e-6)
-    # the gain row too
-    assert relax.lp.rl[m] < pr.gain < relax.lp.ru[m]
+    # the gain equality (22.8) has exact coefficients: it stays an equality
+    assert relax.lp.rl[m] == relax.lp.ru[m] == pr.gain
 
 
 def test_outward_problem_widens_each_equation_by_its_scale():

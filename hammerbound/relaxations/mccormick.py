@@ -126,12 +126,12 @@ class McCormickRelaxation:
         nrow = m
         g = pr.gain_row()
         if g is not None:
-            gtau = FEASIBILITY_RTOL * (float(np.abs(g[0]) @ thmax) + abs(g[1]))
+            # the gain equality (22.8) is a model fact with exact coefficients: not relaxed
             rows.append(np.full(p, nrow))
             cols.append(np.arange(p))
             vals.append(g[0])
-            rl.append([g[1] - gtau])
-            ru.append([g[1] + gtau])
+            rl.append([g[1]])
+            ru.append([g[1]])
             nrow += 1
         self.mc0 = nrow
         qi = np.arange(P)

@@ -172,6 +172,93 @@ class _ScaledPOP:
         self.cliques = [(sorted(cv), hs) for cv, hs in by_set.items()]
 
 
+#: Monomial bases of the moment matrices (see :class:`MomentRelaxation`).
+BASES = ("full", "sparse")
+
+
+def _sparse_basis(theta_vars, noise_vars, order):
+    """Term-sparse basis: ``theta^a e^b`` with ``|b| <= 1`` and ``|a| + |b| <= order``,
+    without the pure-theta monomials of degree ``order >= 2`` (order 2: ``1, theta, e,
+    theta e``)."""
+    out = [()]
+    for d in range(1, order + 1):
+        for a in itertools.combinations_with_replacement(theta_vars, d):
+            if d < order or order == 1:
+                out.append(a)
+        for a in itertools.combinations_with_replacement(theta_vars, d - 1):
+            for e in noise_vars:
+                out.append(tuple(sorted(a + (e,))))
+    return out
+
+
+def _clique_constraints(cvars, hs, pop, order, basis):
+    """``[(g, basis)]`` of one clique: localizing matrices ``M(g y)`` over ``basis`` (the
+    moment matrix is ``g = 1``) and ``(None, multipliers)`` for the equalities.
+
+    ``basis="full"``: every monomial of degree ``<= order`` (localizing: ``<= order - 1``;
+    equality multipliers: ``<= 2 order - 2``), as in Lasserre (2006).
+    ``basis="sparse"``: the moment matrix over :func:`_sparse_basis`; a localizing product
+    ``g b b'`` or an equality product ``h alpha`` is kept only when all its monomials are
+    entries of that moment matrix (so no moment appears that the matrix does not bound).
+    """
+    if basis == "full" or order == 1:
+        mb = _monomials(cvars, order)
+        lb = _monomials(cvars, order - 1)
+        out = [({(): 1.0}, mb)]
+        out += [({(): 1.0, (v, v): -1.0}, lb) for v in cvars]
+        out += [(g, lb) for g in pop.extra_ineqs]
+        out.append((None, _monomials(cvars, 2 * order - 2)))
+        return out
+    tv = [v for v in cvars if v < pop.q]
+    nv = [v for v in cvars if v >= pop.q]
+    mb = _sparse_basis(tv, nv, order)
+    mm = {tuple(sorted(a + b)) for a in mb for b in mb}
+    cand = _monomials(cvars, order - 1)
+
+    def loc_basis(g):
+        keep = []
+        for c in cand:
+            trial = keep + [c]
+            if all(tuple(sorted(m + c + b)) in mm for m in g for b in trial):
+                keep.append(c)
+        return keep
+
+    out = [({(): 1.0}, mb)]
+    for g in [{(): 1.0, (v, v): -1.0} for v in cvars] + list(pop.extra_ineqs):
+        lb = loc_basis(g)
+        if lb:
+            out.append((g, lb))
+    support = set().union(*[set(h) for h in hs]) if hs else set()
+    mult = [a for a in _monomials(cvars, 2 * order - 2)
+            if all(tuple(sorted(m + a)) in mm for m in support)]
+    out.append((None, mult))
+    return out
+
+
+def _affine(y, rows, cols, vals, dim, name):
+    """PICOS affine ``dim x dim`` expression with ``vec`` coefficients over ``y`` (column
+    0 of the lists is the constant); built directly, without a dense product."""
+    import cvxopt
+    from picos.expressions import AffineExpression
+
+    rows = np.asarray(rows, dtype=int)
+    cols = np.asarray(cols, dtype=int)
+    vals = np.asarray(vals, dtype=float)
+    is_c = cols == 0
+    A = sp.coo_matrix((vals[~is_c], (rows[~is_c], cols[~is_c] - 1)),
+                      shape=(dim * dim, y.dim)).tocsc()
+    A.sum_duplicates()
+    A.eliminate_zeros()
+    Ac = A.tocoo()
+    cst = np.zeros(dim * dim)
+    np.add.at(cst, rows[is_c], vals[is_c])
+    coefs = {y: cvxopt.spmatrix(Ac.data.tolist(), Ac.row.tolist(), Ac.col.tolist(),
+                                (dim * dim, y.dim))}
+    if np.any(cst != 0):
+        coefs[()] = cvxopt.matrix(cst)
+    return AffineExpression(name, (dim, dim), coefs)
+
+
 class MomentRelaxation:
     """Sparse moment relaxation of order ``delta`` of the EIV set, formulated in PICOS.
 
@@ -192,12 +279,17 @@ class MomentRelaxation:
     n_moments : int
     """
 
-    def __init__(self, problem: EIVProblem, order: int = 2, theta_box=None):
+    def __init__(self, problem: EIVProblem, order: int = 2, theta_box=None,
+                 basis: str = "full"):
         import picos
 
         if int(order) != order or order < 1:
             raise ParameterValidationError(f"order must be an integer >= 1; got {order!r}.")
+        if basis not in BASES:
+            raise ParameterValidationError(
+                f"basis must be one of {', '.join(map(repr, BASES))}; got {basis!r}.")
         self.order = order = int(order)
+        self.basis = basis
         box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
         if box.shape != (problem.p, 2) or not np.all(np.isfinite(box)) or np.any(
             box[:, 0] > box[:, 1]
@@ -221,59 +313,46 @@ class MomentRelaxation:
         idx(())  # y_0 = 1, eliminated below
         for j in range(pop.q):
             idx((j,))
-        blocks = []  # (rows, cols, vals, const_rows, const_vals, dim) matrices over vec
+        blocks = []  # (rows, cols, vals, dim): vec (column-major) of a matrix over moments
         eqs = []  # lists of polynomials (dict mono->coef) == 0
         q_vars = list(range(pop.q))
         for cvars, hs in pop.cliques:
-            basis = _monomials(cvars, order)
-            blocks.append(self._loc_matrix({(): 1.0}, basis, idx))
-            lbasis = _monomials(cvars, order - 1)
-            for v in cvars:
-                blocks.append(self._loc_matrix({(): 1.0, (v, v): -1.0}, lbasis, idx))
-            for g in pop.extra_ineqs:
-                blocks.append(self._loc_matrix(g, lbasis, idx))
-            ebasis = _monomials(cvars, 2 * order - 2)
-            for h in hs:
-                for a in ebasis:
-                    eqs.append({tuple(sorted(m + a)): c for m, c in h.items()})
+            for g, b in _clique_constraints(cvars, hs, pop, order, basis):
+                if g is None:  # equalities h x^alpha = 0
+                    for h in hs:
+                        for a in b:
+                            eqs.append({tuple(sorted(m + a)): c for m, c in h.items()})
+                else:
+                    blocks.append(self._loc_matrix(g, b, idx))
         if not pop.cliques:  # no equation: only theta-box constraints
-            basis = _monomials(q_vars, order)
-            blocks.append(self._loc_matrix({(): 1.0}, basis, idx))
+            basis_ = _monomials(q_vars, order)
+            blocks.append(self._loc_matrix({(): 1.0}, basis_, idx))
+        # equality moments are registered too (a moment outside every matrix is a free
+        # variable, still bounded by |y| <= 1 for the certificate)
+        erows, ecols, evals, ecst = [], [], [], np.zeros(len(eqs))
+        for i, h in enumerate(eqs):
+            for mono, coef in h.items():
+                j = idx(mono)
+                if j == 0:
+                    ecst[i] += coef
+                else:
+                    erows.append(i)
+                    ecols.append(j - 1)
+                    evals.append(coef)
         m = len(index) - 1  # moment variables y_alpha, alpha != 0 (column j-1)
         self.index = index
         self.n_moments = m
         y = picos.RealVariable("y", m)
         P = picos.Problem()
-        for rows, cols, vals, dim in blocks:
-            cols = np.asarray(cols)
-            rows = np.asarray(rows)
-            vals = np.asarray(vals)
-            is_c = cols == 0
-            Acoef = sp.csc_matrix(
-                (vals[~is_c], (rows[~is_c], cols[~is_c] - 1)), shape=(dim * dim, m)
-            )
-            cst = np.zeros(dim * dim)
-            np.add.at(cst, rows[is_c], vals[is_c])
-            expr = (picos.Constant(Acoef) * y + picos.Constant(cst)).reshaped((dim, dim))
+        for k, (rows, cols, vals, dim) in enumerate(blocks):
+            expr = _affine(y, rows, cols, vals, dim, f"M{k}")
             if dim == 1:
                 P.add_constraint(expr >= 0)
             else:
                 P.add_constraint(expr >> 0)
         if eqs:
-            r, c, v, cst = [], [], [], np.zeros(len(eqs))
-            for i, h in enumerate(eqs):
-                for mono, coef in h.items():
-                    j = idx(mono)
-                    if j == 0:
-                        cst[i] += coef
-                    else:
-                        r.append(i)
-                        c.append(j - 1)
-                        v.append(coef)
-            if len(index) - 1 != m:  # pragma: no cover - equalities only use clique moments
-                raise RuntimeError("equality introduced a moment outside the moment matrices")
-            Aeq = sp.csc_matrix((v, (r, c)), shape=(len(eqs), m))
-            P.add_constraint(picos.Constant(Aeq) * y == picos.Constant(-cst))
+            Aeq = sp.csc_matrix((evals, (erows, ecols)), shape=(len(eqs), m))
+            P.add_constraint(picos.Constant(Aeq) * y == picos.Constant(-ecst))
         obj = self._objective(0)
         P.set_objective("min", picos.Constant(obj[0].reshape(1, -1)) * y)
         self.picos_problem = P

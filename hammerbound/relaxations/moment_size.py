@@ -115,17 +115,53 @@ def _clique_sets(problem: EIVProblem, theta_box) -> tuple[int, int, list]:
     return q, (1 if elim is not None else 0), list(counts.items())
 
 
-def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None) -> MomentSize:
+def _sparse_counts(q: int, n_extra: int, cliques, d: int):
+    """Rows and moments of ``basis="sparse"`` (see :func:`.moment._clique_constraints`)."""
+    from .moment import _sparse_basis
+
+    rows = q + n_extra  # scalar theta boxes, once
+    noise_seen = set()
+    seen = set()
+    side_max = 0
+    for cv, nh in cliques:
+        tv = [v for v in cv if v < q]
+        nv = [v for v in cv if v >= q]
+        mb = _sparse_basis(tv, nv, d)
+        s = len(mb)
+        side_max = max(side_max, s)
+        rows += s * (s + 1) // 2 + nh * s  # moment matrix; h times every basis monomial
+        lb = len(_sparse_basis(tv, [], d - 1)) if d > 1 else 1  # (1 - e^2) x {1, theta..}
+        for v in nv:
+            if v not in noise_seen:
+                noise_seen.add(v)
+                rows += lb * (lb + 1) // 2
+        seen.update(tuple(sorted(a + b)) for a in mb for b in mb)
+    seen.discard(())
+    return rows, len(seen), side_max
+
+
+def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None,
+                               basis: str = "sparse") -> MomentSize:
     """Estimate the size of :class:`.moment.MomentRelaxation` without building it.
 
     The rows are counted exactly (PSD blocks in symmetric vectorisation); the moments are
     counted exactly by enumerating the cliques' monomials when that is cheap (up to
-    ``2e6`` monomials), else bounded from above.
+    ``2e6`` monomials), else bounded from above. ``basis``: as in
+    :class:`.moment.MomentRelaxation` (``"sparse"`` and ``"full"`` coincide at order 1).
     """
     d = int(order)
     q, n_extra, cliques = _clique_sets(problem, theta_box)
     if not cliques:
         cliques = [(tuple(range(q)), 0)]
+    if basis == "sparse" and d >= 2 and any(nh for _, nh in cliques):
+        rows, moments, side = _sparse_counts(q, n_extra, cliques, d)
+        nv_max = max(len(cv) for cv, _ in cliques)
+        work = float(rows) * float(moments)
+        return MomentSize(order=d, n_cliques=len(cliques), clique_vars=nv_max,
+                          psd_side=side, n_rows=int(rows), n_moments=int(moments),
+                          moments_exact=True, work=work,
+                          est_seconds=_SEC_PER_CLIQUE * len(cliques) + _SEC_PER_WORK * work,
+                          est_bytes=_BYTES_PER_WORK * work)
     rows = 0
     nv_max = 0
     for cv, nh in cliques:

@@ -103,12 +103,19 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     relaxation_order : int, default 1
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
-        cost (order 2 at N = 30 took ~290 s with Clarabel; see ``docs/benchmarks.md``).
-        The relaxation's size is estimated before it is built: above
-        ``rows x moments = 2.5e8`` (order 1 at N ~ 900) the fit raises
-        :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or
-        ``"exact"``), above ``2e7`` it warns (module
+        cost. Order 2 (term-sparse basis, ``relaxation_basis="sparse"``) equals the exact
+        intervals within 1e-3 of their width on the chapter example and takes minutes at
+        N = 100 (see ``docs/benchmarks.md``). The relaxation's size is estimated before it
+        is built: above ``rows x moments = 8e8`` (order 1 at N ~ 1500, order 2 at
+        N ~ 150) the fit raises :class:`~hammerbound.exceptions.RelaxationTooLargeError`
+        (use ``"lp"`` or ``"exact"``), above ``2e7`` it warns (module
         :mod:`hammerbound.relaxations.moment_size`).
+    relaxation_basis : {"sparse", "full"}, default "sparse"
+        Monomial basis of the moment matrices (order >= 2; both coincide at order 1):
+        ``"sparse"`` uses ``1, theta, e, theta e`` (the equations are bilinear in
+        parameters x noise), ``"full"`` every monomial of degree <= ``relaxation_order``
+        (at least as tight, ~50x slower: 404 s for N = 10). See
+        :class:`~hammerbound.relaxations.moment.MomentRelaxation`.
     solver : {"clarabel", "cvxopt", "mosek"}, default "clarabel"
         Conic backend of the moment method.
     solver_options : dict or None
@@ -178,8 +185,9 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
     def __init__(self, na=2, nb=2, *, nk=None, b0=False, noise_bound=0.05,
                  steady_state_gain=None,
-                 method="moment", relaxation_order=1, solver="clarabel", solver_options=None,
-                 theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
+                 method="moment", relaxation_order=1, relaxation_basis="sparse",
+                 solver="clarabel", solver_options=None, theta_box=None, tol=1e-4,
+                 max_nodes=20000, time_limit=600.0,
                  total_time_limit=None, on_failure="raise", n_jobs=1, progress=False):
         self.na = na
         self.nb = nb
@@ -189,6 +197,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.steady_state_gain = steady_state_gain
         self.method = method
         self.relaxation_order = relaxation_order
+        self.relaxation_basis = relaxation_basis
         self.solver = solver
         self.solver_options = solver_options
         self.theta_box = theta_box
@@ -246,6 +255,10 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         if self.on_failure not in ("box", "raise"):
             raise ParameterValidationError(
                 f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
+            )
+        if self.relaxation_basis not in ("sparse", "full"):
+            raise ParameterValidationError(
+                f"relaxation_basis must be 'sparse' or 'full'; got {self.relaxation_basis!r}."
             )
         as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
                 example="1.0")
@@ -480,13 +493,15 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
                 backend.check_options(self.solver_options)
                 # memory/time guard before any work (refuses with the estimate, or warns)
-                check_moment_budget(estimate_moment_relaxation(problem, self.relaxation_order))
+                check_moment_budget(estimate_moment_relaxation(
+                    problem, self.relaxation_order, basis=self.relaxation_basis))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
                                     solver_options=self.solver_options, n_jobs=self.n_jobs,
                                     theta_box=lp.bounds, on_failure=self.on_failure,
-                                    fallback=lp.bounds, max_work=float("inf"))
+                                    fallback=lp.bounds, max_work=float("inf"),
+                                    basis=self.relaxation_basis)
                 res.extra["lp"] = lp
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
             hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))

@@ -728,6 +728,10 @@ CASES: list[ErrorCase] = [
       "LinearEIVSetEstimator(...).fit(IOData(u, y), y)",
       lambda: lin().fit(hb.IOData(x_inner(), y_prbs()), y_prbs()),
       DataValidationError, "without y"),
+    C("s2-relaxation-basis", "stage 2", "unknown moment basis",
+      "LinearEIVSetEstimator(method='moment', relaxation_basis='dense', ...).fit(x, y)",
+      lambda: lin(method="moment", relaxation_basis="dense").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "'sparse' or 'full'"),
 ]
 
 

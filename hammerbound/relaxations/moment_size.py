@@ -150,7 +150,7 @@ def _bytes(rows: int, psd: float) -> float:
 
 def _sparse_counts(q: int, n_extra: int, cliques, d: int):
     """Rows and moments of ``basis="sparse"`` (see :func:`.moment._clique_constraints`)."""
-    from .moment import _sparse_basis
+    from .moment_basis import _sparse_basis
 
     rows = q + n_extra  # scalar theta boxes, once
     psd = 0.0

@@ -542,7 +542,7 @@ def section_moment2():
             ratios.append(f"N = {r['N']}: full / sparse wall time = "
                           f"{r['wall_s'] / sp[0]['wall_s']:.0f}x (same run)")
     if ratios:
-        out.append("\n" + "; ".join(ratios) + ".")
+        out.append("; ".join(ratios) + ".")
     big = [r for r in rows if r["basis"] == "sparse"]
     if big:
         r = max(big, key=lambda q: q["N"])
@@ -555,10 +555,10 @@ def section_moment2():
             dl, du = r["rel_diff"][k]
             body2.append([names[k], f(el, 6), f(eu, 6), f(ml, 6), f(mu, 6), f"{dl:.1e}",
                           f"{du:.1e}"])
-        out.append(f"\nPer interval end at N = {r['N']} (relative difference = (moment - "
-                   "exact) / exact width, positive = inside the exact outer bound):\n")
+        out.append(f"Per interval end at N = {r['N']} (relative difference = (moment - "
+                   "exact) / exact width, positive = inside the exact outer bound):")
         out.append(table(hdr2, body2))
-    return "\n".join(out) + "\n"
+    return "\n" + "\n\n".join(o.strip("\n") for o in out if o) + "\n"
 
 
 def main(argv=None):

@@ -42,6 +42,7 @@ from .lp import lp_bounds, raise_if_box_limited
 from .mccormick import McCormickRelaxation
 from .problem import EIVProblem, check_theta, equation_scale
 from .result import BoundInfo, IntervalResult
+from .working_set import AUTO_MIN_EQUATIONS, WorkingSetRelaxation, initial_equations
 
 __all__ = ["exact_bounds"]
 # branch at the LP point, kept this fraction of the width away from the box edges
@@ -82,9 +83,15 @@ class _Screen:
     Same LP as :func:`.problem.check_theta` (``min s`` with ``|M(theta) z - r(theta)| <= s``
     over the error boxes), kept on one HiGHS instance and warm-started from the previous
     basis. Only used to screen candidates; acceptance always goes through ``check_theta``.
+
+    With ``working_set=True`` (long records) the LP holds only a growing subset of the
+    equations, after an interval test of all of them (:func:`.working_set.interval_excess`,
+    whose excess is a lower bound of ``s``); a candidate that the LP passes but
+    ``check_theta`` rejects adds the binding equations of the full LP
+    (:meth:`learn`). A weaker screen only costs a ``check_theta`` call, never a bound.
     """
 
-    def __init__(self, problem: EIVProblem):
+    def __init__(self, problem: EIVProblem, working_set: bool = False):
         import highspy
 
         pr = problem
@@ -93,45 +100,114 @@ class _Screen:
         m = pr.equation_times.size
         eta_idx, dx_idx = pr.eta_index(), pr.dx_index()
         self.m, self.nz = m, n + k
-        self.rows = np.concatenate([np.repeat(np.arange(m), na + 1),
-                                    np.repeat(np.arange(m), dx_idx.shape[1])])
-        self.cols = np.concatenate([eta_idx.ravel(), n + dx_idx.ravel()])
+        self._eta_idx, self._dx_idx = eta_idx, dx_idx
         self.na1, self.nbp = na + 1, dx_idx.shape[1]
         self.lb = np.concatenate([-pr.deta, -pr.dx_group, [0.0]])
         self.ub = np.concatenate([pr.deta, pr.dx_group, [highspy.kHighsInf]])
-        # fixed sparsity of A = [[M, -1], [M, 1]] (column-major, duplicates summed): only the
-        # values depend on theta, gathered from the contributions with one bincount
-        nc = self.rows.size
-        rows2 = np.concatenate([self.rows, self.rows + m, np.arange(m), np.arange(m, 2 * m)])
-        cols2 = np.concatenate([self.cols, self.cols, np.full(2 * m, n + k)])
-        order = np.lexsort((rows2, cols2))
-        r_s, c_s = rows2[order], cols2[order]
-        new = np.ones(order.size, dtype=bool)
-        new[1:] = (r_s[1:] != r_s[:-1]) | (c_s[1:] != c_s[:-1])
-        self._pos = np.cumsum(new) - 1
-        self._order = order
-        self._nnz = int(self._pos[-1]) + 1
-        self._index = r_s[new].astype(np.int32)
-        self._start = np.searchsorted(c_s[new], np.arange(n + k + 2)).astype(np.int32)
-        self._nc = nc
-        self._ones = np.concatenate([-np.ones(m), np.ones(m)])
+        self.working_set = bool(working_set)
+        if self.working_set:
+            from .working_set import EquationData, initial_equations
+
+            self.data = EquationData(pr)
+            self.in_set = np.zeros(m, dtype=bool)
+            self.in_set[initial_equations(pr, pr.theta_box)] = True
+            self._struct_full = None
+        else:
+            self.in_set = np.ones(m, dtype=bool)
+        self._struct = None
         h = highspy.Highs()
         h.setOptionValue("output_flag", False)
         h.setOptionValue("threads", 1)
         self.h = h
         self.basis = None
+        self._last = None
+        self._last_eqs = None
+        self._tol = None
         self._hs = highspy
 
+    def _structure(self, eqs):
+        """Fixed sparsity of A = [[M, -1], [M, 1]] on the equations ``eqs`` (column-major,
+        duplicates summed): only the values depend on theta, gathered with one bincount."""
+        n, k = self.problem.N, self.problem.n_groups
+        m = eqs.size
+        loc = np.arange(m)
+        rows = np.concatenate([np.repeat(loc, self.na1), np.repeat(loc, self.nbp)])
+        cols = np.concatenate([self._eta_idx[eqs].ravel(), n + self._dx_idx[eqs].ravel()])
+        rows2 = np.concatenate([rows, rows + m, loc, loc + m])
+        cols2 = np.concatenate([cols, cols, np.full(2 * m, n + k)])
+        order = np.lexsort((rows2, cols2))
+        r_s, c_s = rows2[order], cols2[order]
+        new = np.ones(order.size, dtype=bool)
+        new[1:] = (r_s[1:] != r_s[:-1]) | (c_s[1:] != c_s[:-1])
+        pos = np.cumsum(new) - 1
+        return {"eqs": eqs, "pos": pos, "order": order, "nnz": int(pos[-1]) + 1,
+                "index": r_s[new].astype(np.int32),
+                "start": np.searchsorted(c_s[new], np.arange(n + k + 2)).astype(np.int32),
+                "ones": np.concatenate([-np.ones(m), np.ones(m)])}
+
     def violation(self, theta) -> float:
-        hs = self._hs
         theta = np.asarray(theta, dtype=float)
+        if self._last is not None and np.array_equal(self._last[0], theta):
+            return self._last[1]
+        v = self._violation(theta)
+        self._last = (theta.copy(), v)
+        return v
+
+    def binding(self, theta) -> np.ndarray:
+        """Equations (indices) with a non-zero multiplier in the screening LP at ``theta``.
+
+        Empty when ``theta`` screens feasible. Otherwise these rows carry the certificate
+        that no errors explain the data at ``theta`` (the working-set separation,
+        :meth:`.working_set.WorkingSetRelaxation.separate`).
+        """
+        v = self.violation(theta)
+        if not np.isfinite(v) or v <= self.tol_at(theta) or self._last_eqs is None:
+            return np.zeros(0, dtype=np.int64)
+        return self._last_eqs
+
+    def learn(self, theta) -> None:
+        """After ``check_theta`` rejected a screened ``theta``: add the binding equations of
+        the full screening LP at ``theta`` to the working set (working-set mode only)."""
+        if not self.working_set:
+            return
+        if self._struct_full is None:
+            self._struct_full = self._structure(np.arange(self.m))
+        theta = np.asarray(theta, dtype=float)
+        v = self._solve(theta, self._struct_full, None)
+        if np.isfinite(v) and self._last_eqs is not None:
+            self.in_set[self._last_eqs] = True
+            self._struct = None
+        self._last = None
+
+    def _violation(self, theta) -> float:
+        self._last_eqs = None
+        if self.working_set:
+            from .working_set import ADD_PER_ROUND
+
+            r, err, _ = self.data.terms(theta)
+            exc = np.abs(r) - err  # s >= exc_t for every equation t
+            worst = float(np.max(exc, initial=-np.inf))
+            if worst > self.tol_at(theta):
+                bad = np.flatnonzero(exc > self.tol_at(theta))
+                self._last_eqs = bad[np.argsort(-exc[bad])[:ADD_PER_ROUND]]
+                self.in_set[self._last_eqs] = True
+                self._struct = None
+                return worst
+        if self._struct is None:
+            self._struct = self._structure(np.flatnonzero(self.in_set))
+            self.basis = None
+        return self._solve(theta, self._struct, "basis")
+
+    def _solve(self, theta, st, keep) -> float:
+        hs = self._hs
         pr = self.problem
         a, b = theta[: pr.na], theta[pr.na :]
-        m, nz = self.m, self.nz
+        eqs = st["eqs"]
+        m, nz = eqs.size, self.nz
         vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
-        contrib = np.concatenate([vals, vals, self._ones])
-        data = np.bincount(self._pos, weights=contrib[self._order], minlength=self._nnz)
-        r = pr.simulate_noise_free(theta)
+        contrib = np.concatenate([vals, vals, st["ones"]])
+        data = np.bincount(st["pos"], weights=contrib[st["order"]], minlength=st["nnz"])
+        r = pr.simulate_noise_free(theta)[eqs]
         lp = hs.HighsLp()
         lp.num_col_, lp.num_row_ = nz + 1, 2 * m
         c = np.zeros(nz + 1)
@@ -141,24 +217,36 @@ class _Screen:
         lp.row_lower_ = np.concatenate([np.full(m, -hs.kHighsInf), r])
         lp.row_upper_ = np.concatenate([r, np.full(m, hs.kHighsInf)])
         lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = self._start
-        lp.a_matrix_.index_ = self._index
+        lp.a_matrix_.start_ = st["start"]
+        lp.a_matrix_.index_ = st["index"]
         lp.a_matrix_.value_ = data
         self.h.passModel(lp)
-        if self.basis is not None:
+        if keep is not None and self.basis is not None:
             self.h.setBasis(self.basis)
         self.h.run()
         if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
-            self.basis = None
+            if keep is not None:
+                self.basis = None
             return np.inf
-        self.basis = self.h.getBasis()
-        return float(self.h.getInfo().objective_function_value)
+        if keep is not None:
+            self.basis = self.h.getBasis()
+        v = float(self.h.getInfo().objective_function_value)
+        if v > self.tol_at(theta):
+            y = np.abs(np.asarray(self.h.getSolution().row_dual))
+            w = y[:m] + y[m:]
+            self._last_eqs = eqs[w > 1e-9 * max(float(w.max(initial=0.0)), 1e-300)]
+        return v
 
     def tol_at(self, theta) -> float:
         """Screening tolerance: the strictest equation tolerance of :func:`check_theta`."""
         from ..tolerances import FEASIBILITY_RTOL
 
-        return FEASIBILITY_RTOL * float(np.min(equation_scale(self.problem, theta)))
+        theta = np.asarray(theta, dtype=float)
+        if self._tol is None or not np.array_equal(self._tol[0], theta):
+            scale = self.data.terms(theta)[2] if self.working_set else \
+                equation_scale(self.problem, theta)
+            self._tol = (theta.copy(), FEASIBILITY_RTOL * float(np.min(scale)))
+        return self._tol[1]
 
     def screens(self, theta) -> bool:
         return self.violation(theta) <= self.tol_at(theta)
@@ -173,6 +261,7 @@ class _Pool:
     screen: _Screen | None = None
     checks: int = 0
     stop_at: float | None = None  # time.perf_counter() after which heuristics give up
+    working_set: bool = False  # screen on a working set of equations (long records)
 
     def _out_of_time(self) -> bool:
         return self.stop_at is not None and time.perf_counter() > self.stop_at
@@ -185,6 +274,8 @@ class _Pool:
         except SolverError:  # not verified: simply not accepted as a witness
             return None
         if not chk.feasible:
+            if self.screen is not None:
+                self.screen.learn(theta)
             return None
         pt = _Point(np.array(theta, dtype=float), chk.eta, chk.dx)
         self.points.append(pt)
@@ -192,7 +283,7 @@ class _Pool:
 
     def _ensure_screen(self):
         if self.screen is None:
-            self.screen = _Screen(self.problem)
+            self.screen = _Screen(self.problem, working_set=self.working_set)
 
     def add(self, theta) -> _Point | None:
         """Screen, then verify (nothing once ``stop_at`` has passed)."""
@@ -294,14 +385,41 @@ def _on_gain_plane(problem, theta):
     return theta + g[0] * (g[1] - g[0] @ theta) / float(g[0] @ g[0])
 
 
-def _obbt_task(problem, box, tasks, bases, deadline=None):
+def _relaxation(problem, box, ws):
+    """The full McCormick relaxation (``ws`` None) or one on the working set ``ws``."""
+    if ws is None:
+        return McCormickRelaxation(problem, box)
+    return WorkingSetRelaxation(problem, box, ws)
+
+
+def _solve(relax, screen=None):
+    """Solve the node LP of ``relax``; on a working set, add the equations found violated
+    at its point and re-solve until none is (every bound on the way is certified: the
+    working-set LP relaxes the full one). The result's ``iterations`` sum all re-solves."""
+    iters = 0
+    while True:
+        res = relax.lp.solve()
+        iters += res.iterations
+        if not isinstance(relax, WorkingSetRelaxation) or res.status != "optimal":
+            break
+        add = relax.separate(res.x, screen)
+        if add.size == 0:
+            break
+        relax.add_equations(add)
+    res.iterations = iters
+    return res
+
+
+def _obbt_task(problem, box, tasks, bases, deadline=None, ws=None):
     """Solve the OBBT LPs ``tasks`` (list of (k, sense)) on one McCormick model.
 
     Returns a list of ``(bound, theta (p,) or None, x or None, basis)`` where ``bound``
     is a rigorous lower bound of ``min sense * theta_k`` over the relaxation (``-inf``
-    for a task skipped or cut short at ``deadline``, a :func:`time.time` timestamp).
+    for a task skipped or cut short at ``deadline``, a :func:`time.time` timestamp), and
+    the working set at the end (None without one).
     """
-    relax = McCormickRelaxation(problem, box)
+    relax = _relaxation(problem, box, ws)
+    screen = None if ws is None else _Screen(problem, working_set=True)
     out = []
     for (k, s), basis in zip(tasks, bases, strict=True):
         if deadline is not None:
@@ -313,18 +431,19 @@ def _obbt_task(problem, box, tasks, bases, deadline=None):
         c = np.zeros(relax.ncol)
         c[k] = s
         relax.lp.set_cost(c)
-        if basis is not None:
+        if basis is not None and ws is None:
             relax.lp.set_basis(basis)
-        r = relax.lp.solve()
+        r = _solve(relax, screen)
         if r.status == "infeasible":
             out.append((np.inf, None, None, r.iterations))
             continue
-        out.append((r.bound, None if r.x is None else r.x.copy(), relax.lp.get_basis(),
-                    r.iterations))
-    return out
+        out.append((r.bound, None if r.x is None else r.x.copy(),
+                    relax.lp.get_basis() if ws is None else None, r.iterations))
+    return out, (None if ws is None else relax.equations)
 
 
-def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, deadline=None):
+def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, deadline=None,
+          ws=None):
     """Optimality-based bound tightening of the theta box on the McCormick relaxation.
 
     Each round solves ``min/max theta_k`` (k = 1..p) over the relaxation on the current
@@ -341,6 +460,9 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
         searches; the bound stays valid on the final, smaller box).
     thetas : list of ndarray (p,)
         LP points met on the way (feasibility candidates).
+    ws : ndarray or None
+        With a working set ``ws`` (equation indices) on input: the union of the working
+        sets grown by the OBBT LPs (else None).
     """
     p = problem.p
     box = np.array(box, dtype=float)
@@ -353,16 +475,21 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
     for _ in range(rounds):
         old = box.copy()
         if nj == 1:
-            res = _obbt_task(problem, box, tasks, [bases[t] for t in tasks], deadline)
+            res, ws_new = _obbt_task(problem, box, tasks, [bases[t] for t in tasks], deadline,
+                                     ws)
             res = dict(zip(tasks, res, strict=True))
+            ws_all = [ws_new]
         else:
             from joblib import delayed
 
             outs = parallel(delayed(_obbt_task)(problem, box, ch, [bases[t] for t in ch],
-                                                deadline)
+                                                deadline, ws)
                             for ch in chunks)
-            res = {t: o for ch, oc in zip(chunks, outs, strict=True)
+            res = {t: o for ch, (oc, _) in zip(chunks, outs, strict=True)
                    for t, o in zip(ch, oc, strict=True)}
+            ws_all = [w for _, w in outs]
+        if ws is not None:
+            ws = np.unique(np.concatenate([ws, *ws_all]))
         for (k, s), (bnd, x, basis, _) in res.items():
             if not np.isfinite(bnd) and bnd > 0:
                 raise EmptyFeasibleSetError(
@@ -384,7 +511,7 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
             break
         if deadline is not None and time.time() >= deadline:
             break
-    return box, roots, thetas
+    return box, roots, thetas, ws
 
 
 def _cap(box, k, sense, ub):
@@ -491,7 +618,7 @@ class _GapBar:
 
 
 def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, progress,
-            position, deadline=None):
+            position, deadline=None, ws=None):
     """Minimise ``sense * theta_k`` over the EIV set by branch-and-bound (one interval end).
 
     ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None). ``box0`` is the
@@ -522,11 +649,13 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                        "before this end started; the LP/OBBT outer bound is reported",
                        0, np.nan)
     stop_at = t0 + limit
-    relax = McCormickRelaxation(problem, box0)
+    relax = _relaxation(problem, box0, ws)
     c = np.zeros(relax.ncol)
     c[k] = sense
     relax.lp.set_cost(c)
-    pool = _Pool(problem, list(points), stop_at=stop_at)
+    pool = _Pool(problem, list(points), stop_at=stop_at, working_set=ws is not None)
+    if ws is not None:
+        pool._ensure_screen()
 
     inc = min(pool.points, key=lambda q: val(q.theta), default=None)
     ub = val(inc.theta) if inc is not None else np.inf
@@ -538,9 +667,13 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     heap = []
     counter = 0
     pending = None  # (lb, box, precomputed LPSolve-like (bound, x))
-    if root is not None and root[1] is not None:
+    if root is not None and root[1] is not None and ws is None:
         relax.lp.set_basis(root[2])
         pending = (max(end0, root[0]), box0, root[1])
+    elif root is not None and ws is not None:
+        # the OBBT basis belongs to another working set: solve the root again, from its bound
+        heap.append((max(end0, root[0]), counter, box0))
+        counter += 1
     else:
         heap.append((end0, counter, box0))
         counter += 1
@@ -579,7 +712,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             relax.set_box(box)
             relax.lp.set_cutoff(ub - tol_eff if np.isfinite(ub) else None)
             _limit_lp(relax.lp, stop_at - time.perf_counter())
-            res = relax.lp.solve()
+            res = _solve(relax, pool.screen)
             nodes += 1
             iters += res.iterations
             if res.status == "infeasible":
@@ -688,6 +821,7 @@ def exact_bounds(
     check_box: bool = True,
     total_time_limit: float | None = None,
     deadline: float | None = None,
+    working_set: bool | None = None,
 ) -> IntervalResult:
     """Tight parameter uncertainty intervals (22.35)-(22.37) with a certificate.
 
@@ -723,6 +857,11 @@ def exact_bounds(
     deadline : float or None, default None
         The same budget as an absolute :func:`time.time` timestamp (e.g. shared with other
         steps of a fit); with both, the earlier one counts.
+    working_set : bool or None, default None
+        Solve the OBBT and node LPs on a growing working set of equations
+        (:mod:`.working_set`; the bounds stay certified over all equations, the working-set
+        LPs relax the full ones). ``None``: from
+        :data:`.working_set.AUTO_MIN_EQUATIONS` equations on (long records).
 
     Returns
     -------
@@ -761,9 +900,12 @@ def exact_bounds(
         parallel = Parallel(n_jobs=n_jobs)
         parallel.__enter__()
     try:
-        box, roots, thetas = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel,
-                                   deadline=deadline)
-        pool = _Pool(problem)
+        if working_set is None:
+            working_set = problem.equation_times.size >= AUTO_MIN_EQUATIONS
+        ws = initial_equations(problem, lp.bounds) if working_set else None
+        box, roots, thetas, ws = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel,
+                                       deadline=deadline, ws=ws)
+        pool = _Pool(problem, working_set=ws is not None)
         starts = ([np.mean(thetas, axis=0)] if thetas else []) + [box.mean(axis=1)]
         for th in list(thetas) + [_on_gain_plane(problem, th) for th in starts]:
             if not time_left():
@@ -773,7 +915,7 @@ def exact_bounds(
             pool.seek(starts, box, deadline=deadline)
         pts = pool.points
         args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
-                    deadline=deadline)
+                    deadline=deadline, ws=ws)
         if parallel is None:
             outs = [_search(problem, box, k, s, pts, roots.get((k, s)), position=i, **args)
                     for i, (k, s) in enumerate(jobs)]
@@ -820,5 +962,6 @@ def exact_bounds(
     return IntervalResult(
         bounds=bounds, infos=tuple(infos), method="exact", param_names=tuple(names),
         time=time.perf_counter() - t0,
-        extra={"lp": lp, "root_box": box, "inner": inner},
+        extra={"lp": lp, "root_box": box, "inner": inner,
+               "working_set": None if ws is None else int(ws.size)},
     )

@@ -86,9 +86,9 @@ class _Screen:
 
     With ``working_set=True`` (long records) the LP holds only a growing subset of the
     equations, after an interval test of all of them (:func:`.working_set.interval_excess`,
-    whose excess is a lower bound of ``s``); a candidate that the LP passes but
-    ``check_theta`` rejects adds the binding equations of the full LP
-    (:meth:`learn`). A weaker screen only costs a ``check_theta`` call, never a bound.
+    whose excess is a lower bound of ``s``); a candidate that passes is solved over all
+    equations (:meth:`full`) before ``check_theta``, and a rejection there adds the binding
+    equations to the subset. A weaker screen only costs time, never a bound.
     """
 
     def __init__(self, problem: EIVProblem, working_set: bool = False):
@@ -119,7 +119,7 @@ class _Screen:
         h.setOptionValue("output_flag", False)
         h.setOptionValue("threads", 1)
         self.h = h
-        self.basis = None
+        self.bases = {}
         self._last = None
         self._last_eqs = None
         self._tol = None
@@ -165,19 +165,28 @@ class _Screen:
             return np.zeros(0, dtype=np.int64)
         return self._last_eqs
 
-    def learn(self, theta) -> None:
-        """After ``check_theta`` rejected a screened ``theta``: add the binding equations of
-        the full screening LP at ``theta`` to the working set (working-set mode only)."""
-        if not self.working_set:
-            return
+    def full(self, theta):
+        """Working-set mode: solve the screening LP over *all* equations at ``theta``.
+
+        Returns ``(violation, (eta, dx) or None)``; when ``theta`` does not screen, the
+        binding equations join the working set. The solution is only a candidate witness
+        for :func:`check_theta`, which judges it by its own rule.
+        """
         if self._struct_full is None:
             self._struct_full = self._structure(np.arange(self.m))
         theta = np.asarray(theta, dtype=float)
-        v = self._solve(theta, self._struct_full, None)
-        if np.isfinite(v) and self._last_eqs is not None:
-            self.in_set[self._last_eqs] = True
-            self._struct = None
+        v = self._solve(theta, self._struct_full, "full")
         self._last = None
+        if not np.isfinite(v):
+            return v, None
+        if v > self.tol_at(theta):
+            if self._last_eqs is not None:
+                self.in_set[self._last_eqs] = True
+                self._struct = None
+            return v, None
+        z = np.asarray(self.h.getSolution().col_value)
+        n = self.problem.N
+        return v, (z[:n], z[n : self.nz])
 
     def _violation(self, theta) -> float:
         self._last_eqs = None
@@ -195,8 +204,8 @@ class _Screen:
                 return worst
         if self._struct is None:
             self._struct = self._structure(np.flatnonzero(self.in_set))
-            self.basis = None
-        return self._solve(theta, self._struct, "basis")
+            self.bases.pop("set", None)
+        return self._solve(theta, self._struct, "set")
 
     def _solve(self, theta, st, keep) -> float:
         hs = self._hs
@@ -221,15 +230,13 @@ class _Screen:
         lp.a_matrix_.index_ = st["index"]
         lp.a_matrix_.value_ = data
         self.h.passModel(lp)
-        if keep is not None and self.basis is not None:
-            self.h.setBasis(self.basis)
+        if self.bases.get(keep) is not None:
+            self.h.setBasis(self.bases[keep])
         self.h.run()
         if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
-            if keep is not None:
-                self.basis = None
+            self.bases[keep] = None
             return np.inf
-        if keep is not None:
-            self.basis = self.h.getBasis()
+        self.bases[keep] = self.h.getBasis()
         v = float(self.h.getInfo().objective_function_value)
         if v > self.tol_at(theta):
             y = np.abs(np.asarray(self.h.getSolution().row_dual))
@@ -269,13 +276,19 @@ class _Pool:
     def verify(self, theta) -> _Point | None:
         """Accept ``theta`` only if :func:`check_theta` says it is feasible."""
         self.checks += 1
+        hint = None
+        if self.working_set:
+            # the full screening LP (warm-started) first: a rejection costs no check_theta,
+            # and its solution is the candidate witness that check_theta judges
+            self._ensure_screen()
+            v, hint = self.screen.full(theta)
+            if np.isfinite(v) and hint is None:
+                return None
         try:
-            chk = check_theta(self.problem, theta)
+            chk = check_theta(self.problem, theta, witness=hint)
         except SolverError:  # not verified: simply not accepted as a witness
             return None
         if not chk.feasible:
-            if self.screen is not None:
-                self.screen.learn(theta)
             return None
         pt = _Point(np.array(theta, dtype=float), chk.eta, chk.dx)
         self.points.append(pt)

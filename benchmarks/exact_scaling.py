@@ -102,8 +102,13 @@ def main(argv=None) -> int:
     p.add_argument("--delta", type=float, default=0.05)
     p.add_argument("--n-jobs", type=int, default=2)
     p.add_argument("--tol", type=float, default=1e-4)
+    p.add_argument("--merge", action="store_true",
+                   help="replace only the rows of these N in results/exact_scaling.json")
     args = p.parse_args(argv)
     rows = []
+    out = C.RESULTS / "exact_scaling.json"
+    kept = [r for r in C.read_json(out)["rows"] if r["N"] not in args.N] \
+        if args.merge and out.exists() else []
     for N in args.N:
         pr, t_lp = _problem(N, args.delta)
         load0 = C.loadavg()
@@ -127,12 +132,12 @@ def main(argv=None) -> int:
         print(f"N={N:6d} new {rn['wall_s']:6.1f} s ({rn['nodes']} nodes, "
               f"{rn['working_set_equations']}/{row['equations']} eqs, "
               f"{rn['peak_rss_mb']:.0f} MB){old_s} load={load0}", flush=True)
+    rows = sorted(kept + rows, key=lambda r: r["N"])
     fit = {"new": _exponent([r["N"] for r in rows], [r["new"]["wall_s"] for r in rows])}
     olds = [r for r in rows if "old" in r]
     fit["old"] = _exponent([r["N"] for r in olds], [r["old"]["wall_s"] for r in olds])
     print(f"growth exponent of the time in N: new {fit['new']:.2f}, old {fit['old']:.2f}")
-    C.write_json({"environment": C.environment(), "rows": rows, "exponent": fit},
-                 C.RESULTS / "exact_scaling.json")
+    C.write_json({"environment": C.environment(), "rows": rows, "exponent": fit}, out)
     return 0
 
 

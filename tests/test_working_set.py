@@ -170,3 +170,23 @@ def test_working_set_limits_give_valid_outer_bounds():
     assert np.all(res.bounds[:, 0] <= inner[:, 0]) and np.all(res.bounds[:, 1] >= inner[:, 1])
     for i in res.infos:
         assert i.status in ("optimal", "limit") and i.gap is not None
+
+
+def test_check_theta_witness_only_saves_the_lp_never_changes_the_rule():
+    from hammerbound.relaxations.problem import check_theta
+
+    pr, theta = make_eiv_problem(N=60, deta=0.05, seed=4)
+    ref = check_theta(pr, theta)
+    assert ref.feasible
+    # its own witness is accepted as is
+    chk = check_theta(pr, theta, witness=(ref.eta, ref.dx))
+    assert chk.feasible and np.allclose(chk.eta, ref.eta)
+    # a useless witness falls back to the LP: same decision
+    chk = check_theta(pr, theta, witness=(np.zeros(pr.N), np.zeros(pr.n_groups)))
+    assert chk.feasible
+    # an infeasible theta stays infeasible whatever witness is offered
+    bad = theta.copy()
+    bad[0] += 0.5
+    assert not check_theta(pr, bad).feasible
+    assert not check_theta(pr, bad, witness=(ref.eta, ref.dx)).feasible
+    assert not check_theta(pr, bad, witness=(np.full(pr.N, 9.0), np.zeros(pr.n_groups))).feasible

@@ -26,7 +26,11 @@ nodes and 55 s -> 17 s for the 8 bounds on 2 cores; ``python -m benchmarks.exact
 * node LPs use devex dual pricing and, for well-scaled data, no scaling
   (:func:`.mccormick._node_options`);
 * when no relaxation point is feasible (thin sets), a Nelder-Mead search on the screening
-  violation supplies the first verified point (:meth:`_Pool.seek`).
+  violation supplies the first verified point (:meth:`_Pool.seek`);
+* on long records (from :data:`.working_set.AUTO_MIN_EQUATIONS` equations), the OBBT and
+  node LPs hold a growing **working set** of equations (:mod:`.working_set`): a relaxation
+  of the full LP, so every bound stays certified over all equations (N = 3000: 14.6x
+  faster in ``python -m benchmarks.exact_scaling``).
 """
 
 from __future__ import annotations

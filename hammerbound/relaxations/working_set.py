@@ -198,7 +198,7 @@ class WorkingSetRelaxation:
         eqs = eqs[~self.in_set[eqs]] if eqs.size else eqs
         if eqs.size == 0:
             return 0
-        pr, p, na = self.problem, self.p, self.problem.na
+        p, na = self.p, self.problem.na
         lp = self.lp
         # ---- new product columns ---------------------------------------------------------
         a_ids = (np.arange(na)[:, None] * self.m + eqs[None, :]).ravel()  # (na * len,)

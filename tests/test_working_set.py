@@ -11,8 +11,10 @@ from conftest import make_eiv_problem
 from scipy.optimize import linprog
 from scipy.signal import lfilter
 
-from hammerbound.relaxations.bnb import _Screen, _solve, exact_bounds
+from hammerbound.relaxations.bnb import exact_bounds
 from hammerbound.relaxations.mccormick import McCormickRelaxation
+from hammerbound.relaxations.obbt import _solve
+from hammerbound.relaxations.points import _Screen
 from hammerbound.relaxations.problem import EIVProblem
 from hammerbound.relaxations.working_set import WorkingSetRelaxation, interval_excess
 

@@ -14,7 +14,7 @@ So the rigorous dual bound of the ``S``-LP (:mod:`._highs`) is a valid lower bou
 working set only decides how *tight* a node bound is, never whether it is valid.
 
 **Separation** (which equations to add, :func:`interval_excess` and
-:meth:`.bnb._Screen.binding`): at the LP point ``theta``, first cheap interval arithmetic
+:meth:`.points._Screen.binding`): at the LP point ``theta``, first cheap interval arithmetic
 (an equation whose nominal residual exceeds its largest error term cannot hold at
 ``theta`` for any errors), then the equations that carry the infeasibility certificate of
 the screening LP at ``theta`` (its binding rows). A node is only branched or closed once
@@ -317,7 +317,7 @@ class WorkingSetRelaxation:
         1. interval arithmetic at ``theta = x[:p]`` (:meth:`EquationData.excess`);
         2. the same with the errors of the set's rows fixed at their LP values (catches the
            equations that couple with the set through shared errors);
-        3. if a screening LP (:class:`.bnb._Screen`) is given, the equations outside the set
+        3. if a screening LP (:class:`.points._Screen`) is given, the equations outside the set
            binding in its certificate that no errors explain the data at ``theta``.
         """
         theta = x[: self.p]

@@ -124,8 +124,7 @@ class _WitnessLP:
         self.hs = highspy
         from ..relaxations._highs import new_highs
 
-        self.h = new_highs()
-        self.h.setOptionValue("threads", 1)
+        self.h = new_highs()  # no "threads" option: see _highs.new_highs
         self.basis = None
 
     def witness(self, theta):

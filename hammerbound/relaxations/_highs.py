@@ -36,6 +36,7 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
+from ..exceptions import SolverError
 from .safe_lp import certify_infeasible
 
 EPS = np.finfo(float).eps
@@ -103,6 +104,12 @@ def silence_highs_banner() -> None:
 
 def new_highs(options=None):
     """A ``highspy.Highs`` instance that prints nothing (banner silenced, ``output_flag`` off).
+
+    The option ``threads`` is never set here, on purpose: HiGHS keeps *one* thread
+    scheduler per process, sized by the first ``run()``, and a later ``run()`` whose
+    ``threads`` option is non-zero and different fails without solving ("the scheduler has
+    already been initialized to use 2 threads"). With the default (0) our LPs run whatever
+    HiGHS user came first in the process, and never break a later one.
 
     Parameters
     ----------
@@ -236,7 +243,7 @@ class HighsLP:
         self.lb = np.asarray(lb, dtype=float).copy()
         self.ub = np.asarray(ub, dtype=float).copy()
         self.c = np.zeros(n) if c is None else np.asarray(c, dtype=float).copy()
-        h = new_highs({"threads": 1, **(options or {})})
+        h = new_highs(options)
         # unscaled solves are faster on well-scaled data, but if the certified bound then
         # trails HiGHS's own value, the duals are inaccurate: scaling goes back on for good
         self._unscaled = (options or {}).get("simplex_scale_strategy") == 0
@@ -405,10 +412,17 @@ class HighsLP:
         h = self.h
         if np.any(self.lb > self.ub):
             return LPSolve("infeasible", np.inf, np.nan, None, 0)
-        h.run()
+        run = h.run()
         st = h.getModelStatus()
         it = int(h.getInfo().simplex_iteration_count)
         MS = highspy.HighsModelStatus
+        if run == highspy.HighsStatus.kError and st == MS.kNotset:
+            # HiGHS refused to start (no bound is lost by raising: nothing was solved)
+            raise SolverError(
+                "HiGHS refused to solve an LP (its run() returned an error before solving; "
+                "e.g. the process-wide HiGHS thread scheduler was sized differently by "
+                "another HiGHS user with a non-zero 'threads' option). Run the fit in a "
+                "fresh process or leave HiGHS's 'threads' option at its default.")
         if st == MS.kOptimal:
             sol = h.getSolution()
             y = np.asarray(sol.row_dual)

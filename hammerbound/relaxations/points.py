@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..exceptions import SolverError
+from ._highs import new_highs
 from .problem import EIVProblem, check_theta, equation_scale
 
 
@@ -64,10 +65,7 @@ class _Screen:
         else:
             self.in_set = np.ones(m, dtype=bool)
         self._struct = None
-        h = highspy.Highs()
-        h.setOptionValue("output_flag", False)
-        h.setOptionValue("threads", 1)
-        self.h = h
+        self.h = new_highs()  # no "threads" option: see _highs.new_highs
         self.bases = {}
         self._last = None
         self._last_eqs = None

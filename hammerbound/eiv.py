@@ -48,16 +48,6 @@ __all__ = ["LinearEIVSetEstimator", "METHODS"]
 METHODS = ("moment", "lp", "exact")
 
 
-def _positive_bound(name, value, n, *, allow_zero=False):
-    """Scalar or per-sample bound -> float array of shape (n,) (see :mod:`.validation`)."""
-    return as_bound(name, value, n, allow_zero=allow_zero)
-
-
-def _as_signal(name, v):
-    """1-D float signal from a list/array of shape (N,) or (N, 1) (see :mod:`.validation`)."""
-    return as_signal(name, v)
-
-
 def _theta_vector(theta, p, names):
     """``theta`` as a finite float vector of shape (p,), else a DataValidationError."""
     return as_theta(theta, p, names)
@@ -264,9 +254,9 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     def _output_bound(self, n, output_bound=None):
         """``deta`` of shape (n,): the fit-time ``output_bound`` or the ``noise_bound``."""
         if output_bound is not None:
-            return _positive_bound("output_bound", output_bound, n)
+            return as_bound("output_bound", output_bound, n)
         try:
-            return _positive_bound("noise_bound", self.noise_bound, n)
+            return as_bound("noise_bound", self.noise_bound, n)
         except DataValidationError as exc:
             raise DataValidationError(
                 f"{exc} In cross-validation pass per-sample bounds to fit (output_bound=..., "
@@ -274,15 +264,15 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 "constructor parameters.") from None
 
     def _build_problem(self, X, y, input_bound, groups, output_bound=None):
-        x = _as_signal("X", X)
-        yy = _as_signal("y", y)
+        x = as_signal("X", X)
+        yy = as_signal("y", y)
         if x.shape != yy.shape:
             raise DataValidationError(
                 f"X and y must have the same number of samples; got {x.size} and {yy.size}."
             )
         n = x.size
         deta = self._output_bound(n, output_bound)
-        dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
+        dx = as_bound("input_bound", input_bound, n, allow_zero=True)
         check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
         check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
                     {"noise_bound": deta, "input_bound": dx},
@@ -676,7 +666,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         A, B = self._polys()
         if isinstance(X, IOData):
             return simulate_from_measured(A, B, X.u, X.y, self._n0())
-        x = _as_signal("X", X)
+        x = as_signal("X", X)
         return lfilter(B, A, x)
 
     def score(self, X, y=None, sample_weight=None):
@@ -693,7 +683,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         from .timeseries import segment_r2, simulate_from_measured
 
         X, y, _ = unpack(X, y)
-        x, yy = _as_signal("X", X), _as_signal("y", y)
+        x, yy = as_signal("X", X), as_signal("y", y)
         if x.shape != yy.shape:
             raise DataValidationError("X and y must have the same length.")
         n0 = self._n0()
@@ -716,13 +706,13 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         lower, upper : ndarray of shape (N,)
         """
         check_is_fitted(self, "bounds_")
-        x = _as_signal("X", X)
-        yy = _as_signal("y", y)
+        x = as_signal("X", X)
+        yy = as_signal("y", y)
         if x.shape != yy.shape:
             raise DataValidationError("X and y must have the same length.")
         n = x.size
         deta = self._output_bound(n, output_bound)
-        dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
+        dx = as_bound("input_bound", input_bound, n, allow_zero=True)
         na = self.na
         lags = [int(j) for j in self._lags()]
         lo = np.full(n, np.nan)

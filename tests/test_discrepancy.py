@@ -327,13 +327,13 @@ def test_bad_data(clean):
     u, y = clean
     y_nan = y.copy()
     y_nan[7] = np.nan
-    with pytest.raises(DataValidationError, match="y contains NaN or inf.*index 7"):
+    with pytest.raises(DataValidationError, match="y contains NaN or inf.*sample 7"):
         diagnose(G, u, y_nan, noise_bound=NB)
     with pytest.raises(DataValidationError, match="u has 300 samples but y has 299"):
         diagnose(G, u, y[:-1], noise_bound=NB)
-    with pytest.raises(DataValidationError, match="one-dimensional"):
+    with pytest.raises(DataValidationError, match="1-D signal"):
         diagnose(G, np.ones((10, 3)), np.ones((10, 3)), noise_bound=NB)
-    with pytest.raises(DataValidationError, match="numeric"):
+    with pytest.raises(DataValidationError, match="real numbers"):
         diagnose(G, ["a"] * 20, y[:20], noise_bound=NB)
     with pytest.raises(DataValidationError, match="identically zero"):
         diagnose(G, np.zeros(50), y[:50], noise_bound=NB)

@@ -62,30 +62,17 @@ class Fit:
         return p if self.post is None else self.post(p)
 
 
-def _highs_solve(c, A, b, bounds):
-    """``min c x`` s.t. ``A x <= b`` and box ``bounds`` with HiGHS (no certification)."""
-    import highspy
+def _lp_solve(c, A, b, bounds):
+    """``min c x`` s.t. ``A x <= b`` and box ``bounds`` (scipy's HiGHS; no certification).
 
-    from ..relaxations._highs import new_highs
+    Not ``highspy``: a solve through highspy in the same process was seen to make later
+    stage-2 LPs (scipy's HiGHS) report unbounded sets (tests/test_cli.py after a
+    diagnosis), so the search keeps to scipy's build.
+    """
+    from scipy.optimize import linprog
 
-    h = new_highs()
-    lp = highspy.HighsLp()
-    nr, nc = A.shape
-    lp.num_col_, lp.num_row_ = nc, nr
-    lp.col_cost_ = np.asarray(c, float)
-    lp.col_lower_ = np.asarray(bounds[:, 0], float)
-    lp.col_upper_ = np.asarray(bounds[:, 1], float)
-    lp.row_lower_ = np.full(nr, -highspy.kHighsInf)
-    lp.row_upper_ = np.asarray(b, float)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    lp.a_matrix_.start_ = np.arange(0, nr * nc + 1, nr, dtype=np.int32)
-    lp.a_matrix_.index_ = np.tile(np.arange(nr, dtype=np.int32), nc)
-    lp.a_matrix_.value_ = np.asarray(A, float).ravel(order="F")
-    h.passModel(lp)
-    h.run()
-    if h.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-        return None
-    return np.array(h.getSolution().col_value)
+    res = linprog(c, A_ub=A, b_ub=b, bounds=bounds, method="highs-ds")
+    return res.x if res.status == 0 else None
 
 
 def _fast_lp(c, A_ub, b_ub, bounds, k):
@@ -97,7 +84,7 @@ def _fast_lp(c, A_ub, b_ub, bounds, k):
     act[np.argsort(-viol)[: min(A_ub.shape[0], 16 * (k + 1))]] = True
     x = None
     for _ in range(60):
-        x = _highs_solve(c, A_ub[act], b_ub[act], bounds)
+        x = _lp_solve(c, A_ub[act], b_ub[act], bounds)
         if x is None:
             return None
         viol = A_ub @ x - b_ub

@@ -5,6 +5,7 @@
     python -m benchmarks chapter  [--quick] ...
     python -m benchmarks methods  [--quick] [--part same|delta2|scaling|order] ...
     python -m benchmarks coverage [--quick] [--dask] ...
+    python -m benchmarks moment2  [--N 10 20 50 100] [--full-N 10]
     python -m benchmarks report                 # regenerate docs/benchmarks.md from results/
     python -m benchmarks all --quick            # every benchmark, then the report
 
@@ -20,6 +21,7 @@ COMMANDS = {
     "stage1": "stage1_speed",
     "chapter": "chapter_tables",
     "methods": "methods",
+    "moment2": "moment_order2",
     "coverage": "coverage",
     "report": "report",
 }

@@ -29,9 +29,7 @@ from __future__ import annotations
 import numbers
 
 import numpy as np
-from scipy.signal import lfilter
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.utils.validation import check_is_fitted
 
 from .exceptions import (
     DataValidationError,
@@ -40,31 +38,17 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .feasible_set import FeasibleSet
+from .linear_model import LinearModelMixin
+from .modelset.estimator import ModelSetMixin
 from .relaxations.problem import EIVProblem
-from .validation import as_bound, as_real, as_signal, as_theta, check_excited, check_scale
+from .validation import as_bound, as_real, as_signal, check_excited, check_scale
 
 __all__ = ["LinearEIVSetEstimator", "METHODS"]
 
 METHODS = ("moment", "lp", "exact")
 
 
-def _theta_vector(theta, p, names):
-    """``theta`` as a finite float vector of shape (p,), else a DataValidationError."""
-    return as_theta(theta, p, names)
-
-
-def _is_vector_like(theta) -> bool:
-    """A flat sequence of numbers (not a TransferFunction nor an (A, B) pair)."""
-    if hasattr(theta, "num") and hasattr(theta, "den"):
-        return False
-    try:
-        arr = np.asarray(theta, dtype=float)
-    except (TypeError, ValueError):
-        return False
-    return arr.ndim == 1
-
-
-class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
+class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, BaseEstimator):
     """Guaranteed parameter intervals of ``G(q^-1) = B/A`` from bounded-error EIV data.
 
     Parameters
@@ -93,12 +77,19 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
     relaxation_order : int, default 1
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
-        cost (order 2 at N = 30 took ~290 s with Clarabel; see ``docs/benchmarks.md``).
-        The relaxation's size is estimated before it is built: above
-        ``rows x moments = 2.5e8`` (order 1 at N ~ 900) the fit raises
-        :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or
-        ``"exact"``), above ``2e7`` it warns (module
+        cost. Order 2 (term-sparse basis, ``relaxation_basis="sparse"``) equals the exact
+        intervals within 1e-3 of their width on the chapter example and takes minutes at
+        N = 100 (see ``docs/benchmarks.md``). The relaxation's size is estimated before it
+        is built: above ``rows x moments = 8e8`` (order 1 at N ~ 1500, order 2 at
+        N ~ 150) the fit raises :class:`~hammerbound.exceptions.RelaxationTooLargeError`
+        (use ``"lp"`` or ``"exact"``), above ``2e7`` it warns (module
         :mod:`hammerbound.relaxations.moment_size`).
+    relaxation_basis : {"sparse", "full"}, default "sparse"
+        Monomial basis of the moment matrices (order >= 2; both coincide at order 1):
+        ``"sparse"`` uses ``1, theta, e, theta e`` (the equations are bilinear in
+        parameters x noise), ``"full"`` every monomial of degree <= ``relaxation_order``
+        (at least as tight, ~50x slower: 404 s for N = 10). See
+        :class:`~hammerbound.relaxations.moment.MomentRelaxation`.
     solver : {"clarabel", "cvxopt", "mosek"}, default "clarabel"
         Conic backend of the moment method.
     solver_options : dict or None
@@ -168,8 +159,9 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
 
     def __init__(self, na=2, nb=2, *, nk=None, b0=False, noise_bound=0.05,
                  steady_state_gain=None,
-                 method="moment", relaxation_order=1, solver="clarabel", solver_options=None,
-                 theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
+                 method="moment", relaxation_order=1, relaxation_basis="sparse",
+                 solver="clarabel", solver_options=None, theta_box=None, tol=1e-4,
+                 max_nodes=20000, time_limit=600.0,
                  total_time_limit=None, on_failure="raise", n_jobs=1, progress=False):
         self.na = na
         self.nb = nb
@@ -179,6 +171,7 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.steady_state_gain = steady_state_gain
         self.method = method
         self.relaxation_order = relaxation_order
+        self.relaxation_basis = relaxation_basis
         self.solver = solver
         self.solver_options = solver_options
         self.theta_box = theta_box
@@ -236,6 +229,10 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         if self.on_failure not in ("box", "raise"):
             raise ParameterValidationError(
                 f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
+            )
+        if self.relaxation_basis not in ("sparse", "full"):
+            raise ParameterValidationError(
+                f"relaxation_basis must be 'sparse' or 'full'; got {self.relaxation_basis!r}."
             )
         as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
                 example="1.0")
@@ -470,13 +467,15 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
                 backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
                 backend.check_options(self.solver_options)
                 # memory/time guard before any work (refuses with the estimate, or warns)
-                check_moment_budget(estimate_moment_relaxation(problem, self.relaxation_order))
+                check_moment_budget(estimate_moment_relaxation(
+                    problem, self.relaxation_order, basis=self.relaxation_basis))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
                                     solver_options=self.solver_options, n_jobs=self.n_jobs,
                                     theta_box=lp.bounds, on_failure=self.on_failure,
-                                    fallback=lp.bounds, max_work=float("inf"))
+                                    fallback=lp.bounds, max_work=float("inf"),
+                                    basis=self.relaxation_basis)
                 res.extra["lp"] = lp
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
             hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))
@@ -528,349 +527,8 @@ class LinearEIVSetEstimator(RegressorMixin, BaseEstimator):
         self.n_samples_ = problem.N
         return self
 
-    # ------------------------------------------------------------------ tables
-    def _status(self):
-        from .tables import bound_status
-
-        return bound_status(self.param_names_, self.bound_info_, self.box_limited_)
-
-    def to_frame(self):
-        """The intervals as a table: parameter, lower, centre, upper, half_width, status.
-
-        A pandas DataFrame when pandas is installed, else a numpy structured array with
-        the same fields. ``status`` is ``"optimal"`` or says which end is set by the a
-        priori box or by a solver/time limit (still guaranteed).
-        """
-        check_is_fitted(self, "bounds_")
-        from .tables import interval_frame
-
-        return interval_frame(self.param_names_, self.bounds_, self._status())
-
-    def summary(self) -> str:
-        """Text summary: model structure, assumptions, data and the interval table."""
-        check_is_fitted(self, "bounds_")
-        from .tables import interval_text
-
-        pr = self.problem_
-        g = self.steady_state_gain
-        head = (f"LinearEIVSetEstimator: method {self.method}, na={pr.na} nb={pr.nb} "
-                f"nk={pr.nk}, N = {pr.N}, dt = {'not given' if self.dt_ is None else f'{self.dt_:g}'}, "
-                + ("no gain constraint" if g is None else f"gain B(1)/A(1) = {g:g}"))
-        return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
-
-    # ------------------------------------------------------------------ model
-    def _polys(self, theta=None):
-        check_is_fitted(self, "bounds_")
-        th = self.center_ if theta is None else _theta_vector(theta, self.bounds_.shape[0],
-                                                                  self.param_names_)
-        na = self.na
-        A = np.concatenate([[1.0], th[:na]])
-        lags = self._lags()
-        B = np.zeros(int(lags[-1]) + 1)
-        B[lags] = th[na:]
-        return A, B
-
-    @property
-    def A_(self):
-        """Central denominator ``[1, a_1, ..., a_na]``."""
-        return self._polys()[0]
-
-    @property
-    def B_(self):
-        """Central numerator ``[b_0, b_1, ...]`` up to the last lag (zeros before ``nk``)."""
-        return self._polys()[1]
-
-    def to_transfer_function(self, dt=None, theta=None):
-        """The central (or given ``theta``) model as a discrete ``control.TransferFunction``.
-
-        ``dt`` defaults to the sampling time of the fitted data (an :class:`IOData`), or
-        ``True`` (discrete, sampling time not given) as in python-control.
-        """
-        import control
-
-        if dt is None:
-            dt = getattr(self, "dt_", None)
-            dt = True if dt is None else dt
-
-        A, B = self._polys(theta)
-        n = max(A.size, B.size)
-        A = np.concatenate([A, np.zeros(n - A.size)])
-        B = np.concatenate([B, np.zeros(n - B.size)])
-        names = getattr(self, "signal_names_", None)
-        if names is None or names == ("u", "y"):
-            return control.tf(B, A, dt)
-        return control.tf(B, A, dt, inputs=names[0], outputs=names[1])
-
-    def theta_of(self, G):
-        """``theta`` in :attr:`param_names_` order of a model ``G``: a discrete
-        ``control.TransferFunction`` or a pair ``(A, B)`` in powers of ``q^-1``.
-
-        Raises ParameterValidationError if ``G`` has a coefficient outside this model
-        structure (a higher order, another delay).
-        """
-        check_is_fitted(self, "bounds_")
-        from .systems import as_polynomials
-
-        G_dt = getattr(G, "dt", None)
-        dt = getattr(self, "dt_", None)
-        if dt is not None and isinstance(G_dt, numbers.Real) and not isinstance(G_dt, bool) \
-                and not np.isclose(float(G_dt), dt, rtol=1e-9, atol=0):
-            raise ParameterValidationError(
-                f"the transfer function has dt={G_dt:g} but the data were sampled with "
-                f"dt={dt:g}; discretise it at dt={dt:g} first.")
-        A, B = as_polynomials(G)
-        lags = self._lags()
-        na = self.na
-        a = np.zeros(na)
-        a[:min(na, A.size - 1)] = A[1:na + 1]
-        extra_a = A[na + 1:]
-        b = np.zeros(lags.size)
-        keep = lags[lags < B.size]
-        b[:keep.size] = B[keep]
-        mask = np.ones(B.size, bool)
-        mask[keep] = False
-        if np.any(extra_a != 0) or np.any(B[mask] != 0):
-            raise ParameterValidationError(
-                f"the model has coefficients outside this structure (na={na}, nb={self.nb}, "
-                f"nk={self._nk()}: A = {A.tolist()}, B = {B.tolist()}); pass theta in order "
-                f"{self.param_names_} instead.")
-        return np.concatenate([a, b])
-
-    def contains(self, theta, tol=0.0) -> bool:
-        """Whether ``theta`` lies in every reported interval.
-
-        ``theta`` is a vector in :attr:`param_names_` order, a discrete
-        ``control.TransferFunction`` or a pair ``(A, B)`` (see :meth:`theta_of`).
-        """
-        check_is_fitted(self, "bounds_")
-        if not _is_vector_like(theta):
-            theta = self.theta_of(theta)
-        th = _theta_vector(theta, self.bounds_.shape[0], self.param_names_)
-        return bool(np.all(th >= self.bounds_[:, 0] - tol) and np.all(th <= self.bounds_[:, 1] + tol))
-
-    def _n0(self) -> int:
-        return max(self.na, int(self._lags()[-1]))
-
-    def predict(self, X):
-        """Noise-free output of the central model simulated on input ``X``.
-
-        ``X`` an array: free-run simulation from zero initial state. ``X`` an
-        :class:`~hammerbound.IOData`: free-run simulation started from its *measured*
-        outputs ``y[:n0]`` (``n0 = max(na, last input lag)``), the meaningful prediction
-        for a held-out segment (see :mod:`hammerbound.timeseries`).
-        """
-        check_is_fitted(self, "bounds_")
-        from .iodata import IOData
-        from .timeseries import simulate_from_measured
-
-        A, B = self._polys()
-        if isinstance(X, IOData):
-            return simulate_from_measured(A, B, X.u, X.y, self._n0())
-        x = as_signal("X", X)
-        return lfilter(B, A, x)
-
-    def score(self, X, y=None, sample_weight=None):
-        """R^2 of the central model's free-run simulation on a (held-out) segment.
-
-        The simulation starts from the measured outputs of the segment's first ``n0 =
-        max(na, last input lag)`` samples and runs on the input alone from there; R^2 is
-        taken over the simulated samples ``t >= n0``. This is a multi-step (simulation)
-        score, not a one-step-ahead one, and is meaningful for a ``TimeSeriesSplit`` test
-        fold that starts mid-record. ``X`` may be an IOData (then ``y`` is None).
-        """
-        check_is_fitted(self, "bounds_")
-        from .iodata import unpack
-        from .timeseries import segment_r2, simulate_from_measured
-
-        X, y, _ = unpack(X, y)
-        x, yy = as_signal("X", X), as_signal("y", y)
-        if x.shape != yy.shape:
-            raise DataValidationError("X and y must have the same length.")
-        n0 = self._n0()
-        if x.size <= n0 + 1:
-            raise DataValidationError(
-                f"the scored segment needs more than n0 + 1 = {n0 + 1} samples; got {x.size}.")
-        A, B = self._polys()
-        return segment_r2(yy, simulate_from_measured(A, B, x, yy, n0), n0, sample_weight)
-
-    def one_step_envelope(self, X, y, input_bound=0.0, output_bound=None):
-        """Guaranteed one-step-ahead band of the noise-free output ``w_t``.
-
-        For every ``t >= max(na, last input lag)`` and every ``theta`` in :attr:`bounds_`, every past
-        ``w_{t-i}`` in ``y_{t-i} +- deta`` and input ``x_{t-j}`` in ``X +- input_bound``,
-        ``w_t = -sum a_i w_{t-i} + sum b_j x_{t-j}`` lies in ``[lower_t, upper_t]``
-        (interval arithmetic, hence an outer bound). Earlier samples are NaN.
-
-        Returns
-        -------
-        lower, upper : ndarray of shape (N,)
-        """
-        check_is_fitted(self, "bounds_")
-        x = as_signal("X", X)
-        yy = as_signal("y", y)
-        if x.shape != yy.shape:
-            raise DataValidationError("X and y must have the same length.")
-        n = x.size
-        deta = self._output_bound(n, output_bound)
-        dx = as_bound("input_bound", input_bound, n, allow_zero=True)
-        na = self.na
-        lags = [int(j) for j in self._lags()]
-        lo = np.full(n, np.nan)
-        hi = np.full(n, np.nan)
-        n0 = max(na, lags[-1])
-        t = np.arange(n0, n)
-        acc_lo = np.zeros(t.size)
-        acc_hi = np.zeros(t.size)
-
-        def add_product(pl, ph, vl, vh):
-            c = np.stack([pl * vl, pl * vh, ph * vl, ph * vh])
-            return c.min(axis=0), c.max(axis=0)
-
-        for i in range(1, na + 1):
-            al, ah = self.bounds_[i - 1]
-            wl = yy[t - i] - deta[t - i]
-            wh = yy[t - i] + deta[t - i]
-            pl, ph = add_product(-ah, -al, wl, wh)
-            acc_lo += pl
-            acc_hi += ph
-        for k, j in enumerate(lags):
-            bl, bh = self.bounds_[na + k]
-            pl, ph = add_product(bl, bh, x[t - j] - dx[t - j], x[t - j] + dx[t - j])
-            acc_lo += pl
-            acc_hi += ph
-        # outward rounding margin for the floating-point sums
-        eps = 8 * np.finfo(float).eps * (np.abs(acc_lo) + np.abs(acc_hi) + 1)
-        lo[t] = acc_lo - eps
-        hi[t] = acc_hi + eps
-        return lo, hi
-
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
         tags.input_tags.one_d_array = True
         tags.target_tags.single_output = True
         return tags
-
-    # ------------------------------------------------------------------ model set (issue 16)
-    def _b_lags(self):
-        return [int(j) for j in self._lags()]
-
-    def _period(self, dt):
-        """A numeric sampling time: ``dt``, else that of the fitted data, else 1.0."""
-        if dt is None:
-            dt = getattr(self, "dt_", None)
-        return 1.0 if dt is None else dt
-
-    def sample(self, n, random_state=None, *, thin=1, seeds=None):
-        """``n`` parameter vectors of the feasible set (22.34), each *certified* feasible.
-
-        Hit-and-run with shrinkage inside :attr:`bounds_` (on the gain hyperplane when
-        ``steady_state_gain`` is set), seeded at the exact method's witnesses and the
-        centre; every sample carries its witness noise sequences. The samples are spread
-        over the set but neither uniform nor independent, and a nonconvex set's
-        components without a seed are missed: see :mod:`hammerbound.modelset.sampling`.
-
-        Parameters
-        ----------
-        n : int
-        random_state : None, int or numpy Generator
-        thin : int, default 1
-            Record one move out of ``thin``.
-        seeds : array of shape (k, p), optional
-            Extra starting points (each is verified first).
-
-        Returns
-        -------
-        CertifiedSamples
-            ``theta`` (n, p) with the certificates ``eta``, ``dx``, ``max_violation``.
-
-        Raises
-        ------
-        SolverError
-            No feasible starting point (fit with ``method="exact"`` or pass ``seeds``).
-        """
-        check_is_fitted(self, "bounds_")
-        from .modelset.sampling import sample_eiv
-
-        starts = [] if seeds is None else [np.asarray(s, float) for s in np.atleast_2d(seeds)]
-        starts += [i.witness for i in self.bound_info_ if getattr(i, "witness", None) is not None]
-        starts.append(self.center_)
-        return sample_eiv(self.problem_, self.bounds_, n, seeds=starts,
-                          random_state=random_state, thin=thin, param_names=self.param_names_)
-
-    def to_transfer_functions(self, n, dt=None, random_state=None):
-        """``n`` certified members of the set as discrete ``control.TransferFunction`` (period
-        ``dt``; default as :meth:`to_transfer_function`)."""
-        smp = self.sample(n, random_state=random_state)
-        return [self.to_transfer_function(dt=dt, theta=th) for th in smp.theta]
-
-    def frequency_response_bounds(self, omega=None, dt=None, *, on_gain_plane=False):
-        """Guaranteed magnitude/phase bounds of every model in :attr:`bounds_`.
-
-        Exact over the orthotope at each frequency (zonotope value sets of ``A`` and
-        ``B``), with guaranteed bounds between grid frequencies as well; see
-        :mod:`hammerbound.modelset.frequency`.
-
-        Parameters
-        ----------
-        omega : array of rad/s, optional
-            Strictly increasing, >= 0. Default: 512 log-spaced points up to ``pi/dt``.
-        dt : float or None, default None
-            Sampling time of the data (``z = e^{j omega dt}``); default: that of the fitted
-            :class:`~hammerbound.IOData`, else 1.0 (``omega`` in rad/sample).
-        on_gain_plane : bool, default False
-            Tighten the magnitude bounds to the orthotope *intersected with the gain
-            equality* (22.8) (every feasible model satisfies it; the box alone cannot
-            express it, which makes the plain envelope wide at low frequencies). The
-            bounds then no longer cover box points off that hyperplane. Needs
-            ``steady_state_gain``.
-
-        Returns
-        -------
-        FrequencyEnvelope
-        """
-        check_is_fitted(self, "bounds_")
-        from .modelset.frequency import check_omega, frequency_envelope
-
-        dt = self._period(dt)
-        w = check_omega(omega, dt)
-        if on_gain_plane and self.steady_state_gain is None:
-            raise ParameterValidationError(
-                "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
-                "(or use the plain envelope, on_gain_plane=False)."
-            )
-        gain = float(self.steady_state_gain) if on_gain_plane else None
-        return frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=float(dt),
-                                  gain=gain)
-
-    def uncertainty_weight(self, kind="multiplicative", order=2, dt=None, *, margin=0.05,
-                           omega=None, n_grid=8192):
-        """A stable, minimum-phase weight ``W`` bounding the set around the central model.
-
-        ``kind="multiplicative"``: ``|G/G0 - 1| <= |W|``; ``"additive"``: ``|G - G0| <= |W|``,
-        for every ``theta`` in :attr:`bounds_` and *every* frequency (proved on a grid of
-        ``n_grid`` points over ``[0, pi/dt]`` with Lipschitz bounds in between; the proof is
-        returned in ``.certificate``). ``dt`` defaults to the sampling time of the fitted
-        :class:`~hammerbound.IOData`, else 1.0. See :mod:`hammerbound.modelset.uncertainty`.
-
-        Returns
-        -------
-        UncertaintyWeight
-            ``.W`` (control.TransferFunction), ``.central`` (G0), ``.certificate``.
-
-        Raises
-        ------
-        UnboundedSetError
-            Some ``A`` in the box vanishes on the unit circle: no finite weight exists.
-        """
-        check_is_fitted(self, "bounds_")
-        from .modelset.frequency import check_omega
-        from .modelset.uncertainty import KINDS, fit_weight
-
-        if kind not in KINDS:
-            raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
-        dt = self._period(dt)
-        check_omega(None, dt)
-        w = None if omega is None else check_omega(omega, dt)
-        return fit_weight(self.bounds_, self.na, self._b_lags(), self.to_transfer_function(dt),
-                          dt=float(dt), kind=kind, order=order, omega=w, margin=margin,
-                          n_grid=n_grid)

@@ -352,7 +352,7 @@ def test_cap_keeps_only_the_part_below_the_incumbent():
 
 
 def test_seek_finds_a_verified_point_from_an_infeasible_start():
-    from hammerbound.relaxations.bnb import _Pool
+    from hammerbound.relaxations.points import _Pool
 
     pr, theta = make_eiv_problem(N=60, deta=0.1, two_level=True, seed=2)
     box = lp_bounds(pr).bounds

@@ -244,7 +244,7 @@ def _project(problem, theta):
 def _seek(problem, box, seeds, ver):
     """A first feasible point by minimising the violation (the exact method's search)."""
     try:
-        from ..relaxations.bnb import _Pool
+        from ..relaxations.points import _Pool
 
         pool = _Pool(problem)
         starts = [np.asarray(s, dtype=float) for s in seeds] or [box.mean(axis=1)]

@@ -286,14 +286,53 @@ class HighsLP:
     def data_positions(self, rows, cols) -> np.ndarray:
         """Positions in ``A.data`` of the existing entries ``(rows[k], cols[k])``."""
         A = self.A
-        pos = np.empty(len(rows), dtype=np.int64)
-        for k, (r, c) in enumerate(zip(rows, cols, strict=True)):
-            s, e = A.indptr[c], A.indptr[c + 1]
-            j = s + np.searchsorted(A.indices[s:e], r)
-            if j >= e or A.indices[j] != r:
-                raise KeyError(f"no structural entry at ({r}, {c})")
-            pos[k] = j
+        rows = np.asarray(rows, dtype=np.int64)
+        cols = np.asarray(cols, dtype=np.int64)
+        m = np.int64(A.shape[0])
+        # CSC with sorted indices: the keys col * m + row of the entries are increasing
+        keys = np.repeat(np.arange(A.shape[1], dtype=np.int64), np.diff(A.indptr)) * m \
+            + A.indices.astype(np.int64)
+        want = cols * m + rows
+        pos = np.searchsorted(keys, want)
+        bad = (pos >= keys.size) | (keys[np.minimum(pos, keys.size - 1)] != want)
+        if np.any(bad):
+            k = int(np.flatnonzero(bad)[0])
+            raise KeyError(f"no structural entry at ({rows[k]}, {cols[k]})")
         return pos
+
+    def add_cols(self, lo, hi):
+        """Append empty columns with bounds ``lo, hi`` and zero cost (the basis is kept)."""
+        lo = np.asarray(lo, dtype=float)
+        hi = np.asarray(hi, dtype=float)
+        k = lo.size
+        if k == 0:
+            return
+        self.h.addCols(k, np.zeros(k), lo, hi, 0, np.zeros(k, dtype=np.int32),
+                       np.zeros(0, dtype=np.int32), np.zeros(0))
+        self.A = sp.hstack([self.A, sp.csc_matrix((self.A.shape[0], k))], format="csc")
+        self.lb = np.concatenate([self.lb, lo])
+        self.ub = np.concatenate([self.ub, hi])
+        self.c = np.concatenate([self.c, np.zeros(k)])
+
+    def add_rows(self, rl, ru, block):
+        """Append rows ``rl <= block z <= ru`` (``block`` sparse, shape (k, n); basis kept)."""
+        block = sp.csr_matrix(block, dtype=float)
+        k = block.shape[0]
+        if k == 0:
+            return
+        block.sort_indices()
+        rl = np.asarray(rl, dtype=float)
+        ru = np.asarray(ru, dtype=float)
+        self.h.addRows(k, np.where(np.isfinite(rl), rl, -INF), np.where(np.isfinite(ru), ru, INF),
+                       block.nnz, block.indptr.astype(np.int32), block.indices.astype(np.int32),
+                       block.data)
+        # through CSR (vstack of CSR concatenates the arrays): explicit zeros (coefficients
+        # that set_box may have set to 0) stay structural entries
+        A = sp.vstack([self.A.tocsr(), block], format="csr").tocsc()
+        A.sort_indices()
+        self.A = A
+        self.rl = np.concatenate([self.rl, rl])
+        self.ru = np.concatenate([self.ru, ru])
 
     def set_coeffs(self, rows, cols, pos, vals):
         """Change existing coefficients (``pos`` from :meth:`data_positions`)."""

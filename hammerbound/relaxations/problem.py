@@ -290,7 +290,8 @@ def outward_problem(problem: EIVProblem, box) -> EIVProblem:
     return dataclasses.replace(problem, deta=deta)
 
 
-def check_theta(problem: EIVProblem, theta, tol: float | None = None) -> FeasibilityCheck:
+def check_theta(problem: EIVProblem, theta, tol: float | None = None, *,
+                witness=None) -> FeasibilityCheck:
     """Decide whether ``theta`` belongs to the EIV feasible set (22.34).
 
     At fixed theta the constraints are linear in (eta, dx), so this solves the LP
@@ -304,6 +305,10 @@ def check_theta(problem: EIVProblem, theta, tol: float | None = None) -> Feasibi
     rounding of the residuals (~1e-16 per term) and far below any meaningful noise bound.
     Witnesses only ever *accept* points (inner values of the exact method); no outer bound
     depends on this decision.
+
+    ``witness``, an optional candidate ``(eta (N,), dx (K,))`` (e.g. from a warm-started
+    solver), is judged first by the same rule (clipped, residuals recomputed); only if it
+    fails is the LP solved. A witness can only save the LP, never change the rule.
     """
     from ..tolerances import FEASIBILITY_RTOL
 
@@ -336,6 +341,13 @@ def check_theta(problem: EIVProblem, theta, tol: float | None = None) -> Feasibi
     # the magnitude of its terms), so HiGHS's absolute tolerances act relative to the data
     scale = equation_scale(problem, theta)
     zmax = np.concatenate([problem.deta, problem.dx_group])
+    if witness is not None:
+        z = np.clip(np.concatenate([np.asarray(witness[0], dtype=float).ravel(),
+                                    np.asarray(witness[1], dtype=float).ravel()]), -zmax, zmax)
+        if z.shape == zmax.shape:
+            chk = _judge(problem, theta, M, r, scale, z, tol)
+            if chk.feasible:
+                return chk
     Ms = sp.diags(1.0 / scale) @ M @ sp.diags(zmax)
     rs = r / scale
     s_col = -np.ones((m, 1))
@@ -360,6 +372,13 @@ def check_theta(problem: EIVProblem, theta, tol: float | None = None) -> Feasibi
     # witness satisfies |eta| <= deta and |dx| <= dx_group exactly (the violation below is
     # recomputed from the clipped witness)
     z = np.clip(res.x[: n + k], -1.0, 1.0) * zmax
+    return _judge(problem, theta, M, r, scale, z, tol)
+
+
+def _judge(problem, theta, M, r, scale, z, tol) -> FeasibilityCheck:
+    """The acceptance rule of :func:`check_theta` for a witness ``z = [eta; dx]`` (clipped)."""
+    m = r.size
+    n, k = problem.N, problem.n_groups
     eta, dxv = z[:n], z[n : n + k]
     # recompute the violation exactly from the witness rather than trusting the LP value
     resid = np.abs(M @ z - r) if m else np.zeros(0)

@@ -1,0 +1,143 @@
+"""The fitted linear block's guaranteed model set (issue 16): certified samples, transfer
+functions, frequency-response envelope and uncertainty weight.
+
+:class:`ModelSetMixin` is mixed into :class:`~hammerbound.LinearEIVSetEstimator`; the work
+is done in :mod:`hammerbound.modelset`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.utils.validation import check_is_fitted
+
+from ..exceptions import ParameterValidationError
+
+__all__ = ["ModelSetMixin"]
+
+
+class ModelSetMixin:
+    """Model-set views of a fitted :class:`~hammerbound.LinearEIVSetEstimator`."""
+
+    def _b_lags(self):
+        return [int(j) for j in self._lags()]
+
+    def _period(self, dt):
+        """A numeric sampling time: ``dt``, else that of the fitted data, else 1.0."""
+        if dt is None:
+            dt = getattr(self, "dt_", None)
+        return 1.0 if dt is None else dt
+
+    def sample(self, n, random_state=None, *, thin=1, seeds=None):
+        """``n`` parameter vectors of the feasible set (22.34), each *certified* feasible.
+
+        Hit-and-run with shrinkage inside :attr:`bounds_` (on the gain hyperplane when
+        ``steady_state_gain`` is set), seeded at the exact method's witnesses and the
+        centre; every sample carries its witness noise sequences. The samples are spread
+        over the set but neither uniform nor independent, and a nonconvex set's
+        components without a seed are missed: see :mod:`hammerbound.modelset.sampling`.
+
+        Parameters
+        ----------
+        n : int
+        random_state : None, int or numpy Generator
+        thin : int, default 1
+            Record one move out of ``thin``.
+        seeds : array of shape (k, p), optional
+            Extra starting points (each is verified first).
+
+        Returns
+        -------
+        CertifiedSamples
+            ``theta`` (n, p) with the certificates ``eta``, ``dx``, ``max_violation``.
+
+        Raises
+        ------
+        SolverError
+            No feasible starting point (fit with ``method="exact"`` or pass ``seeds``).
+        """
+        check_is_fitted(self, "bounds_")
+        from .sampling import sample_eiv
+
+        starts = [] if seeds is None else [np.asarray(s, float) for s in np.atleast_2d(seeds)]
+        starts += [i.witness for i in self.bound_info_ if getattr(i, "witness", None) is not None]
+        starts.append(self.center_)
+        return sample_eiv(self.problem_, self.bounds_, n, seeds=starts,
+                          random_state=random_state, thin=thin, param_names=self.param_names_)
+
+    def to_transfer_functions(self, n, dt=None, random_state=None):
+        """``n`` certified members of the set as discrete ``control.TransferFunction`` (period
+        ``dt``; default as :meth:`to_transfer_function`)."""
+        smp = self.sample(n, random_state=random_state)
+        return [self.to_transfer_function(dt=dt, theta=th) for th in smp.theta]
+
+    def frequency_response_bounds(self, omega=None, dt=None, *, on_gain_plane=False):
+        """Guaranteed magnitude/phase bounds of every model in :attr:`bounds_`.
+
+        Exact over the orthotope at each frequency (zonotope value sets of ``A`` and
+        ``B``), with guaranteed bounds between grid frequencies as well; see
+        :mod:`hammerbound.modelset.frequency`.
+
+        Parameters
+        ----------
+        omega : array of rad/s, optional
+            Strictly increasing, >= 0. Default: 512 log-spaced points up to ``pi/dt``.
+        dt : float or None, default None
+            Sampling time of the data (``z = e^{j omega dt}``); default: that of the fitted
+            :class:`~hammerbound.IOData`, else 1.0 (``omega`` in rad/sample).
+        on_gain_plane : bool, default False
+            Tighten the magnitude bounds to the orthotope *intersected with the gain
+            equality* (22.8) (every feasible model satisfies it; the box alone cannot
+            express it, which makes the plain envelope wide at low frequencies). The
+            bounds then no longer cover box points off that hyperplane. Needs
+            ``steady_state_gain``.
+
+        Returns
+        -------
+        FrequencyEnvelope
+        """
+        check_is_fitted(self, "bounds_")
+        from .frequency import check_omega, frequency_envelope
+
+        dt = self._period(dt)
+        w = check_omega(omega, dt)
+        if on_gain_plane and self.steady_state_gain is None:
+            raise ParameterValidationError(
+                "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
+                "(or use the plain envelope, on_gain_plane=False)."
+            )
+        gain = float(self.steady_state_gain) if on_gain_plane else None
+        return frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=float(dt),
+                                  gain=gain)
+
+    def uncertainty_weight(self, kind="multiplicative", order=2, dt=None, *, margin=0.05,
+                           omega=None, n_grid=8192):
+        """A stable, minimum-phase weight ``W`` bounding the set around the central model.
+
+        ``kind="multiplicative"``: ``|G/G0 - 1| <= |W|``; ``"additive"``: ``|G - G0| <= |W|``,
+        for every ``theta`` in :attr:`bounds_` and *every* frequency (proved on a grid of
+        ``n_grid`` points over ``[0, pi/dt]`` with Lipschitz bounds in between; the proof is
+        returned in ``.certificate``). ``dt`` defaults to the sampling time of the fitted
+        :class:`~hammerbound.IOData`, else 1.0. See :mod:`hammerbound.modelset.uncertainty`.
+
+        Returns
+        -------
+        UncertaintyWeight
+            ``.W`` (control.TransferFunction), ``.central`` (G0), ``.certificate``.
+
+        Raises
+        ------
+        UnboundedSetError
+            Some ``A`` in the box vanishes on the unit circle: no finite weight exists.
+        """
+        check_is_fitted(self, "bounds_")
+        from .frequency import check_omega
+        from .uncertainty import KINDS, fit_weight
+
+        if kind not in KINDS:
+            raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
+        dt = self._period(dt)
+        check_omega(None, dt)
+        w = None if omega is None else check_omega(omega, dt)
+        return fit_weight(self.bounds_, self.na, self._b_lags(), self.to_transfer_function(dt),
+                          dt=float(dt), kind=kind, order=order, omega=w, margin=margin,
+                          n_grid=n_grid)

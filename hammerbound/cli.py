@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 
 from .cli_paths import FORCE_FLAG, add_force_option, check_output_dir, check_output_file
-from .exceptions import HammerboundError
+from .exceptions import HammerboundError, ParameterValidationError
 
-__all__ = ["main"]
+__all__ = ["diagnose_cli_main", "main"]
 
 
 class _Progress:
@@ -390,23 +390,122 @@ def _version() -> str:
 
 def _diagnose(argv) -> int:
     """``hammerbound diagnose``: check ``--plot`` (and take ``--force``) before the work, then
-    hand the rest to :func:`hammerbound.discrepancy.diagnose_cli_main`."""
+    hand the rest to :func:`diagnose_cli_main`."""
     pre = argparse.ArgumentParser(add_help=False, prog="hammerbound diagnose")
     pre.add_argument("--plot", default=None)
     pre.add_argument(FORCE_FLAG, action="store_true")
     known, rest = pre.parse_known_args(argv)
     if any(a in ("-h", "--help") for a in rest):
-        from .discrepancy import diagnose_cli_main
-
         rc = diagnose_cli_main(rest)
         print(f"\n{FORCE_FLAG}: overwrite an existing --plot file (refused by default)")
         return rc
     if known.plot is not None:
         check_output_file(known.plot, force=known.force, option="--plot")
         rest = [*rest, "--plot", known.plot]
-    from .discrepancy import diagnose_cli_main
-
     return diagnose_cli_main(rest)
+
+
+def _coeffs(text, flag):
+    try:
+        vals = [float(v) for v in text.replace(",", " ").split()]
+    except ValueError as exc:
+        raise ParameterValidationError(
+            f"{flag} must be numbers separated by spaces or commas, e.g. {flag} \"1 -0.5\"; "
+            f"got {text!r}."
+        ) from exc
+    if not vals:
+        raise ParameterValidationError(f"{flag} is empty; give at least one coefficient.")
+    return np.array(vals)
+
+
+def diagnose_cli_main(argv=None) -> int:
+    """Entry point of ``hammerbound diagnose``.
+
+    Usage::
+
+        hammerbound diagnose DATA.csv --num "0 0.5" --den "1 -0.5" --noise-bound 0.02
+                             [--candidates offset,delay] [--refit linear|none] [--skip K]
+                             [--max-delay D] [--max-effects K] [--u-column u]
+                             [--y-column y]
+                             [--plot out.png] [--json]
+
+    ``DATA.csv`` holds the input and output columns (see :func:`hammerbound.io.read_io_csv`: with a
+    header they are found by name, default ``u`` and ``y``; without one the first two
+    columns are used). ``--num``/``--den`` are the model's coefficients in powers of
+    ``q^-1``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments after the subcommand (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 when the (refined) model is consistent with the data, 1 when it is not,
+        2 on invalid input or usage (message on stderr).
+    """
+    from .discrepancy import CANDIDATES, diagnose
+    from .io import read_io_csv
+    from .systems import as_polynomials
+
+    p = argparse.ArgumentParser(
+        prog="hammerbound diagnose",
+        description="Locate, name and add the effect a linear simulation model misses.",
+    )
+    p.add_argument("data", help="CSV file with input and output columns (optional header)")
+    p.add_argument("--num", required=True, help="numerator B in powers of q^-1, e.g. '0 0.5'")
+    p.add_argument("--den", required=True, help="denominator A in powers of q^-1, e.g. '1 -0.5'")
+    p.add_argument("--noise-bound", required=True, type=float,
+                   help="bound on the output error |eta_t|")
+    p.add_argument("--candidates", default=None,
+                   help=f"comma-separated subset of {','.join(CANDIDATES)}")
+    p.add_argument("--refit", default="linear", choices=["linear", "none"])
+    p.add_argument("--skip", type=int, default=0, help="initial samples not scored")
+    p.add_argument("--max-delay", type=int, default=10)
+    p.add_argument("--max-effects", type=int, default=2,
+                   help="largest number of effects searched jointly (1, 2 or 3)")
+    p.add_argument("--u-column", default="u", help="input column: header name or 0-based index")
+    p.add_argument("--y-column", default="y",
+                   help="output column: header name or 0-based index")
+    p.add_argument("--delimiter", default=",")
+    p.add_argument("--plot", default=None, help="save the diagnosis figure to this PNG")
+    p.add_argument("--json", action="store_true", help="print a JSON report")
+    try:
+        args = p.parse_args(argv)
+    except SystemExit as exc:  # usage errors (already printed) and --help
+        return int(exc.code or 0)
+    try:
+        u, y = read_io_csv(args.data, args.u_column, args.y_column, args.delimiter)
+        num, den = _coeffs(args.num, "--num"), _coeffs(args.den, "--den")
+        A, B = as_polynomials((den, num))
+        import control
+
+        n = max(A.size, B.size)
+        G = control.tf(np.r_[B, np.zeros(n - B.size)], np.r_[A, np.zeros(n - A.size)], True)
+        cands = None if args.candidates is None else [
+            c.strip() for c in args.candidates.split(",") if c.strip()
+        ]
+        rep = diagnose(G, u, y, args.noise_bound, candidates=cands,
+                       refit=args.refit, skip=args.skip, max_delay=args.max_delay,
+                       max_effects=args.max_effects)
+    except HammerboundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        try:
+            fig = rep.plot(args.plot)
+        except OSError as exc:
+            print(f"error: cannot write the figure to {args.plot}: {exc}", file=sys.stderr)
+            return 2
+        plt.close(fig)
+    print(json.dumps(rep.to_dict(), indent=2) if args.json else rep.summary())
+    return 0 if rep.consistent_after else 1
 
 
 def _run_suite(rest) -> int:

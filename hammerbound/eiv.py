@@ -48,16 +48,6 @@ __all__ = ["LinearEIVSetEstimator", "METHODS"]
 METHODS = ("moment", "lp", "exact")
 
 
-def _positive_bound(name, value, n, *, allow_zero=False):
-    """Scalar or per-sample bound -> float array of shape (n,) (see :mod:`.validation`)."""
-    return as_bound(name, value, n, allow_zero=allow_zero)
-
-
-def _as_signal(name, v):
-    """1-D float signal from a list/array of shape (N,) or (N, 1) (see :mod:`.validation`)."""
-    return as_signal(name, v)
-
-
 class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, BaseEstimator):
     """Guaranteed parameter intervals of ``G(q^-1) = B/A`` from bounded-error EIV data.
 
@@ -261,9 +251,9 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     def _output_bound(self, n, output_bound=None):
         """``deta`` of shape (n,): the fit-time ``output_bound`` or the ``noise_bound``."""
         if output_bound is not None:
-            return _positive_bound("output_bound", output_bound, n)
+            return as_bound("output_bound", output_bound, n)
         try:
-            return _positive_bound("noise_bound", self.noise_bound, n)
+            return as_bound("noise_bound", self.noise_bound, n)
         except DataValidationError as exc:
             raise DataValidationError(
                 f"{exc} In cross-validation pass per-sample bounds to fit (output_bound=..., "
@@ -271,15 +261,15 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 "constructor parameters.") from None
 
     def _build_problem(self, X, y, input_bound, groups, output_bound=None):
-        x = _as_signal("X", X)
-        yy = _as_signal("y", y)
+        x = as_signal("X", X)
+        yy = as_signal("y", y)
         if x.shape != yy.shape:
             raise DataValidationError(
                 f"X and y must have the same number of samples; got {x.size} and {yy.size}."
             )
         n = x.size
         deta = self._output_bound(n, output_bound)
-        dx = _positive_bound("input_bound", input_bound, n, allow_zero=True)
+        dx = as_bound("input_bound", input_bound, n, allow_zero=True)
         check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
         check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
                     {"noise_bound": deta, "input_bound": dx},

@@ -76,17 +76,9 @@ def _check_system(system):
         )
 
 
-def _noise_bounds(noise_bound, n):
-    """Scalar or per-sample noise bound (shape (n,) or (n, 1)) -> float array of shape (n,)."""
-    return as_bound("noise_bound", noise_bound, n, allow_zero=True,
-                    shape_error=ParameterValidationError)
-
-
 def uniform_noise(n: int, bound, random_state=None) -> np.ndarray:
     """Bounded noise ``eta ~ U[-bound, +bound]`` (section 22.5)."""
-    bound = np.broadcast_to(np.asarray(bound, dtype=float), (n,))
-    if np.any(~np.isfinite(bound)) or np.any(bound < 0):
-        raise ParameterValidationError("noise bound must be finite and >= 0.")
+    bound = as_bound("noise bound", bound, n, allow_zero=True)
     return _rng(random_state).uniform(-1.0, 1.0, n) * bound
 
 
@@ -178,7 +170,8 @@ def square_wave_experiment(
     idx = np.arange(1, 2 * amps.size + 1) * settle - 1
     u = u_full[idx]
     w = w_full[idx]
-    nb = _noise_bounds(noise_bound, u.size)
+    nb = as_bound("noise_bound", noise_bound, u.size, allow_zero=True,
+                  shape_error=ParameterValidationError)
     eta = uniform_noise(u.size, nb, random_state)
     return SteadyStateData(u, w + eta, w, eta, nb, settle)
 
@@ -208,7 +201,8 @@ def prbs_experiment(
     u = prbs(n, u_star, hold=hold, random_state=rng)
     x = system.inner(u)
     w = system.simulate(u)
-    nb = _noise_bounds(noise_bound, u.size)
+    nb = as_bound("noise_bound", noise_bound, u.size, allow_zero=True,
+                  shape_error=ParameterValidationError)
     eta = uniform_noise(u.size, nb, rng)
     return PRBSData(u, w + eta, w, x, eta, nb, float(u_star))
 

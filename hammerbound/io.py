@@ -9,7 +9,8 @@ import numpy as np
 
 from .exceptions import DataValidationError
 
-__all__ = ["csv_header", "example_data_path", "read_columns", "load_chapter_tables"]
+__all__ = ["csv_header", "example_data_path", "load_chapter_tables", "read_columns",
+           "read_io_csv"]
 
 
 def read_columns(path, columns) -> dict[str, np.ndarray]:
@@ -136,3 +137,102 @@ def load_chapter_tables(path=None) -> list[dict]:
             return []
     with Path(path).open(newline="") as fh:
         return list(csv.DictReader(fh))
+
+
+def _column_index(spec, header, ncols, which, default, path):
+    """Position of column ``spec`` (a header name or a 0-based index)."""
+    spec = str(spec).strip()
+    cols = None if header is None else [h.strip() for h in header]
+    if cols is not None and spec.lower() in [c.lower() for c in cols]:
+        j = [c.lower() for c in cols].index(spec.lower())
+    elif spec.isdigit():
+        j = int(spec)
+    elif cols is None and spec == which:
+        j = default
+    elif cols is None:
+        raise DataValidationError(
+            f"{path} has no header line, so the {which} column cannot be found by the name "
+            f"{spec!r}; add a header (e.g. 'u,y') or give a 0-based column index."
+        )
+    else:
+        raise DataValidationError(
+            f"column {spec!r} (the {which} column) not found in the header of {path}; columns "
+            f"are {cols}. Rename it or pass --{which}-column NAME."
+        )
+    if j >= ncols:
+        found = f"{ncols} column(s)" + ("" if cols is None else f" {cols}")
+        raise DataValidationError(
+            f"{path} needs an input and an output column (u,y) but the {which} column "
+            f"(index {j}) is missing: found {found}."
+        )
+    return j
+
+
+def read_io_csv(path, u_column="u", y_column="y", delimiter=","):
+    """Read an input/output record from a CSV file.
+
+    The file may start with a header line naming the columns (then ``u_column`` and
+    ``y_column`` are looked up by name, case-insensitively); without a header the
+    columns are taken by 0-based index (default: the first two columns are ``u, y``).
+    Blank lines and lines starting with ``#`` are ignored.
+
+    Returns
+    -------
+    u, y : ndarray
+
+    Raises
+    ------
+    DataValidationError
+        Unreadable file, missing column, non-numeric or incomplete rows (the message lists
+        the offending line numbers), fewer than two columns.
+    """
+    try:
+        with open(path, newline="") as fh:
+            rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh, delimiter=delimiter))]
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise DataValidationError(f"cannot read {path}: {exc}") from exc
+    rows = [(ln, r) for ln, r in rows
+            if r and any(f.strip() for f in r) and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise DataValidationError(f"{path} contains no data rows.")
+
+    def numeric(field):
+        try:
+            float(field)
+            return True
+        except ValueError:
+            return False
+
+    header = None
+    if not all(numeric(f) for f in rows[0][1]):
+        header, rows = rows[0][1], rows[1:]
+    ncols = len(header) if header is not None else len(rows[0][1])
+    ju = _column_index(u_column, header, ncols, "u", 0, path)
+    jy = _column_index(y_column, header, ncols, "y", 1, path)
+    if ju == jy:
+        raise DataValidationError(
+            f"the u and y columns of {path} are the same column (index {ju}); pass "
+            "--u-column / --y-column."
+        )
+    if not rows:
+        raise DataValidationError(f"{path} has a header but no data rows.")
+    u, y, bad = [], [], []
+    for ln, r in rows:
+        try:
+            uv, yv = float(r[ju]), float(r[jy])
+        except (IndexError, ValueError):
+            bad.append((ln, delimiter.join(r)))
+            continue
+        if not (np.isfinite(uv) and np.isfinite(yv)):
+            bad.append((ln, delimiter.join(r)))
+            continue
+        u.append(uv)
+        y.append(yv)
+    if bad:
+        shown = "; ".join(f"line {ln}: {text!r}" for ln, text in bad[:5])
+        more = f" (and {len(bad) - 5} more)" if len(bad) > 5 else ""
+        raise DataValidationError(
+            f"{path}: {len(bad)} row(s) without two finite numbers in the u and y columns - "
+            f"{shown}{more}. Fix or remove them (keep u and y aligned)."
+        )
+    return np.array(u), np.array(y)

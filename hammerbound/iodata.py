@@ -17,15 +17,9 @@ import numbers
 import numpy as np
 
 from .exceptions import DataValidationError, ParameterValidationError
+from .validation import as_signal
 
 __all__ = ["IOData"]
-
-
-def _signal(name, v):
-    """One validation of signals for the whole package (:func:`validation.as_signal`)."""
-    from .validation import as_signal
-
-    return as_signal(name, v)
 
 
 def _check_dt(dt):
@@ -41,7 +35,7 @@ def _check_dt(dt):
 def uniform_step(t, name="t") -> float:
     """The constant step of the time vector ``t``, or a DataValidationError naming the
     first irregular sample."""
-    t = _signal(name, t)
+    t = as_signal(name, t)
     if t.size < 2:
         raise DataValidationError(f"the time column {name!r} needs at least two samples.")
     d = np.diff(t)
@@ -94,8 +88,8 @@ class IOData:
 
     def __init__(self, u, y, dt=None, *, input_name="u", output_name="y", input_unit="",
                  output_unit="", t0=0.0, sample_index=None):
-        self.u = _signal("u", u)
-        self.y = _signal("y", y)
+        self.u = as_signal("u", u)
+        self.y = as_signal("y", y)
         if self.u.shape != self.y.shape:
             raise DataValidationError(
                 f"u and y must have the same number of samples; got {self.u.size} and "

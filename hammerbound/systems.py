@@ -22,6 +22,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from .exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
+from .validation import as_signal
 
 __all__ = [
     "Backlash",
@@ -31,23 +32,6 @@ __all__ = [
     "simulate_backlash",
     "steady_state_gain",
 ]
-
-
-def _check_signal(name, u):
-    try:
-        a = np.asarray(u, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataValidationError(f"{name} must be a numeric 1-D array.") from exc
-    if a.ndim != 1:
-        raise DataValidationError(
-            f"{name} must be one-dimensional; got shape {a.shape}. Use np.ravel(u)."
-        )
-    if a.size == 0:
-        raise DataValidationError(f"{name} is empty; pass at least one sample.")
-    if not np.all(np.isfinite(a)):
-        bad = int(np.flatnonzero(~np.isfinite(a))[0])
-        raise DataValidationError(f"{name} contains NaN or inf (first at index {bad}).")
-    return a
 
 
 @dataclass(frozen=True)
@@ -121,7 +105,7 @@ def simulate_backlash(u, ml, cl, mr, cr, x0: float = 0.0) -> np.ndarray:
         ``m_l != m_r``), where (22.1) is not well defined.
     """
     bl = ml if isinstance(ml, Backlash) else Backlash(ml, cl, mr, cr)
-    u = _check_signal("u", u)
+    u = as_signal("u", u)
     L = bl.left(u)
     R = bl.right(u)
     bad = np.flatnonzero(R > L)

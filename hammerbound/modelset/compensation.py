@@ -33,19 +33,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
+from ..validation import as_signal
 
 __all__ = ["BacklashInverse", "build_inverse"]
 
 
 def _signal(v):
-    try:
-        a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise DataValidationError("v must be a numeric array of desired inner-signal values.") from exc
-    a = np.atleast_1d(a)
-    if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
-        raise DataValidationError("v must be a non-empty 1-D array of finite values.")
-    return a
+    """Commanded values: a number or a 1-D array (:func:`~hammerbound.validation.as_signal`)."""
+    return as_signal("v", [v] if np.ndim(v) == 0 and isinstance(v, (int, float, np.number))
+                     else v)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,148 @@
+"""The candidate-effect interface (see the package docstring of :mod:`.effects`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Context", "Effect", "Param"]
+
+
+@dataclass(frozen=True)
+class Param:
+    """One searched (nonlinear) parameter of an effect.
+
+    Attributes
+    ----------
+    name : str
+        Short name shown in reports (``c``, ``w``, ``s``, ``d``, ``p``).
+    lo, hi : float
+        Search range (absolute units; use :class:`Context` to scale with the data).
+    log : bool
+        Grid spaced logarithmically (``lo > 0``).
+    integer : bool
+        Integer parameter: every integer in ``[lo, hi]`` is tried (exhaustive search).
+    """
+
+    name: str
+    lo: float
+    hi: float
+    log: bool = False
+    integer: bool = False
+
+    def grid(self, size: int) -> np.ndarray:
+        """Initial grid of ``size`` points (all integers for an integer parameter)."""
+        if self.integer:
+            return np.arange(int(round(self.lo)), int(round(self.hi)) + 1, dtype=float)
+        if self.log:
+            return np.geomspace(self.lo, self.hi, size)
+        return np.linspace(self.lo, self.hi, size)
+
+
+@dataclass(frozen=True)
+class Context:
+    """What an effect may use to set its search ranges.
+
+    Attributes
+    ----------
+    u_max : float
+        ``max |u|`` (scored samples and before).
+    y_max : float
+        ``max |y|``.
+    n : int
+        Number of samples.
+    max_delay : int
+        Largest extra delay the user allows.
+    noise_bound : float
+    """
+
+    u_max: float
+    y_max: float
+    n: int
+    max_delay: int
+    noise_bound: float
+
+
+class Effect:
+    """Base class of a candidate effect: override only the hooks the effect uses.
+
+    The model class after adding effects ``E1 .. Ek`` to a model ``G`` (input
+    nonlinearity chain ``N0``, linear block ``B/A``, output offset) is::
+
+        yhat = OUT( [B/A] F(q^-1) IN_k(...IN_1(N0(u))) + sum_j coef_j col_j )
+
+    where ``IN_i`` are :meth:`transform_input`, ``F`` the product of the
+    :meth:`series_filter` of every effect, ``col_j`` the :meth:`output_columns` (their
+    coefficients are fitted by the linear program, like ``B``) and ``OUT`` the
+    :meth:`transform_output` of every effect. The searched parameters ``theta`` (one
+    value per :attr:`params` entry) are found by a grid search with local refinement
+    (override :meth:`search_space` / :meth:`initial_grid` to change it).
+    """
+
+    #: Candidate name (registry key, shown in reports).
+    name: str = ""
+    #: Searched (nonlinear) parameters, see :meth:`search_space` (names only).
+    param_names: tuple = ()
+    #: Names of the parameters fitted as linear-program coefficients (:meth:`output_columns`).
+    linear_names: tuple = ()
+    #: One-line description (docs and summary).
+    description: str = ""
+    #: True when :meth:`transform_input` is used (input-side effect; hints use it).
+    acts_on_input: bool = False
+
+    @property
+    def n_params(self) -> int:
+        """Number of parameters the effect adds to the model class."""
+        return len(self.param_names) + len(self.linear_names)
+
+    # ------------------------------------------------------------------ search
+    def search_space(self, ctx: Context) -> tuple:
+        """Search ranges of the searched parameters: a tuple of :class:`Param`."""
+        return ()
+
+    def initial_grid(self, ctx: Context, size: int) -> list:
+        """Starting points of the search: a list of parameter tuples (default: the
+        cartesian product of the :class:`Param` grids)."""
+        import itertools
+
+        grids = [p.grid(size) for p in self.search_space(ctx)]
+        return [tuple(float(v) for v in pt) for pt in itertools.product(*grids)]
+
+    # ------------------------------------------------------------------ model hooks
+    def transform_input(self, x: np.ndarray, theta: tuple) -> np.ndarray:
+        """Signal after the effect, for the signal ``x`` entering it (input side)."""
+        return x
+
+    def series_filter(self, theta: tuple):
+        """``(num, den)`` in powers of ``q^-1`` put in series with the linear block, or None."""
+        return None
+
+    def output_columns(self, n: int, theta: tuple) -> np.ndarray | None:
+        """``(n, len(linear_names))`` columns added to the output, or None."""
+        return None
+
+    def transform_output(self, yhat: np.ndarray, theta: tuple) -> np.ndarray:
+        """Output after the effect (nonlinear sensor effects)."""
+        return yhat
+
+    def one_sided(self, y: np.ndarray, theta: tuple) -> np.ndarray | None:
+        """For output effects that clip: ``+1`` where only ``yhat_t >= y_t - e`` is required
+        before :meth:`transform_output` (the clipped sample may be exceeded), ``-1`` where
+        only ``yhat_t <= y_t + e``, ``0`` elsewhere; None: two-sided everywhere. The
+        achieved error is always recomputed from the full model, so a wrong choice here
+        can only make the fit worse, never the reported error wrong."""
+        return None
+
+    # ------------------------------------------------------------------ reporting
+    def value(self, theta: tuple, coefs: tuple):
+        """Value reported as ``CandidateFit.value`` (one number for one-parameter effects)."""
+        vals = tuple(theta) + tuple(coefs)
+        return float(vals[0]) if len(vals) == 1 else vals
+
+    def param_label(self) -> str:
+        """Parameter name(s) shown in reports."""
+        return ",".join((*self.param_names, *self.linear_names))
+
+    def __repr__(self) -> str:
+        return f"<effect {self.name}>"

@@ -1,0 +1,88 @@
+"""The diagnosis figure (:meth:`DiagnosisReport.plot`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_report"]
+
+
+def plot_report(self, path=None, *, max_samples=None):
+    """Figure of a :class:`~.report.DiagnosisReport` (see its ``plot``)."""
+    import matplotlib.pyplot as plt
+
+    n = self.y.size if max_samples is None else max(1, min(int(max_samples), self.y.size))
+    t = np.arange(n)
+    sl = slice(0, n)
+    fig, axes = plt.subplots(
+        4, 1, figsize=(10, 10.5), gridspec_kw={"height_ratios": [1, 1.6, 1.6, 1.4]}
+    )
+    fig.suptitle(
+        f"Discrepancy diagnosis - missing effect: {self.effect_label};  "
+        f"gap {self.gap_before:.3g} -> "
+        f"{self.gap_after:.3g}  (noise bound {self.noise_bound:.3g})",
+        fontsize=11,
+    )
+    ax = axes[0]
+    ax.step(t, self.u[sl], where="post", color="k", lw=0.9)
+    ax.set_ylabel("input u")
+    ax = axes[1]
+    ax.plot(t, self.y[sl], ".", ms=2.5, color="0.35", label="data y")
+    ax.plot(t, self.prediction_nominal[sl], color="tab:orange", lw=1.0,
+            label="model as given")
+    ax.plot(t, self.prediction_after[sl], color="tab:blue", lw=1.0,
+            label=f"refined ({self.effect or 'refit only'})")
+    ax.set_ylabel("output y")
+    ax.legend(loc="upper left", fontsize=8, ncol=3, framealpha=0.9)
+    ax = axes[2]
+    rb = (self.y - self.prediction_before)[sl]
+    ra = (self.y - self.prediction_after)[sl]
+    nb = self.noise_bound
+    ax.axhspan(-nb, nb, color="tab:green", alpha=0.2, lw=0,
+               label=f"noise band +-{nb:.3g}")
+    ax.plot(t, rb, color="tab:red", lw=0.8,
+            label=f"before: gap {self.gap_before:.3g}, "
+                  f"{100 * self.fraction_outside_before:.0f}% outside")
+    ax.plot(t, ra, color="tab:blue", lw=0.8,
+            label=f"after: gap {self.gap_after:.3g}, "
+                  f"{100 * self.fraction_outside_after:.0f}% outside")
+    if self.skip:
+        ax.axvspan(0, min(self.skip, n), color="0.85", label="not scored (skip)")
+    lim = 1.15 * max(np.max(np.abs(rb)), np.max(np.abs(ra)), nb)
+    ax.set_ylim(-lim, 1.6 * lim)  # head-room for the legend
+    ax.set_ylabel("residual y - yhat\n(minimax refit)")
+    ax.set_xlabel("sample t")
+    ax.legend(loc="upper left", fontsize=8, ncol=3, framealpha=0.9)
+    for a in axes[:3]:
+        a.set_xlim(0, max(n - 1, 1))
+    ax = axes[3]
+    shown = [*self.candidates, *sorted(self.combinations, key=lambda c: c.minimax_error)[:4]]
+    if shown:
+        names = [c.name for c in shown]
+        errs = np.array([max(c.minimax_error, 1e-300) for c in shown])
+        colors = ["tab:blue" if c.name == self.effect
+                  else ("tab:green" if c.consistent else "0.6") for c in shown]
+        bars = ax.bar(names, errs, color=colors)
+        if len(shown) > 6:
+            ax.tick_params(axis="x", labelsize=7, labelrotation=20)
+        for b, e in zip(bars, errs, strict=True):
+            ax.annotate(f"{e:.3g}", (b.get_x() + b.get_width() / 2, e),
+                        xytext=(0, 2), textcoords="offset points", ha="center",
+                        va="bottom", fontsize=8,
+                        bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
+        ax.set_yscale("log")
+        lo = min(errs.min(), nb) / 2
+        hi = max(errs.max(), self.gap_before) * 3
+        ax.set_ylim(lo, hi)
+    ax.axhline(nb, color="tab:green", ls="--", label="noise bound")
+    ax.axhline(self.gap_before, color="tab:red", ls=":", label="gap before")
+    ax.set_ylabel("minimax error\nof candidate")
+    ax.set_title("candidate evidence (blue: chosen, green: also consistent, "
+                 "grey: inconsistent)", fontsize=9)
+    ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig
+
+

@@ -26,6 +26,8 @@ An effect declares:
   - :meth:`Effect.output_columns` ``(n, theta) -> (n, k) array``: columns added to the
     output whose ``k = len(linear_names)`` coefficients are fitted by the LP (offset, a
     drift ``t/n`` ...);
+  - :meth:`Effect.output_gain` ``(n, theta) -> (n,) array``: a time-varying gain on the
+    model output (a gain drift); the LP rows are scaled by it, so the fit stays exact;
   - :meth:`Effect.transform_output` ``(yhat, theta) -> yhat`` with
     :meth:`Effect.one_sided` ``(y, theta) -> array of {-1, 0, +1} or None``: a nonlinear
     output (sensor) map; the LP is told which samples are only bounded on one side;
@@ -37,8 +39,8 @@ function of its arguments (the search calls it many times). Whatever the hooks d
 reported minimax error is recomputed from the returned :class:`RefinedModel`'s prediction,
 so a hook can make a fit worse, never a reported error wrong.
 
-Example (a gain drift ``(1 + g t/n)`` would need :meth:`transform_output`; an offset drift
-is one linear column)::
+Example (an offset drift is one linear column; a gain drift ``(1 + g t/n)`` is an
+:meth:`Effect.output_gain`, see ``drift.py``)::
 
     class OffsetDrift(Effect):
         name = "offset_drift"

@@ -59,12 +59,17 @@ from __future__ import annotations
 from types import MappingProxyType
 
 from ...exceptions import ParameterValidationError
+from .asym_backlash import AsymBacklash
 from .backlash import Backlash
 from .base import Context, Effect, Param
 from .deadzone import Deadzone
 from .delay import Delay
+from .drift import Drift
 from .extra_pole import ExtraPole
 from .offset import Offset
+from .output_saturation import OutputSaturation
+from .polynomial import Polynomial
+from .relay import Relay
 from .saturation import Saturation
 
 __all__ = ["CANDIDATES", "REGISTRY", "Context", "Effect", "Param", "get", "register"]
@@ -106,3 +111,8 @@ register(Backlash())
 register(Deadzone())
 register(Saturation())
 register(ExtraPole())
+register(Polynomial())
+register(AsymBacklash())
+register(Relay())
+register(OutputSaturation())
+register(Drift())

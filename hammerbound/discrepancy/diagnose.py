@@ -168,7 +168,7 @@ def diagnose(
             c = better[0]
             msg += (
                 f" An effect whose size is below the noise bound can neither be confirmed nor "
-                f"excluded: e.g. {c.name} ({c.param_name} = {c.value:.4g}) would lower the "
+                f"excluded: e.g. {c.name} ({c.param_name} = {_num(c.value)}) would lower the "
                 f"error to {c.minimax_error:.4g}, which is not required by the data."
             )
     else:
@@ -178,7 +178,7 @@ def diagnose(
             best = ok[0]
             effect = best.name
             msg = (
-                f"Missing effect: {best.name} ({best.param_name} = {best.value:.4g}); with it "
+                f"Missing effect: {best.name} ({best.param_name} = {_num(best.value)}); with it "
                 f"the data are consistent with the noise bound (gap {gap_before:.4g} -> "
                 f"{best.minimax_error:.4g} <= {nb:.4g})."
             )
@@ -195,7 +195,7 @@ def diagnose(
                 msg = (
                     f"No single candidate makes the data consistent with the noise bound "
                     f"{nb:.4g}; the best is {best.name} ({best.param_name} = "
-                    f"{best.value:.4g}), gap {gap_before:.4g} -> {best.minimax_error:.4g}. "
+                    f"{_num(best.value)}), gap {gap_before:.4g} -> {best.minimax_error:.4g}. "
                     f"Either the noise bound is too small or something else (or a "
                     f"combination) is missing - run diagnose on report.refined_model to look "
                     f"for a second effect."
@@ -233,3 +233,9 @@ def diagnose(
         prediction_after=pred_after,
         skip=skip,
     )
+
+
+def _num(v):
+    if isinstance(v, tuple):
+        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+    return f"{v:.4g}"

@@ -31,6 +31,10 @@ An effect declares:
   - :meth:`Effect.transform_output` ``(yhat, theta) -> yhat`` with
     :meth:`Effect.one_sided` ``(y, theta) -> array of {-1, 0, +1} or None``: a nonlinear
     output (sensor) map; the LP is told which samples are only bounded on one side;
+* ``default = False`` to leave it out of ``diagnose(candidates=None)`` (tried only when
+  named, or with ``candidates="all"``): the library's several-parameter candidates
+  (``polynomial``, ``asym_backlash``, ``relay``, ``output_saturation``, ``drift``) cost
+  1-3 s each per call (product-grid searches), the one-parameter ones ~0.2 s;
 * optionally :meth:`Effect.value` ``(theta, coefs)`` - what ``CandidateFit.value`` shows
   (default: the single parameter, or a tuple).
 
@@ -72,7 +76,8 @@ from .polynomial import Polynomial
 from .relay import Relay
 from .saturation import Saturation
 
-__all__ = ["CANDIDATES", "REGISTRY", "Context", "Effect", "Param", "get", "register"]
+__all__ = ["CANDIDATES", "REGISTRY", "Context", "Effect", "Param", "default_candidates", "get",
+           "register"]
 
 _REGISTRY: dict = {}
 #: Registered effects by name, in the order they are tried (read-only view).
@@ -100,11 +105,18 @@ def get(name: str) -> Effect:
         ) from None
 
 
+def default_candidates() -> tuple:
+    """Names tried by ``diagnose(candidates=None)``: registered effects with ``default``."""
+    return tuple(name for name, e in _REGISTRY.items() if e.default)
+
+
 _COUNTS: dict = {}
-#: Candidate names in the order they are tried, with the number of added parameters.
+#: Every registered candidate name, in the order they are tried, with the number of added
+#: parameters (the default set is :func:`default_candidates`).
 CANDIDATES = MappingProxyType(_COUNTS)
 
 # ---------------------------------------------------------------- registrations (one line each)
+# the first six are tried by default; the rest only when named or with candidates="all"
 register(Offset())
 register(Delay())
 register(Backlash())

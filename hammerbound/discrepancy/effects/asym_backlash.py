@@ -37,6 +37,7 @@ def play(u, ml, cl, mr, cr):
 
 class AsymBacklash(Effect):
     name = "asym_backlash"
+    default = False
     param_names = ("s", "c_l", "c_r")
     description = ("backlash (22.1) with slopes m_l = 1 + s, m_r = 1 - s (mean slope 1) "
                    "and half-widths c_l, c_r on the input")

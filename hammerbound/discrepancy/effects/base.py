@@ -91,6 +91,8 @@ class Effect:
     description: str = ""
     #: True when :meth:`transform_input` is used (input-side effect; hints use it).
     acts_on_input: bool = False
+    #: Tried when ``diagnose(candidates=None)``; False: only when named (or ``"all"``).
+    default: bool = True
 
     @property
     def n_params(self) -> int:

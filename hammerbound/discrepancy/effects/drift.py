@@ -16,6 +16,7 @@ from .base import Effect, Param
 
 class Drift(Effect):
     name = "drift"
+    default = False
     param_names = ("g",)
     linear_names = ("o1",)
     description = "output (1 + g t/n) (yhat + o1 t/n): slow gain and offset drift"

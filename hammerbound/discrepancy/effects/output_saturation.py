@@ -21,6 +21,7 @@ MARGIN = 0.02
 
 class OutputSaturation(Effect):
     name = "output_saturation"
+    default = False
     param_names = ("lo", "hi")
     description = "sensor saturation: the output is clip(yhat, lo, hi)"
 

@@ -15,6 +15,7 @@ from .base import Effect, Param
 
 class Polynomial(Effect):
     name = "polynomial"
+    default = False
     param_names = ("a2", "a3")
     description = "static polynomial x + a2 x^2 + a3 x^3 on the input"
     acts_on_input = True

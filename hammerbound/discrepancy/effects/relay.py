@@ -10,9 +10,10 @@ since ever (the data start from rest with the relay off), so it is a constant ``
 the output, fitted exactly as an LP column. For a true linear block ``G`` the refitted
 numerator is ``(y_on - y_off) G`` and ``o = G(1) y_off``. The reported value is ``(h, o)``.
 
-Only thresholds symmetric about 0 are searched: the error is piecewise constant in the
-thresholds (it changes only when a threshold crosses an input value), which a 1-D grid
-resolves but a joint 2-D search of two thresholds does not.
+The error is piecewise constant in ``h`` (it changes only when ``h`` crosses an input
+value), so a local refinement cannot move between plateaus: the grid is dense
+(``max(4 grid_size, 64)`` points). Only thresholds symmetric about 0 are searched: a joint
+2-D search of two thresholds on such plateaus would need data-driven starting points.
 """
 
 import numpy as np
@@ -35,8 +36,16 @@ def relay(u, h):
     return np.array(out)
 
 
+class _DenseParam(Param):
+    """A parameter whose error is piecewise constant: searched on a dense grid."""
+
+    def grid(self, size):
+        return np.linspace(self.lo, self.hi, max(4 * int(size), 64))
+
+
 class Relay(Effect):
     name = "relay"
+    default = False
     param_names = ("h",)
     linear_names = ("o",)
     description = ("relay with hysteresis on the input: on (1) above h, off (0) below -h, "
@@ -44,7 +53,7 @@ class Relay(Effect):
     acts_on_input = True
 
     def search_space(self, ctx):
-        return (Param("h", 0.01 * ctx.u_max, 0.8 * ctx.u_max),)
+        return (_DenseParam("h", 0.01 * ctx.u_max, 0.8 * ctx.u_max),)
 
     def transform_input(self, x, theta):
         return relay(x, abs(float(theta[0])))

@@ -8,7 +8,6 @@ LP columns without giving every power its own numerator (a more general, less sp
 class).
 """
 
-import numpy as np
 
 from .base import Effect, Param
 

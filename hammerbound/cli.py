@@ -425,7 +425,8 @@ def diagnose_cli_main(argv=None) -> int:
 
         hammerbound diagnose DATA.csv --num "0 0.5" --den "1 -0.5" --noise-bound 0.02
                              [--candidates offset,delay] [--refit linear|none] [--skip K]
-                             [--max-delay D] [--u-column u] [--y-column y]
+                             [--max-delay D] [--max-effects K] [--u-column u]
+                             [--y-column y]
                              [--plot out.png] [--json]
 
     ``DATA.csv`` holds the input and output columns (see :func:`hammerbound.io.read_io_csv`: with a
@@ -462,6 +463,8 @@ def diagnose_cli_main(argv=None) -> int:
     p.add_argument("--refit", default="linear", choices=["linear", "none"])
     p.add_argument("--skip", type=int, default=0, help="initial samples not scored")
     p.add_argument("--max-delay", type=int, default=10)
+    p.add_argument("--max-effects", type=int, default=2,
+                   help="largest number of effects searched jointly (1, 2 or 3)")
     p.add_argument("--u-column", default="u", help="input column: header name or 0-based index")
     p.add_argument("--y-column", default="y",
                    help="output column: header name or 0-based index")
@@ -484,7 +487,8 @@ def diagnose_cli_main(argv=None) -> int:
             c.strip() for c in args.candidates.split(",") if c.strip()
         ]
         rep = diagnose(G, u, y, args.noise_bound, candidates=cands,
-                       refit=args.refit, skip=args.skip, max_delay=args.max_delay)
+                       refit=args.refit, skip=args.skip, max_delay=args.max_delay,
+                       max_effects=args.max_effects)
     except HammerboundError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

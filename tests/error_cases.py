@@ -728,6 +728,19 @@ CASES: list[ErrorCase] = [
       "LinearEIVSetEstimator(...).fit(IOData(u, y), y)",
       lambda: lin().fit(hb.IOData(x_inner(), y_prbs()), y_prbs()),
       DataValidationError, "without y"),
+    C("diag-signal-row", "discrepancy", "input given as a row (1, N)",
+      "diagnose(system, u_prbs[None, :], y_prbs, 0.05)",
+      lambda: _diagnose(SYS, u_prbs()[None, :], y_prbs(), 0.05),
+      DataValidationError, "shape (N,) or (N, 1)"),
+    C("noise-wrong-length", "experiments", "per-sample noise bound of the wrong length",
+      "uniform_noise(5, [0.1, 0.2])",
+      lambda: __import__("hammerbound.experiments", fromlist=["x"]).uniform_noise(
+          5, [0.1, 0.2]),
+      DataValidationError, "one value per sample"),
+    C("backlash-sim-text", "systems", "text input to the backlash simulation",
+      "simulate_backlash(['a', 'b'], 1, 0.1, 1, 0.1)",
+      lambda: hb.simulate_backlash(["a", "b"], 1.0, 0.1, 1.0, 0.1),
+      DataValidationError, "real numbers"),
 ]
 
 

@@ -179,25 +179,33 @@ def test_effect_just_above_noise_bound_is_found(effect, value):
 
 
 def test_noise_bound_smaller_than_noise_with_effect_is_honest():
-    # a real offset, but the claimed noise bound is below the actual noise: the offset is
-    # named (it removes most of the gap) yet the report does not claim consistency
+    # a real offset, but the claimed noise bound is below the actual noise: nothing makes
+    # the data consistent, so nothing is named; the offset is reported as the closest
+    # candidate with the share of the gap it removes, in separate fields
     u, y = make_data("offset", 0.3, 0)
-    rep = diagnose(G, u, y, noise_bound=0.01)
-    assert rep.effect == "offset"
-    assert not rep.consistent_after
-    assert 0.01 < rep.gap_after < rep.gap_before / 10
-    assert "No single candidate makes the data consistent" in rep.message
+    rep = diagnose(G, u, y, noise_bound=0.01, max_effects=1)
+    assert rep.effect is None and rep.effects_added == ()
+    assert not rep.consistent_after and rep.gap_after == rep.gap_before
+    assert rep.closest[0] == "offset"
+    assert rep.closest_gap_removed[0] > 0.9
+    assert 0.01 < rep.closest_minimax_error[0] < rep.gap_before / 10
+    assert "None of the candidates explains the data" in rep.message
+    assert "none of the candidates explains the data" in rep.summary()
 
 
 def test_second_effect_found_on_refined_model():
+    # diagnose on a RefinedModel refits the effects already in it together with the new one
     u = _input(0)
+    first = diagnose(G, u, _true_output("delay", 2, u) + _noise(0, u.size), noise_bound=NB,
+                     candidates=["delay", "offset"])
+    assert first.effect == "delay" and first.consistent_after
     y = _true_output("delay", 2, u) + 0.3 + _noise(0, u.size)
-    first = diagnose(G, u, y, noise_bound=NB)
-    assert first.effect is not None and not first.consistent_after
-    second = diagnose(first.refined_model, u, y, noise_bound=NB)
-    assert {first.effect, second.effect} == {"delay", "offset"}
-    assert second.gap_after <= NB < second.gap_before <= first.gap_before
-    assert [e for e, _ in second.refined_model.effects] == [first.effect, second.effect]
+    second = diagnose(first.refined_model, u, y, noise_bound=NB, candidates=["offset"])
+    assert second.effect == "offset" and second.effects_added == ("offset",)
+    assert second.gap_after <= NB < second.gap_before
+    assert [e for e, _ in second.refined_model.effects] == ["delay", "offset"]
+    assert second.refined_model.effects[0][1] == 2.0
+    assert second.refined_model.offset == pytest.approx(0.3, abs=0.02)
 
 
 def test_refit_none_and_candidate_subset():

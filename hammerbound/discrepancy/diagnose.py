@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import itertools
+import time
+from dataclasses import replace
+
 import numpy as np
 
 from . import effects as _effects
@@ -9,7 +13,7 @@ from .checks import candidate_names, int_param, positive, validate
 from .effects import CANDIDATES, Context
 from .fitting import design, outside, rebuild
 from .locate import locate_design
-from .report import CandidateFit, DiagnosisReport
+from .report import CandidateFit, CombinationFit, DiagnosisReport
 from .search import Problem, fit_combination
 
 __all__ = ["diagnose"]
@@ -29,6 +33,7 @@ def diagnose(
     window: int = 5,
     coef_box: float = 1e3,
     min_improvement: float = 1.1,
+    max_effects: int = 2,
 ) -> DiagnosisReport:
     """Locate, name and add the effect a simulation model is missing.
 
@@ -67,10 +72,13 @@ def diagnose(
     coef_box : float
         Coefficient box (relative to the output scale) for the certified lower bounds.
     min_improvement : float
-        When *no* candidate is consistent, the best one is named only if it shrinks the
-        gap by at least this factor (``gap_before / gap_after >= min_improvement``);
-        otherwise ``effect`` is None. Guards against naming an effect for a noise bound
-        that is simply too small.
+        When nothing is consistent, a candidate (or combination) is listed in
+        ``report.closest`` only if it shrinks the gap by at least this factor
+        (``gap_before / error >= min_improvement``).
+    max_effects : int
+        Largest number of effects added together (1: single candidates only; 2: pairs are
+        searched jointly when no single candidate is consistent; 3: then triples of the
+        four best single candidates). The fewest effects that reach consistency win.
 
     Returns
     -------
@@ -103,6 +111,8 @@ def diagnose(
     window = int_param("window", window, 1)
     coef_box = positive("coef_box", coef_box)
     min_improvement = positive("min_improvement", min_improvement, 1.0, strict=False)
+    max_effects = int_param("max_effects", max_effects, 1)
+    t0 = time.perf_counter()
 
     origin = s if s.origin is None else s.origin
     existing = tuple((_effects.get(n), tuple(th)) for n, th, _ in s.effect_params) \
@@ -111,54 +121,229 @@ def diagnose(
                   n=int(u.size), max_delay=max_delay, noise_bound=nb)
     pb = Problem(origin, u, y, nb, do_refit, skip, coef_box, grid_size, ctx)
     old = tuple(e for e, _ in existing)
-    if existing:
-        before = fit_combination(pb, old, starts=[tuple(th for _, th in existing)])
+    cost = [0, 0]  # LPs solved, combinations fitted
+
+    def fit(effs, **kw):
+        cf = fit_combination(pb, effs, **kw)
+        cost[0] += cf.n_evaluations
+        cost[1] += 1
+        return cf
+
+    old_thetas = tuple(th for _, th in existing)
+    if existing:  # the effects already in the model are refitted (jointly)
+        before = fit(old, starts=[old_thetas])
+        old_thetas = before.thetas
         d_before, combo_before = before.design, tuple(zip(old, before.thetas, strict=True))
     else:
         combo_before = ()
         d_before = design(origin, u, do_refit, (), y)
-    disagreement, base_fit, nominal = locate_design(
+    disagreement, base_fit, nominal, tagged = locate_design(
         s, d_before, u, y, nb, skip, window, max_delay, coef_box
     )
     gap_before = base_fit.error
     consistent_before = not np.any(outside(y, base_fit.prediction, nb, skip))
     base_model = rebuild(origin, do_refit, combo_before, d_before, base_fit)
-    frac_before = disagreement.fraction_outside
 
     def frac(pred):
         return float(np.mean(outside(y, pred, nb, skip)[skip:]))
 
+    def ok(cf):
+        return not np.any(outside(y, cf.prediction, nb, skip))
+
+    def removed(err):
+        """Fraction of the gap excess (gap_before - noise_bound) that a fit removes."""
+        if gap_before <= nb:
+            return 0.0
+        return float(np.clip((gap_before - err) / (gap_before - nb), 0.0, 1.0))
+
     # step 2: refit every candidate (also when the model is already consistent, so that
     # the report always carries the evidence for each of them)
-    fits = []
-    cand_models = {}
+    singles = {}
     have = {e.name for e in old}
+    if consistent_before:  # nothing to decide: no refinement of errors at the bound
+        pb = replace(pb, refine_to_bound=False)
     for name in names:
-        if name in have:
-            continue
-        e = _effects.get(name)
-        cf = fit_combination(pb, (*old, e))
-        theta = cf.thetas[-1]
-        coefs = tuple(float(v) for v in cf.fit.z[cf.design.slices[-1]])
-        err = cf.error
-        cand_models[name] = (cf.model, cf.prediction)
-        fits.append(
-            CandidateFit(
-                name=name,
-                n_params=CANDIDATES[name],
-                param_name=e.param_label(),
-                value=e.value(theta, coefs),
-                minimax_error=err,
-                lower_bound=cf.lower,
-                consistent=not np.any(outside(y, cf.prediction, nb, skip)),
-                fraction_outside=frac(cf.prediction),
-                improvement=gap_before / err if err > 0 else float("inf"),
-                exhaustive=cf.exhaustive,
-                n_evaluations=cf.n_evaluations,
-            )
-        )
+        if name not in have:
+            e = _effects.get(name)
+            starts = [(*old_thetas, g) for g in e.initial_grid(ctx, 6)] if old else None
+            singles[name] = fit((*old, e), starts=starts)
+    fits = tuple(_candidate_fit(cf, gap_before, ok(cf), frac(cf.prediction),
+                                removed(cf.error)) for cf in singles.values())
+
+    chosen, combos = None, []
+    if not consistent_before:
+        good = [cf for cf in singles.values() if ok(cf)]
+        if good:
+            chosen = min(good, key=lambda c: (c.n_params, c.error))
+        elif max_effects >= 2 and len(singles) >= 2:
+            chosen, combos = _joint_search(fit, old, old_thetas, singles, max_effects, ok)
+        if chosen is not None and len(chosen.effects) > 1:
+            chosen = _prune(fit, chosen, ok)
+    combo_fits = tuple(_combination_fit(cf, len(old), ok(cf), removed(cf.error))
+                       for cf in combos)
+
+    # step 3: name only what makes the data consistent
     pred_before = base_fit.prediction
-    effect = None
+    effect, added, closest = None, (), ()
+    if chosen is not None:
+        added = tuple(n for n in chosen.names if n not in have)
+        effect = "+".join(added) if added else None
+        refined, pred_after, gap_after = chosen.model, chosen.prediction, chosen.error
+    else:
+        refined, pred_after, gap_after = base_model, pred_before, gap_before
+    if not consistent_before and chosen is None:
+        # the best single candidate, and the best combination only when it is markedly
+        # closer (by min_improvement) than that single one: fewer effects first
+        one = sorted(((c.name, c.minimax_error) for c in fits), key=lambda p: p[1])[:1]
+        many = sorted(((c.name, c.minimax_error) for c in combo_fits), key=lambda p: p[1])[:1]
+        pool = [p for p in one if p[1] * min_improvement <= gap_before]
+        ref = pool[0][1] if pool else gap_before
+        pool += [p for p in many if p[1] * min_improvement <= ref]
+        closest = tuple(pool)
+    msg = _message(nb, gap_before, consistent_before, chosen, added, fits, combo_fits,
+                   closest, removed, min_improvement, old)
+    keep = set(added) if added else (
+        {c.name for c in fits if c.consistent} if consistent_before else
+        {n for n, e in closest if removed(e) >= 0.5})
+    hints = tuple(text for tag, text in tagged if tag is None or tag in keep)
+    return DiagnosisReport(
+        effect=effect,
+        gap_before=gap_before,
+        gap_after=gap_after,
+        noise_bound=nb,
+        consistent_before=consistent_before,
+        consistent_after=not np.any(outside(y, pred_after, nb, skip)),
+        fraction_outside_before=disagreement.fraction_outside,
+        fraction_outside_after=frac(pred_after),
+        refined_model=refined,
+        candidates=fits,
+        disagreement=replace(disagreement, hints=hints),
+        message=msg,
+        u=u,
+        y=y,
+        prediction_nominal=nominal,
+        prediction_before=pred_before,
+        prediction_after=pred_after,
+        skip=skip,
+        effects_added=added,
+        closest=tuple(n for n, _ in closest),
+        closest_gap_removed=tuple(removed(e) for _, e in closest),
+        closest_minimax_error=tuple(e for _, e in closest),
+        combinations=combo_fits,
+        search_seconds=time.perf_counter() - t0,
+        n_fits=cost[0],
+        n_combinations=cost[1],
+    )
+
+
+def _candidate_fit(cf, gap_before, consistent, fraction, removed):
+    e = cf.effects[-1]
+    coefs = tuple(float(v) for v in cf.fit.z[cf.design.slices[-1]])
+    err = cf.error
+    return CandidateFit(
+        name=e.name,
+        n_params=CANDIDATES[e.name],
+        param_name=e.param_label(),
+        value=e.value(cf.thetas[-1], coefs),
+        minimax_error=err,
+        lower_bound=cf.lower,
+        consistent=consistent,
+        fraction_outside=fraction,
+        improvement=gap_before / err if err > 0 else float("inf"),
+        exhaustive=cf.exhaustive,
+        n_evaluations=cf.n_evaluations,
+        gap_fraction_removed=removed,
+    )
+
+
+def _combination_fit(cf, n_old, consistent, removed):
+    vals = []
+    for (e, th), sl in zip(zip(cf.effects, cf.thetas, strict=True), cf.design.slices,
+                           strict=True):
+        vals.append(e.value(th, tuple(float(v) for v in cf.fit.z[sl])))
+    return CombinationFit(
+        name="+".join(cf.names[n_old:]), effects=cf.names, values=tuple(vals),
+        minimax_error=cf.error, consistent=consistent, gap_fraction_removed=removed,
+        n_evaluations=cf.n_evaluations, seconds=cf.seconds,
+    )
+
+
+def _int_choices(effects, offset, singles):
+    """Integer parameters of new effects in a combination: the three best values of the
+    single fit and the neighbours of the best."""
+    out = {}
+    for i, e in enumerate(effects):
+        rank = (singles[e.name].int_ranking or {})
+        for (ii, j), vals in rank.items():
+            if ii != offset or not vals:
+                continue
+            b = vals[0]
+            out[(offset + i, j)] = sorted({*vals[:3], b - 1, b + 1} & set(vals))
+    return out
+
+
+def _joint_search(fit, old, old_thetas, singles, max_effects, ok):
+    """Pairs (then triples of the four best singles) fitted jointly: a coarse screening
+    of the combinations, most promising first (smallest product of the single errors; it
+    stops at the first consistent one), then a full search of the three best screened."""
+    pool = sorted(singles, key=lambda n: singles[n].error)
+    done = []
+    for k in (2, 3)[: max_effects - 1]:
+        names = pool if k == 2 else pool[:4]
+        order = sorted(itertools.combinations(names, k),
+                       key=lambda c: float(np.prod([singles[n].error for n in c])))
+        screen = []
+        for combo in order:
+            effs = tuple(_effects.get(n) for n in combo)
+            start = (*old_thetas, *(singles[n].thetas[-1] for n in combo))
+            ic = _int_choices(effs, len(old), singles)
+            cf = fit((*old, *effs), starts=[start], int_choices=ic, coarse=True)
+            screen.append((cf, start, ic))
+            if ok(cf):
+                break
+        screen.sort(key=lambda t: t[0].error)
+        good = [t[0] for t in screen if ok(t[0])]
+        if not good:
+            full = [fit(cf.effects, starts=[cf.thetas, st], int_choices=ic)
+                    for cf, st, ic in screen[:3]]
+            good = [cf for cf in full if ok(cf)]
+            done += full
+        best = {}
+        for cf in done + [t[0] for t in screen]:  # one entry per combination: its best fit
+            if cf.names not in best or cf.error < best[cf.names].error:
+                best[cf.names] = cf
+        done = sorted(best.values(), key=lambda c: c.error)
+        if good:
+            return min(good, key=lambda c: (c.n_params, c.error)), done
+    return None, done
+
+
+def _prune(fit, chosen, ok):
+    """Drop effects that the others make redundant (the data stay consistent without)."""
+    effs, thetas = list(chosen.effects), list(chosen.thetas)
+    i = 0
+    while len(effs) > 1 and i < len(effs):
+        rest = effs[:i] + effs[i + 1:]
+        cf = fit(tuple(rest), starts=[tuple(thetas[:i] + thetas[i + 1:])])
+        if ok(cf):
+            chosen, effs, thetas = cf, list(cf.effects), list(cf.thetas)
+        else:
+            i += 1
+    return chosen
+
+
+def _fmt(cf):
+    return ", ".join(f"{c.name} ({c.param_name} = {_num(c.value)})" for c in cf)
+
+
+def _num(v):
+    if isinstance(v, tuple):
+        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+    return f"{v:.4g}"
+
+
+def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, closest,
+             removed, min_improvement, old):
     if consistent_before:
         msg = (
             f"No missing effect: the model (after refitting its parameters) reproduces the "
@@ -174,71 +359,43 @@ def diagnose(
                 f"excluded: e.g. {c.name} ({c.param_name} = {_num(c.value)}) would lower the "
                 f"error to {c.minimax_error:.4g}, which is not required by the data."
             )
+        return msg
+    if chosen is not None:
+        parts = []
+        for (e, th), sl in zip(zip(chosen.effects, chosen.thetas, strict=True),
+                               chosen.design.slices, strict=True):
+            coefs = tuple(float(v) for v in chosen.fit.z[sl])
+            parts.append(f"{e.name} ({e.param_label()} = {_num(e.value(th, coefs))})")
+        what = " + ".join(parts)
+        if len(added) == 1 and not old:
+            msg = (f"Missing effect: {what}; with it the data are consistent with the noise "
+                   f"bound (gap {gap_before:.4g} -> {chosen.error:.4g} <= {nb:.4g}).")
+            others = [c for c in fits if c.consistent and c.name != added[0]]
+            if others:
+                msg += (" Also consistent, with a larger error or more parameters: "
+                        + ", ".join(f"{c.name} ({c.minimax_error:.4g})" for c in others)
+                        + "; the data do not exclude them.")
+        else:
+            msg = (f"Missing effects, fitted jointly: {what}; with them the data are "
+                   f"consistent with the noise bound (gap {gap_before:.4g} -> "
+                   f"{chosen.error:.4g} <= {nb:.4g}).")
+            if len(added) > 1:
+                best = min(fits, key=lambda c: c.minimax_error)
+                msg += (f" No single candidate is consistent (best: {best.name}, "
+                        f"{best.minimax_error:.4g}).")
+        return msg
+    k = max((len(c.name.split("+")) for c in combos), default=1)
+    tried = "single candidate" + (f" nor combination of up to {k} candidates (fitted "
+                                  f"jointly)" if combos else "")
+    msg = (f"None of the candidates explains the data: the model is inconsistent with the "
+           f"data (gap {gap_before:.4g} > {nb:.4g}) and no {tried} makes it consistent.")
+    if closest:
+        msg += " Closest: " + "; ".join(
+            f"{n} (error {e:.4g}, removes {100 * removed(e):.0f}% of the gap above the bound)"
+            for n, e in closest) + "."
     else:
-        ok = sorted((c for c in fits if c.consistent),
-                    key=lambda c: (c.n_params, c.minimax_error))
-        if ok:
-            best = ok[0]
-            effect = best.name
-            msg = (
-                f"Missing effect: {best.name} ({best.param_name} = {_num(best.value)}); with it "
-                f"the data are consistent with the noise bound (gap {gap_before:.4g} -> "
-                f"{best.minimax_error:.4g} <= {nb:.4g})."
-            )
-            if len(ok) > 1:
-                others = ", ".join(f"{c.name} ({c.minimax_error:.4g})" for c in ok[1:])
-                msg += (
-                    f" Also consistent, with a larger error or more parameters: {others}; "
-                    f"the data do not exclude them."
-                )
-        elif fits:
-            best = min(fits, key=lambda c: c.minimax_error)
-            if best.minimax_error * min_improvement <= gap_before:
-                effect = best.name
-                msg = (
-                    f"No single candidate makes the data consistent with the noise bound "
-                    f"{nb:.4g}; the best is {best.name} ({best.param_name} = "
-                    f"{_num(best.value)}), gap {gap_before:.4g} -> {best.minimax_error:.4g}. "
-                    f"Either the noise bound is too small or something else (or a "
-                    f"combination) is missing - run diagnose on report.refined_model to look "
-                    f"for a second effect."
-                )
-            else:
-                msg = (
-                    f"The model is inconsistent with the data (gap {gap_before:.4g} > "
-                    f"{nb:.4g}) but no candidate shrinks the gap by the factor "
-                    f"min_improvement = {min_improvement:g} (best: {best.name}, "
-                    f"{best.minimax_error:.4g}). Check the noise bound, or the missing effect "
-                    f"is not in the candidate library."
-                )
-    if effect is None:
-        refined, pred_after, gap_after = base_model, pred_before, gap_before
-    else:
-        refined, pred_after = cand_models[effect]
-        gap_after = best.minimax_error
-    return DiagnosisReport(
-        effect=effect,
-        gap_before=gap_before,
-        gap_after=gap_after,
-        noise_bound=nb,
-        consistent_before=consistent_before,
-        consistent_after=not np.any(outside(y, pred_after, nb, skip)),
-        fraction_outside_before=frac_before,
-        fraction_outside_after=frac(pred_after),
-        refined_model=refined,
-        candidates=tuple(fits),
-        disagreement=disagreement,
-        message=msg,
-        u=u,
-        y=y,
-        prediction_nominal=nominal,
-        prediction_before=pred_before,
-        prediction_after=pred_after,
-        skip=skip,
-    )
-
-
-def _num(v):
-    if isinstance(v, tuple):
-        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
-    return f"{v:.4g}"
+        msg += (f" No candidate shrinks the gap by the factor min_improvement = "
+                f"{min_improvement:g}.")
+    msg += (" Check the noise bound, or the missing effect is not in the candidate "
+            "library.")
+    return msg

@@ -62,7 +62,55 @@ class Fit:
         return p if self.post is None else self.post(p)
 
 
-def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None) -> Fit:
+def _highs_solve(c, A, b, bounds):
+    """``min c x`` s.t. ``A x <= b`` and box ``bounds`` with HiGHS (no certification)."""
+    import highspy
+
+    from ..relaxations._highs import new_highs
+
+    h = new_highs()
+    lp = highspy.HighsLp()
+    nr, nc = A.shape
+    lp.num_col_, lp.num_row_ = nc, nr
+    lp.col_cost_ = np.asarray(c, float)
+    lp.col_lower_ = np.asarray(bounds[:, 0], float)
+    lp.col_upper_ = np.asarray(bounds[:, 1], float)
+    lp.row_lower_ = np.full(nr, -highspy.kHighsInf)
+    lp.row_upper_ = np.asarray(b, float)
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    lp.a_matrix_.start_ = np.arange(0, nr * nc + 1, nr, dtype=np.int32)
+    lp.a_matrix_.index_ = np.tile(np.arange(nr, dtype=np.int32), nc)
+    lp.a_matrix_.value_ = np.asarray(A, float).ravel(order="F")
+    h.passModel(lp)
+    h.run()
+    if h.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+        return None
+    return np.array(h.getSolution().col_value)
+
+
+def _fast_lp(c, A_ub, b_ub, bounds, k):
+    """The same LP by constraint generation (rows of largest violation added until none is
+    violated): the exact optimum for the search's many small fits, without certification."""
+    x_ls = np.linalg.lstsq(A_ub[:, :k], b_ub, rcond=None)[0]
+    viol = A_ub[:, :k] @ x_ls - b_ub
+    act = np.zeros(A_ub.shape[0], bool)
+    act[np.argsort(-viol)[: min(A_ub.shape[0], 16 * (k + 1))]] = True
+    x = None
+    for _ in range(60):
+        x = _highs_solve(c, A_ub[act], b_ub[act], bounds)
+        if x is None:
+            return None
+        viol = A_ub @ x - b_ub
+        new = (viol > 1e-12 * (1.0 + abs(x[-1]))) & ~act
+        if not np.any(new):
+            return x
+        worst = np.flatnonzero(new)
+        act[worst[np.argsort(-viol[worst])[: 4 * (k + 2)]]] = True
+    return x
+
+
+def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
+            fast=False) -> Fit:
     """Chebyshev fit ``min_z max_{t>=skip} |y_t - f_t - (Phi z)_t|`` as a linear program.
 
     The free coefficients are boxed, ``|z_j| max_t |Phi_tj| <= coef_box (max|y - f| + 2)``
@@ -77,6 +125,8 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None) ->
     ``sides`` (optional, values in {-1, 0, +1}) drops one of the two constraints of a
     sample (``+1``: only ``y - yhat <= e``); ``post`` maps the linear prediction to the
     model output before the achieved error is computed (output nonlinearities).
+    ``fast``: solve by constraint generation without a certified lower bound (``lower``
+    is 0; used inside parameter searches, whose final point is re-solved certified).
     """
     def achieved(z):
         p = f + (Phi @ z if Phi.shape[1] else 0.0)
@@ -116,6 +166,15 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None) ->
             z, e = np.zeros(k), e0
         return z, e, (float(res.bound) if res.status == "optimal" else 0.0)
 
+    if fast:
+        x = _fast_lp(c, A_ub, b_ub, bounds, k)
+        z = np.zeros(k) if x is None else x[:k] / scale
+        e = achieved(z)
+        if e > e0:
+            z, e = np.zeros(k), e0
+        if target is None or not target < e <= 1.01 * target:
+            return Fit(e, 0.0, z, f, Phi, post)
+        # just above the bound: the decision needs the finest solve (below)
     z, e, lower = solve(None)
     if target is not None and target < e <= 1.01 * target:
         z2, e2, lower2 = solve(_LP_OPTIONS)
@@ -222,9 +281,10 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None) -> Design:
     return Design(f, Phi, n_model, tuple(slices), sides, post, num, den)
 
 
-def fit_design(y, d: Design, skip, coef_box, target=None) -> Fit:
+def fit_design(y, d: Design, skip, coef_box, target=None, fast=False) -> Fit:
     """Minimax fit of a :class:`Design`."""
-    return minimax(y, d.f, d.Phi, skip, coef_box, target, sides=d.sides, post=d.post)
+    return minimax(y, d.f, d.Phi, skip, coef_box, target, sides=d.sides, post=d.post,
+                   fast=fast)
 
 
 def rebuild(s: RefinedModel, refit: bool, combo, d: Design, fit: Fit) -> RefinedModel:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.signal import lfilter
 
@@ -94,7 +96,31 @@ def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
 
         combo = tuple((_effects.get(n), th) for n, th, _ in s.effect_params)
     d = design(origin, u, do_refit, combo, y)
-    return locate_design(s, d, u, y, nb, skip, window, max_lag)[0]
+    dis, fit, _, tagged = locate_design(s, d, u, y, nb, skip, window, max_lag)
+    return replace(dis, hints=check_hints(origin, combo, u, y, nb, do_refit, skip, max_lag,
+                                          fit.error, tagged))
+
+
+def check_hints(origin, combo, u, y, nb, refit, skip, max_delay, gap, tagged):
+    """Keep a hint that points to a candidate only if that candidate scores: among the
+    candidates the hints point to, the consistent ones when there are any, else those
+    removing at least half of the gap above the noise bound."""
+    from . import effects as _effects
+    from .effects import Context
+    from .search import Problem, fit_combination
+
+    tags = {t for t, _ in tagged if t is not None and t in _effects.REGISTRY}
+    if not tags or gap <= nb:
+        return tuple(text for t, text in tagged if t is None)
+    ctx = Context(float(np.max(np.abs(u))), float(np.max(np.abs(y))), int(u.size),
+                  max(1, min(max_delay, u.size - skip - 2)), nb)
+    pb = Problem(origin, u, y, nb, refit, skip, 1e3, 24, ctx)
+    old = tuple(e for e, _ in combo)
+    cfs = {t: fit_combination(pb, (*old, _effects.get(t))) for t in tags}
+    errs = {t: cf.error for t, cf in cfs.items()}
+    ok = {t for t, cf in cfs.items() if not np.any(outside(y, cf.prediction, nb, skip))}
+    keep = ok or {t for t, e in errs.items() if (gap - e) >= 0.5 * (gap - nb)}
+    return tuple(text for t, text in tagged if t is None or t in keep)
 
 
 def _last_direction(u):
@@ -159,32 +185,33 @@ def locate_design(s, d: Design, u, y, nb, skip, window, max_lag, coef_box=1e3):
     ms = float(np.mean(resid[skip:]) / fit.error) if fit.error > 0 else 0.0
     dc = _direction_correlation(s, u, y, f, Phi, skip)
     lag = _best_lag(y[skip:], nominal[skip:], max_lag)
-    hints = []
+    hints = []  # (candidate the hint points to, or None for a plain observation; text)
     out_fit = outside(y, fit.prediction, nb, skip)
     if not np.any(out_fit):
-        hints.append("the data are consistent with the model class under the noise bound")
+        hints.append((None, "the data are consistent with the model class under the noise "
+                            "bound"))
     else:
         if certified_above(fit.lower, y, fit.error, nb, skip):
-            hints.append(
+            hints.append((None,
                 f"certified: no refit of the model's parameters brings the error below "
                 f"{fit.lower:.4g} > noise bound {nb:.4g}"
-            )
+            ))
         for c in conds:
             if np.isfinite(c.enrichment) and c.enrichment >= 1.5 and c.share_of_violations > 0.2:
-                hints.append(
+                hints.append((None,
                     f"the largest disagreements concentrate {c.name.replace('_', ' ')} "
                     f"({100 * c.share_of_violations:.0f}% of them vs "
                     f"{100 * c.share_of_samples:.0f}% of samples)"
-                )
+                ))
         if abs(ms) > 0.5:
-            hints.append(f"residual has a constant shift (mean = {ms:+.2f} x gap)")
+            hints.append(("offset", f"residual has a constant shift (mean = {ms:+.2f} x gap)"))
         if abs(dc) > 0.5:
-            hints.append(
+            hints.append(("backlash",
                 f"residual follows the direction of the last input movement (correlation "
                 f"{dc:+.2f}): a hysteresis / play effect"
-            )
+            ))
         if lag > 0:
-            hints.append(f"the data lag the model by about {lag} sample(s)")
+            hints.append(("delay", f"the data lag the model by about {lag} sample(s)"))
     dis = Disagreement(
         gap=fit.error,
         gap_lower=fit.lower,
@@ -200,6 +227,6 @@ def locate_design(s, d: Design, u, y, nb, skip, window, max_lag, coef_box=1e3):
         mean_shift=ms,
         direction_correlation=dc,
         best_lag=lag,
-        hints=tuple(hints),
+        hints=tuple(text for _, text in hints),
     )
-    return dis, fit, nominal
+    return dis, fit, nominal, hints

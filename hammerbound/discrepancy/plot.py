@@ -17,9 +17,9 @@ def plot_report(self, path=None, *, max_samples=None):
     fig, axes = plt.subplots(
         4, 1, figsize=(10, 10.5), gridspec_kw={"height_ratios": [1, 1.6, 1.6, 1.4]}
     )
-    name = self.effect or "none"
     fig.suptitle(
-        f"Discrepancy diagnosis - missing effect: {name};  gap {self.gap_before:.3g} -> "
+        f"Discrepancy diagnosis - missing effect: {self.effect_label};  "
+        f"gap {self.gap_before:.3g} -> "
         f"{self.gap_after:.3g}  (noise bound {self.noise_bound:.3g})",
         fontsize=11,
     )
@@ -56,12 +56,15 @@ def plot_report(self, path=None, *, max_samples=None):
     for a in axes[:3]:
         a.set_xlim(0, max(n - 1, 1))
     ax = axes[3]
-    if self.candidates:
-        names = [c.name for c in self.candidates]
-        errs = np.array([c.minimax_error for c in self.candidates])
+    shown = [*self.candidates, *sorted(self.combinations, key=lambda c: c.minimax_error)[:4]]
+    if shown:
+        names = [c.name for c in shown]
+        errs = np.array([max(c.minimax_error, 1e-300) for c in shown])
         colors = ["tab:blue" if c.name == self.effect
-                  else ("tab:green" if c.consistent else "0.6") for c in self.candidates]
+                  else ("tab:green" if c.consistent else "0.6") for c in shown]
         bars = ax.bar(names, errs, color=colors)
+        if len(shown) > 6:
+            ax.tick_params(axis="x", labelsize=7, labelrotation=20)
         for b, e in zip(bars, errs, strict=True):
             ax.annotate(f"{e:.3g}", (b.get_x() + b.get_width() / 2, e),
                         xytext=(0, 2), textcoords="offset points", ha="center",

@@ -10,7 +10,8 @@ import numpy as np
 if TYPE_CHECKING:
     from .model import RefinedModel
 
-__all__ = ["CandidateFit", "ConditionEvidence", "DiagnosisReport", "Disagreement"]
+__all__ = ["CandidateFit", "CombinationFit", "ConditionEvidence", "DiagnosisReport",
+           "Disagreement"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,10 @@ class CandidateFit:
         all integers up to ``max_delay``), so ``lower_bound`` covers the candidate class.
     n_evaluations : int
         Number of minimax LPs solved for this candidate.
+    gap_fraction_removed : float
+        ``(gap_before - minimax_error) / (gap_before - noise_bound)`` clipped to [0, 1]:
+        the share of the gap above the noise bound that the candidate removes (0 when the
+        model is already consistent).
     """
 
     name: str
@@ -58,6 +63,41 @@ class CandidateFit:
     improvement: float
     exhaustive: bool
     n_evaluations: int
+    gap_fraction_removed: float = 0.0
+
+
+@dataclass(frozen=True)
+class CombinationFit:
+    """Evidence for a combination of effects fitted jointly (pairs, triples).
+
+    Attributes
+    ----------
+    name : str
+        The added effects joined by ``+`` (e.g. ``backlash+delay``).
+    effects : tuple of str
+        Every effect of the fitted class (effects already in a :class:`RefinedModel`
+        first: they are refitted too).
+    values : tuple
+        Fitted parameter of each effect.
+    minimax_error : float
+        Achieved ``max_t |y_t - yhat_t|`` of the jointly refitted model.
+    consistent : bool
+    gap_fraction_removed : float
+        ``(gap_before - minimax_error) / (gap_before - noise_bound)`` clipped to [0, 1].
+    n_evaluations : int
+        Minimax LPs solved for this combination.
+    seconds : float
+        Time spent on it.
+    """
+
+    name: str
+    effects: tuple
+    values: tuple
+    minimax_error: float
+    consistent: bool
+    gap_fraction_removed: float
+    n_evaluations: int
+    seconds: float
 
 
 @dataclass(frozen=True)
@@ -160,8 +200,29 @@ class DiagnosisReport:
     Attributes
     ----------
     effect : str or None
-        Name of the chosen missing effect; ``None`` when the model is already consistent
-        with the data, or when no candidate shrinks the gap by ``min_improvement``.
+        Name of the missing effect, or of the combination (``"backlash+delay"``), that
+        makes the data consistent with the noise bound; ``None`` when the model is
+        already consistent, and when **none of the candidates explains the data** (then
+        see ``closest``). Never the name of something that leaves the data inconsistent.
+    effects_added : tuple of str
+        The added effects (``effect`` split at ``+``; empty when ``effect`` is None).
+    closest : tuple of str
+        When nothing explains the data: the (at most two) candidates or combinations
+        with the smallest error among those shrinking the gap by ``min_improvement``.
+        Listed for information only; none of them is consistent.
+    closest_gap_removed : tuple of float
+        For each of ``closest``: the fraction of the gap above the noise bound it
+        removes, ``(gap_before - error) / (gap_before - noise_bound)``.
+    closest_minimax_error : tuple of float
+        For each of ``closest``: its achieved minimax error.
+    combinations : tuple of CombinationFit
+        Evidence of the joint search (empty when a single candidate was consistent).
+    search_seconds : float
+        Wall time of the whole diagnosis (the search's cost).
+    n_fits : int
+        Minimax LPs solved.
+    n_combinations : int
+        Candidate classes (single effects and combinations) fitted.
     gap_before, gap_after : float
         Minimax error (smallest consistent noise bound) of the original and refined
         model classes. ``gap_after == gap_before`` when ``effect is None``. When an
@@ -203,6 +264,23 @@ class DiagnosisReport:
     prediction_before: np.ndarray = field(repr=False, default=None)
     prediction_after: np.ndarray = field(repr=False, default=None)
     skip: int = 0
+    effects_added: tuple = ()
+    closest: tuple = ()
+    closest_gap_removed: tuple = ()
+    closest_minimax_error: tuple = ()
+    combinations: tuple = ()
+    search_seconds: float = 0.0
+    n_fits: int = 0
+    n_combinations: int = 0
+
+    @property
+    def effect_label(self) -> str:
+        """``effect``, or "none of the candidates explains the data" / "none needed"."""
+        if self.effect is not None:
+            return self.effect
+        if self.consistent_before:
+            return "none (the model is consistent with the data)"
+        return "none of the candidates explains the data"
 
     @property
     def gap_before_lower(self) -> float:
@@ -237,17 +315,28 @@ class DiagnosisReport:
             f"gap before (refit)       : {self.gap_before:.6g} "
             f"(certified >= {d.gap_lower:.6g}; "
             f"{100 * self.fraction_outside_before:.1f}% outside)",
-            f"effect                   : {self.effect}",
+            f"effect                   : {self.effect_label}",
             f"gap after                : {self.gap_after:.6g} "
             f"({100 * self.fraction_outside_after:.1f}% outside)",
         ]
+        for name, frac, err in zip(self.closest, self.closest_gap_removed,
+                                   self.closest_minimax_error, strict=True):
+            lines.append(f"closest candidate        : {name} (error {err:.6g}, removes "
+                         f"{100 * frac:.0f}% of the gap above the bound; not consistent)")
+        lines.append(f"search cost              : {self.search_seconds:.2f} s, "
+                     f"{self.n_fits} minimax fits, {self.n_combinations} classes")
         for h in d.hints:
             lines.append(f"  - {h}")
+        if self.combinations:
+            lines.append("combination (joint fit)         minimax err  consistent  gap removed")
+            for c in self.combinations:
+                lines.append(f"{c.name:<30} {c.minimax_error:>12.5g}  {str(c.consistent):>10}"
+                             f" {100 * c.gap_fraction_removed:>11.0f}%")
         if self.candidates:
             lines.append("candidate     param        value   minimax err  consistent  improvement")
             for c in self.candidates:
                 lines.append(
-                    f"{c.name:<13} {c.param_name:>5} {c.value:>12.5g} {c.minimax_error:>13.5g}"
+                    f"{c.name:<13} {c.param_name:>5} {_val(c.value):>12} {c.minimax_error:>13.5g}"
                     f"  {str(c.consistent):>10} {c.improvement:>12.3g}"
                 )
         lines.append(self.message)
@@ -259,6 +348,14 @@ class DiagnosisReport:
         rm = self.refined_model
         return _json_clean({
             "effect": self.effect,
+            "effect_label": self.effect_label,
+            "effects_added": list(self.effects_added),
+            "closest": [{"name": n, "gap_fraction_removed": f, "minimax_error": e}
+                        for n, f, e in zip(self.closest, self.closest_gap_removed,
+                                           self.closest_minimax_error, strict=True)],
+            "combinations": [c.__dict__ for c in self.combinations],
+            "search_cost": {"seconds": self.search_seconds, "n_fits": self.n_fits,
+                            "n_classes": self.n_combinations},
             "noise_bound": self.noise_bound,
             "gap_before": self.gap_before,
             "gap_before_certified_lower": d.gap_lower,
@@ -304,6 +401,12 @@ class DiagnosisReport:
         from .plot import plot_report
 
         return plot_report(self, path, max_samples=max_samples)
+
+
+def _val(v) -> str:
+    if isinstance(v, tuple):
+        return ",".join(f"{x:.3g}" for x in v)
+    return f"{v:.5g}"
 
 
 def _json_clean(obj):

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize, minimize_scalar
@@ -36,6 +36,7 @@ class Problem:
     coef_box: float
     grid_size: int
     ctx: object
+    refine_to_bound: bool = True  # refine errors just above the bound down to rounding
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,7 @@ class ComboFit:
     exhaustive: bool
     n_evaluations: int
     seconds: float
+    int_ranking: dict = None
 
     @property
     def names(self) -> tuple:
@@ -89,7 +91,8 @@ class _Objective:
             pb = self.pb
             combo = tuple(zip(self.effects, self.split(key), strict=True))
             d = design(pb.origin, pb.u, pb.refit, combo, pb.y)
-            self.cache[key] = (fit_design(pb.y, d, pb.skip, pb.coef_box, pb.nb), d)
+            target = pb.nb if pb.refine_to_bound else None
+            self.cache[key] = (fit_design(pb.y, d, pb.skip, pb.coef_box, target, fast=True), d)
         return self.cache[key][0].error
 
     def best(self):
@@ -118,7 +121,7 @@ def _golden(g, a, b, xtol, max_iter=90, stop=None):
             fd = g(d)
 
 
-def _search_1d(g, p, grid_size, target, starts=()):
+def _search_1d(g, p, grid_size, target, starts=(), coarse=False):
     """Grid search then bounded Brent refinement of a 1-D minimax error ``g``.
 
     When the error found lies just above ``target`` (the noise bound: within 1 %), a final
@@ -126,14 +129,15 @@ def _search_1d(g, p, grid_size, target, starts=()):
     whose noise sits exactly at the bound are recognised as consistent.
     """
     lo, hi = p.lo, p.hi
-    grid = np.unique(np.r_[p.grid(grid_size), [s for s in starts if lo <= s <= hi]])
+    grid = np.unique(np.r_[p.grid(8 if coarse else grid_size),
+                           [s for s in starts if lo <= s <= hi]])
     errs = np.array([g(v) for v in grid])
     i = int(np.argmin(errs))
     a, b = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     converged = False
     if b > a:
         res = minimize_scalar(g, bounds=(a, b), method="bounded",
-                              options={"xatol": 1e-4 * (hi - lo), "maxiter": 25})
+                              options={"xatol": 1e-4 * (hi - lo), "maxiter": 8 if coarse else 25})
         converged = bool(res.success)
     # the minimax error is V-shaped (non-smooth) at its minimum, so the first search leaves
     # the parameter ~xatol off. Noise at exactly the bound makes the optimum *equal* to the
@@ -152,7 +156,7 @@ class _Slice:
 
     def __init__(self, obj, base, idx):
         self.obj, self.base, self.idx = obj, list(base), list(idx)
-        self.keys = []
+        self._keys = {}  # points evaluated, in order (no duplicates)
 
     def vec(self, v):
         x = list(self.base)
@@ -162,18 +166,22 @@ class _Slice:
 
     def __call__(self, v):
         x = self.vec(v)
-        self.keys.append(tuple(np.atleast_1d(v).astype(float)))
+        self._keys.setdefault(tuple(np.atleast_1d(v).astype(float)), None)
         return self.obj(x)
 
+    @property
+    def keys(self):
+        return list(self._keys)
+
     def cache_keys(self):
-        return [k[0] for k in self.keys]
+        return [k[0] for k in self._keys]
 
 
-def _search_nd(obj, base, cidx, params, grid_size, target, starts):
+def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False):
     """Joint search of several continuous parameters (coarse grid, then Nelder-Mead)."""
     k = len(cidx)
     f = _Slice(obj, base, cidx)
-    per = max(3, int(round(min(grid_size, 40) ** (1.0 / k) * (1.4 if k == 2 else 1.0))))
+    per = 3 if coarse else max(3, int(round(min(grid_size, 40) ** (1.0 / k))))
     grids = [p.grid(per) for p in params]
     pts = [tuple(pt) for pt in itertools.product(*grids)]
     pts += [tuple(s) for s in starts]
@@ -182,23 +190,25 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts):
     hi = np.array([p.hi for p in params])
     logs = np.array([p.log for p in params])
 
+    def tr(v):
+        return np.where(logs, np.log(np.where(logs, np.maximum(v, 1e-300), 1.0)), v)
+
+    a, b = tr(lo), tr(hi)
+
     def to_unit(v):
-        v = np.where(logs, np.log(np.maximum(v, 1e-300)), v)
-        a = np.where(logs, np.log(lo), lo)
-        b = np.where(logs, np.log(hi), hi)
-        return (v - a) / (b - a)
+        return (tr(v) - a) / (b - a)
 
     def from_unit(w):
-        a = np.where(logs, np.log(lo), lo)
-        b = np.where(logs, np.log(hi), hi)
         v = a + np.clip(w, 0.0, 1.0) * (b - a)
-        return np.where(logs, np.exp(v), v)
+        return np.where(logs, np.exp(np.where(logs, v, 0.0)), v)
 
     order = np.argsort(vals)
-    for j in order[:2]:
+    for j in order[: 1 if coarse else 2]:
         minimize(lambda w: f(from_unit(w)), to_unit(np.array(pts[j])), method="Nelder-Mead",
-                 options={"maxfev": 30 * k, "xatol": 1e-4, "fatol": 1e-12 * (1 + target),
-                          "initial_simplex": None})
+                 options={"maxfev": (8 if coarse else 30) * k, "xatol": 1e-4,
+                          "fatol": 1e-12 * (1 + (target or 0.0))})
+    if coarse:
+        return
     best = np.array(min(list(f.keys), key=f))
     if target is not None and target < f(best) <= 1.01 * target:
         for _ in range(2):  # coordinate-wise golden refinement near the bound
@@ -215,7 +225,8 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts):
                 best = np.array(min(list(f.keys), key=f))
 
 
-def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None) -> ComboFit:
+def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
+                    coarse=False) -> ComboFit:
     """Fit the effects ``effects`` (a sequence of :class:`~.effects.Effect`) jointly.
 
     Parameters
@@ -225,6 +236,8 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None) -> C
     int_choices : dict, optional
         ``{(effect index, parameter index): values}`` restricting integer parameters
         (default: every integer in the parameter's range).
+    coarse : bool
+        A cheap screening search (small grids, short refinement).
     """
     t0 = time.perf_counter()
     effects = tuple(effects)
@@ -242,6 +255,7 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None) -> C
     full_enum = int_choices is None or all(
         int_choices.get((flat[n][0], flat[n][1])) is None for n in int_idx)
     flat_starts = [tuple(v for th in s for v in th) for s in (starts or ())]
+    target = pb.nb if pb.refine_to_bound else None
     for ivals in itertools.product(*int_vals):
         base = [0.0] * len(flat)
         for n, v in zip(int_idx, ivals, strict=True):
@@ -252,17 +266,38 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None) -> C
         cs = [tuple(s[n] for n in cont_idx) for s in flat_starts if len(s) == len(flat)]
         if len(cont_idx) == 1:
             f = _Slice(obj, base, cont_idx)
-            _search_1d(f, flat[cont_idx[0]][2], pb.grid_size, pb.nb, [c[0] for c in cs])
+            _search_1d(f, flat[cont_idx[0]][2], pb.grid_size, target, [c[0] for c in cs],
+                       coarse)
         else:
             _search_nd(obj, base, cont_idx, [flat[n][2] for n in cont_idx], pb.grid_size,
-                       pb.nb, cs)
+                       target, cs, coarse)
     key, fit, d = obj.best()
+    # the final point, solved certified (and to the finest tolerances near the bound)
+    sure = fit_design(pb.y, d, pb.skip, pb.coef_box, target)
+    if sure.error <= fit.error or not np.isfinite(fit.error):
+        fit = sure
+    else:
+        fit = replace(fit, lower=sure.lower)
+    ranking = {}
+    for n in int_idx:
+        i, j, _ = flat[n]
+        best_by_v = {}
+        for kk, (ff, _) in obj.cache.items():
+            v = int(round(kk[n]))
+            best_by_v[v] = min(best_by_v.get(v, np.inf), ff.error)
+        ranking[(i, j)] = sorted(best_by_v, key=best_by_v.get)
     thetas = obj.split(key)
     combo = tuple(zip(effects, thetas, strict=True))
     model = rebuild(pb.origin, pb.refit, combo, d, fit)
     pred = model.predict(pb.u)
     err = float(np.max(np.abs((pb.y - pred)[pb.skip:])))
     exhaustive = not cont_idx and full_enum
-    lower = min(f.lower for f, _ in obj.cache.values()) if exhaustive else fit.lower
+    if exhaustive:  # certified bound over the whole class: every enumerated point, certified
+        lower = fit.lower
+        for kk, (_ff, dd) in obj.cache.items():
+            if kk != key:
+                lower = min(lower, fit_design(pb.y, dd, pb.skip, pb.coef_box).lower)
+    else:
+        lower = fit.lower
     return ComboFit(effects, thetas, fit, d, model, pred, err, min(lower, err), exhaustive,
-                    len(obj.cache), time.perf_counter() - t0)
+                    len(obj.cache) + 1, time.perf_counter() - t0, ranking)

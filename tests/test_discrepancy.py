@@ -18,10 +18,10 @@ from scipy.signal import lfilter
 matplotlib.use("Agg")
 
 from hammerbound.discrepancy import (  # noqa: E402
-    CANDIDATES,
     DiagnosisReport,
     RefinedModel,
     apply_effect,
+    default_candidates,
     diagnose,
     diagnose_cli_main,
     locate,
@@ -95,7 +95,7 @@ def test_names_hidden_effect_and_closes_gap(effect, seed):
     assert rep.gap_before_lower > NB  # the original class is *certified* inconsistent
     assert rep.fraction_outside_after == 0.0 < rep.fraction_outside_before
     # evidence for every candidate; the chosen one is the only consistent one here
-    assert [c.name for c in rep.candidates] == list(CANDIDATES)
+    assert [c.name for c in rep.candidates] == list(default_candidates())
     chosen = rep.candidate(effect)
     assert chosen.consistent and chosen.minimax_error == rep.gap_after
     assert abs(chosen.value - value) <= tol
@@ -143,7 +143,7 @@ def test_no_missing_effect_is_not_invented(seed):
     assert "No missing effect" in rep.message
     assert rep.refined_model.effects == ()
     # the evidence is still reported: no candidate is needed
-    assert len(rep.candidates) == len(CANDIDATES)
+    assert len(rep.candidates) == len(default_candidates())
 
 
 def test_noise_bound_too_small_for_the_noise_does_not_invent_an_effect():

@@ -58,7 +58,7 @@ from __future__ import annotations
 from ..cli import diagnose_cli_main
 from ..io import read_io_csv
 from .diagnose import diagnose
-from .effects import CANDIDATES, REGISTRY, Effect, register
+from .effects import CANDIDATES, REGISTRY, Effect, default_candidates, register
 from .locate import locate
 from .model import RefinedModel, apply_effect
 from .report import CandidateFit, ConditionEvidence, DiagnosisReport, Disagreement
@@ -73,6 +73,7 @@ __all__ = [
     "Effect",
     "RefinedModel",
     "apply_effect",
+    "default_candidates",
     "diagnose",
     "diagnose_cli_main",
     "locate",

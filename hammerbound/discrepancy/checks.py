@@ -71,9 +71,12 @@ def validate(model, u, y, noise_bound, refit, skip):
 
 
 def candidate_names(candidates):
-    """Checked tuple of candidate names (default: every registered one)."""
+    """Checked tuple of candidate names (default: :func:`~.effects.default_candidates`;
+    ``"all"``: every registered one)."""
     known = list(_effects.REGISTRY)
     if candidates is None:
+        return _effects.default_candidates()
+    if isinstance(candidates, str) and candidates == "all":
         return tuple(known)
     if isinstance(candidates, str):
         candidates = (candidates,)

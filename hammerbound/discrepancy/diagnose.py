@@ -50,7 +50,10 @@ def diagnose(
     noise_bound : float
         Known bound ``|eta_t| <= noise_bound`` of the output error (22.5).
     candidates : sequence of str, optional
-        Subset of :data:`CANDIDATES` to try (default: all).
+        Names from :data:`CANDIDATES` to try (default: :func:`default_candidates`, the
+        one-parameter effects; ``"all"``: every registered candidate, including the
+        slower several-parameter ones ``polynomial``, ``asym_backlash``, ``relay``,
+        ``output_saturation``, ``drift``).
     refit : {"linear", "none"}
         ``"linear"`` (default): the model's parameter uncertainty is the numerator ``B``
         of its linear block (leading zeros kept, ``A`` fixed) - or an output gain for a

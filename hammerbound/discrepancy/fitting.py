@@ -135,7 +135,8 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
     up, lo = np.ones(m, bool), np.ones(m, bool)
     if sides is not None:
         sd = np.asarray(sides)[skip:]
-        up, lo = sd >= 0, sd <= 0
+        # +1: only ``y - yhat <= e`` (the ``lo`` rows); -1: only ``yhat - y <= e``
+        up, lo = sd <= 0, sd >= 0
     A_ub = np.vstack([np.hstack([Ps, -ones])[up], np.hstack([-Ps, -ones])[lo]])
     b_ub = np.concatenate([r0[up], -r0[lo]])
     T = float(np.max(np.abs(r0))) + 1.0
@@ -167,6 +168,10 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
         lower = max(lower, lower2)  # both are certified lower bounds
         if e2 < e:
             z, e = z2, e2
+    if post is not None:
+        # the LP fits the prediction before the output map: its bound is not one of the
+        # model class's error, so nothing is certified (tolerances point outward)
+        lower = 0.0
     return Fit(e, max(min(lower, e), 0.0), z, f, Phi, post)
 
 
@@ -193,7 +198,8 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None) -> Design:
     """The model class of origin ``s`` with the effects ``combo`` = ((Effect, theta), ...).
 
     Order: ``s.input_ops``, the effects' input maps (in order), the original backlash, the
-    linear block in series with every effect's filter, the output columns, the output maps.
+    linear block in series with every effect's filter, the output columns, the output gains
+    (:meth:`~.effects.Effect.output_gain`, applied to the rows of the LP), the output maps.
     """
     xx = np.asarray(u, dtype=float)
     for name, theta in s.input_ops:
@@ -239,7 +245,13 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None) -> Design:
             cols.extend(c.T)
         slices.append(slice(k0, len(cols)))
     Phi = np.column_stack(cols) if cols else np.zeros((n, 0))
-    outs = [(e, th) for e, th in combo if _overrides(e, "transform_output")]
+    for e, theta in combo:  # time-varying output gains keep the LP linear and exact
+        w = e.output_gain(n, theta)
+        if w is not None:
+            w = np.asarray(w, dtype=float).reshape(n)
+            f, Phi = f * w, Phi * w[:, None]
+    outs = [(e, th) for e, th in combo
+            if _overrides(e, "transform_output") and not _overrides(e, "output_gain")]
     post, sides = None, None
     if outs:
         def post(p, outs=outs):

@@ -193,8 +193,10 @@ class RefinedModel:
         yh = yh + self.offset
         for name, theta, coefs in self.output_terms:
             yh = yh + _effects.get(name).output_columns(yh.size, theta) @ np.asarray(coefs)
-        for name, theta in self.output_ops:
-            yh = _effects.get(name).transform_output(yh, theta)
+        ops = [(_effects.get(name), theta) for name, theta in self.output_ops]
+        gains = [op for op in ops if type(op[0]).output_gain is not _effects.Effect.output_gain]
+        for e, theta in gains + [op for op in ops if op not in gains]:
+            yh = e.transform_output(yh, theta)  # output gains first, as in the fit
         return yh
 
     def to_hammerstein(self) -> HammersteinSystem:

@@ -209,7 +209,7 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False)
                           "fatol": 1e-12 * (1 + (target or 0.0))})
     if coarse:
         return
-    best = np.array(min(f.keys, key=f))
+    best = np.array(min(list(f.keys), key=f))
     if target is not None and target < f(best) <= 1.01 * target:
         for _ in range(2):  # coordinate-wise golden refinement near the bound
             for i in range(k):
@@ -222,7 +222,7 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False)
 
                 _golden(g, max(lo[i], best[i] - span), min(hi[i], best[i] + span),
                         1e-14 * (hi[i] - lo[i]), stop=target)
-                best = np.array(min(f.keys, key=f))
+                best = np.array(min(list(f.keys), key=f))
 
 
 def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,

@@ -26,9 +26,15 @@ An effect declares:
   - :meth:`Effect.output_columns` ``(n, theta) -> (n, k) array``: columns added to the
     output whose ``k = len(linear_names)`` coefficients are fitted by the LP (offset, a
     drift ``t/n`` ...);
+  - :meth:`Effect.output_gain` ``(n, theta) -> (n,) array``: a time-varying gain on the
+    model output (a gain drift); the LP rows are scaled by it, so the fit stays exact;
   - :meth:`Effect.transform_output` ``(yhat, theta) -> yhat`` with
     :meth:`Effect.one_sided` ``(y, theta) -> array of {-1, 0, +1} or None``: a nonlinear
     output (sensor) map; the LP is told which samples are only bounded on one side;
+* ``default = False`` to leave it out of ``diagnose(candidates=None)`` (tried only when
+  named, or with ``candidates="all"``): the library's several-parameter candidates
+  (``polynomial``, ``asym_backlash``, ``relay``, ``output_saturation``, ``drift``) cost
+  1-3 s each per call (product-grid searches), the one-parameter ones ~0.2 s;
 * optionally :meth:`Effect.value` ``(theta, coefs)`` - what ``CandidateFit.value`` shows
   (default: the single parameter, or a tuple).
 
@@ -37,8 +43,8 @@ function of its arguments (the search calls it many times). Whatever the hooks d
 reported minimax error is recomputed from the returned :class:`RefinedModel`'s prediction,
 so a hook can make a fit worse, never a reported error wrong.
 
-Example (a gain drift ``(1 + g t/n)`` would need :meth:`transform_output`; an offset drift
-is one linear column)::
+Example (an offset drift is one linear column; a gain drift ``(1 + g t/n)`` is an
+:meth:`Effect.output_gain`, see ``drift.py``)::
 
     class OffsetDrift(Effect):
         name = "offset_drift"
@@ -57,15 +63,21 @@ from __future__ import annotations
 from types import MappingProxyType
 
 from ...exceptions import ParameterValidationError
+from .asym_backlash import AsymBacklash
 from .backlash import Backlash
 from .base import Context, Effect, Param
 from .deadzone import Deadzone
 from .delay import Delay
+from .drift import Drift
 from .extra_pole import ExtraPole
 from .offset import Offset
+from .output_saturation import OutputSaturation
+from .polynomial import Polynomial
+from .relay import Relay
 from .saturation import Saturation
 
-__all__ = ["CANDIDATES", "REGISTRY", "Context", "Effect", "Param", "get", "register"]
+__all__ = ["CANDIDATES", "REGISTRY", "Context", "Effect", "Param", "default_candidates", "get",
+           "register"]
 
 _REGISTRY: dict = {}
 #: Registered effects by name, in the order they are tried (read-only view).
@@ -93,14 +105,26 @@ def get(name: str) -> Effect:
         ) from None
 
 
+def default_candidates() -> tuple:
+    """Names tried by ``diagnose(candidates=None)``: registered effects with ``default``."""
+    return tuple(name for name, e in _REGISTRY.items() if e.default)
+
+
 _COUNTS: dict = {}
-#: Candidate names in the order they are tried, with the number of added parameters.
+#: Every registered candidate name, in the order they are tried, with the number of added
+#: parameters (the default set is :func:`default_candidates`).
 CANDIDATES = MappingProxyType(_COUNTS)
 
 # ---------------------------------------------------------------- registrations (one line each)
+# the first six are tried by default; the rest only when named or with candidates="all"
 register(Offset())
 register(Delay())
 register(Backlash())
 register(Deadzone())
 register(Saturation())
 register(ExtraPole())
+register(Polynomial())
+register(AsymBacklash())
+register(Relay())
+register(OutputSaturation())
+register(Drift())

@@ -70,11 +70,12 @@ class Effect:
     The model class after adding effects ``E1 .. Ek`` to a model ``G`` (input
     nonlinearity chain ``N0``, linear block ``B/A``, output offset) is::
 
-        yhat = OUT( [B/A] F(q^-1) IN_k(...IN_1(N0(u))) + sum_j coef_j col_j )
+        yhat = OUT( W * ([B/A] F(q^-1) IN_k(...IN_1(N0(u))) + sum_j coef_j col_j) )
 
     where ``IN_i`` are :meth:`transform_input`, ``F`` the product of the
     :meth:`series_filter` of every effect, ``col_j`` the :meth:`output_columns` (their
-    coefficients are fitted by the linear program, like ``B``) and ``OUT`` the
+    coefficients are fitted by the linear program, like ``B``), ``W`` the product of the
+    :meth:`output_gain` of every effect (time-varying gains, exact in the LP) and ``OUT`` the
     :meth:`transform_output` of every effect. The searched parameters ``theta`` (one
     value per :attr:`params` entry) are found by a grid search with local refinement
     (override :meth:`search_space` / :meth:`initial_grid` to change it).
@@ -90,6 +91,8 @@ class Effect:
     description: str = ""
     #: True when :meth:`transform_input` is used (input-side effect; hints use it).
     acts_on_input: bool = False
+    #: Tried when ``diagnose(candidates=None)``; False: only when named (or ``"all"``).
+    default: bool = True
 
     @property
     def n_params(self) -> int:
@@ -120,6 +123,16 @@ class Effect:
 
     def output_columns(self, n: int, theta: tuple) -> np.ndarray | None:
         """``(n, len(linear_names))`` columns added to the output, or None."""
+        return None
+
+    def output_gain(self, n: int, theta: tuple) -> np.ndarray | None:
+        """A time-varying gain ``w_t`` (shape ``(n,)``) multiplying the model output, or None.
+
+        The fit multiplies the rows of its linear program by ``w``, so the refitted
+        coefficients stay exact (a gain drift). An effect that defines it must also define
+        :meth:`transform_output` as ``yhat * output_gain(yhat.size, theta)`` (used by
+        :meth:`RefinedModel.predict`); output gains act before the other output maps.
+        """
         return None
 
     def transform_output(self, yhat: np.ndarray, theta: tuple) -> np.ndarray:

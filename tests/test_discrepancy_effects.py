@@ -1,0 +1,134 @@
+"""The wider candidate library of ``diagnose`` (issue 17, item 3): each new effect is hidden
+in data simulated here (own numpy/scipy code, not the package's simulators) and must be
+named, with its parameters near the truth and the data consistent; on correct-model data
+the same candidate must not raise a false alarm.
+
+The noise is uniform inside ``0.9 NB`` and exactly ``+NB`` / ``-NB`` at two samples.
+"""
+
+from __future__ import annotations
+
+import control
+import numpy as np
+import pytest
+from scipy.signal import lfilter, lfilter_zi
+
+from hammerbound.discrepancy import REGISTRY, default_candidates, diagnose
+from hammerbound.discrepancy.checks import candidate_names
+
+A = np.array([1.0, -1.2, 0.5])
+B = np.array([0.0, 0.2, 0.1])  # unit static gain, one sample of delay
+G = control.tf(B, A, True)
+NB = 0.02
+N = 120
+NEW = ("polynomial", "asym_backlash", "relay", "output_saturation", "drift")
+
+
+def _input(seed, n=N, hold=6):
+    return np.repeat(np.random.default_rng(seed).uniform(-1.0, 1.0, n // hold + 1), hold)[:n]
+
+
+def _noise(seed, n=N):
+    e = np.random.default_rng(100 + seed).uniform(-0.9 * NB, 0.9 * NB, n)
+    e[n // 3], e[2 * n // 3] = NB, -NB  # exactly at the bound
+    return e
+
+
+def _play(u, ml, cl, mr, cr):
+    """Backlash (22.1) from state 0: x_t = min(max(x_{t-1}, mr (u - cr)), ml (u + cl))."""
+    x, p = np.zeros(u.size), 0.0
+    for t, v in enumerate(u):
+        p = min(max(p, mr * (v - cr)), ml * (v + cl))
+        x[t] = p
+    return x
+
+
+def _relay(u, h, off, on):
+    x, s = np.zeros(u.size), off
+    for t, v in enumerate(u):
+        s = on if v > h else (off if v < -h else s)
+        x[t] = s
+    return x
+
+
+def _run(name, y, u):
+    rep = diagnose(G, u, y, NB, candidates=[name], grid_size=8)
+    assert rep.effect == name, rep.message
+    assert rep.consistent_after and rep.gap_after <= NB * (1 + 1e-9)
+    assert not rep.consistent_before
+    # the reported error is achieved by the refined model
+    err = np.max(np.abs(y - rep.refined_model.predict(u)))
+    assert err == pytest.approx(rep.gap_after, rel=1e-9, abs=1e-12)
+    (cand,) = rep.candidates
+    return rep, cand.value
+
+
+def test_new_candidates_registered_but_not_tried_by_default():
+    for name in NEW:
+        e = REGISTRY[name]
+        assert e.name == name and e.description and e.n_params >= 2
+        assert name not in default_candidates()
+    assert set(NEW) <= set(candidate_names("all")) == set(REGISTRY)
+    assert candidate_names(None) == default_candidates()
+
+
+def test_polynomial_found():
+    u = _input(1)
+    y = lfilter(B, A, u + 0.3 * u**2 - 0.4 * u**3) + _noise(1)
+    _, (a2, a3) = _run("polynomial", y, u)
+    assert a2 == pytest.approx(0.3, abs=0.02) and a3 == pytest.approx(-0.4, abs=0.03)
+
+
+def test_asym_backlash_found():
+    u = _input(2)
+    # crossing of the two lines at u_c = -(1.1*0.1 + 0.9*0.2)/0.2 = -1.45: outside the input
+    y = lfilter(B, A, _play(u, 1.1, 0.1, 0.9, 0.2)) + _noise(2)
+    rep, (ml, cl, mr, cr) = _run("asym_backlash", y, u)
+    assert (ml + mr) / 2 == pytest.approx(1.0)  # the normalisation
+    assert ml / mr == pytest.approx(1.1 / 0.9, rel=0.03)
+    assert cl == pytest.approx(0.1, abs=0.01) and cr == pytest.approx(0.2, abs=0.01)
+    # the refitted numerator carries the gain the normalisation took out of the slopes
+    assert rep.refined_model.B[1:3] == pytest.approx(B[1:3], rel=0.05)
+
+
+def test_relay_found():
+    u = _input(3)
+    off, on, h = 0.2, 1.2, 0.3
+    # at rest since ever with the relay off: the linear block starts in steady state
+    x = _relay(u, h, off, on)
+    y = lfilter(B, A, x, zi=lfilter_zi(B, A) * off)[0] + _noise(3)
+    rep, (hf, o) = _run("relay", y, u)
+    # h is identifiable only up to the input values: same switching, no input in between
+    lo, hi = sorted((hf, h))
+    assert not np.any((np.abs(u) > lo) & (np.abs(u) < hi))
+    assert 0.1 < hf < 0.45
+    assert o == pytest.approx(off * 1.0, abs=0.03)  # G(1) y_off, G(1) = 1
+    assert rep.refined_model.B[1:3] == pytest.approx((on - off) * B[1:3], rel=0.05)
+
+
+def test_output_saturation_found():
+    u = _input(4)
+    y = np.clip(lfilter(B, A, u) + _noise(4), -0.5, 0.6)  # the sensor clips its reading
+    assert np.sum(y == 0.6) >= 5 and np.sum(y == -0.5) >= 5
+    _, (lo, hi) = _run("output_saturation", y, u)
+    assert lo == pytest.approx(-0.5, abs=0.03) and hi == pytest.approx(0.6, abs=0.03)
+    # input saturation is a different effect: it cannot explain these data
+    rep = diagnose(G, u, y, NB, candidates=["saturation"], grid_size=8)
+    assert not rep.consistent_after
+
+
+def test_drift_found():
+    u = _input(5)
+    t = np.arange(N) / N
+    y = (1 + 0.3 * t) * (lfilter(B, A, u) + 0.1 * t) + _noise(5)
+    _, (g, o1) = _run("drift", y, u)
+    assert g == pytest.approx(0.3, abs=0.03) and o1 == pytest.approx(0.1, abs=0.02)
+
+
+def test_no_false_alarm_on_correct_model():
+    u = _input(6, n=60, hold=4)
+    y = lfilter(B, A, u) + _noise(6, 60)
+    rep = diagnose(G, u, y, NB, candidates=list(NEW), grid_size=4)
+    assert rep.consistent_before and rep.effect is None
+    assert [c.name for c in rep.candidates] == list(NEW)
+    assert rep.gap_after == rep.gap_before <= NB * (1 + 1e-9)

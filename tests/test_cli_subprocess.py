@@ -164,11 +164,14 @@ def test_demo_json_stdout_is_only_json_and_progress_on_stderr(tmp_path):
         assert all(r["inside"]) and r["lower"] <= r["true"] <= r["upper"]
     # the default report directory was created (it did not exist)
     assert Path(tmp_path, "demo-report", "report.md").is_file()
-    # progress: one line per fit (2 levels x 2 seeds x 2 N), in order, on stderr
+    # progress: one line per fit (2 levels x 2 seeds x 2 N) as it finishes, on stderr; the
+    # fits run side by side, so in the order they finish, each exactly once
     err = res.stderr.splitlines()
     ends = [s for s in err if s.startswith("hammerbound demo: [")]
     assert [s.split("]")[0] for s in ends] == [f"hammerbound demo: [{k}/8" for k in range(1, 9)]
-    assert "delta_eta=0.05 N=40 seed=1" in ends[-1]
+    fits = sorted(s.split("] ")[1].split(" lp ")[0] for s in ends)
+    assert fits == sorted(f"delta_eta={d} N={n} seed={k}" for d in ("0.02", "0.05")
+                          for n in (30, 40) for k in (0, 1))
 
 
 def test_demo_text_tables_on_stdout_quiet(tmp_path):

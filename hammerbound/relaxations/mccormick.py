@@ -52,7 +52,39 @@ def _node_options(problem: EIVProblem) -> dict:
     return opts
 
 
-class McCormickRelaxation:
+def set_envelope(lp, rows, cols, pos, w_cols, xl, xu, eL, eU):
+    """Set the 4 McCormick rows of the products ``w = x e`` of one theta ``x`` in ``[xl, xu]``
+    with the errors ``e`` in ``[eL, eU]`` (arrays, one per product): coefficients of ``e``,
+    outward-rounded row bounds and the bounds of the ``w`` columns ``w_cols``."""
+    ones = np.ones(np.size(eL))
+    # e-coefficients of the 4 rows: -xL, -xU, -xU, -xL
+    lp.set_coeffs(rows, cols, pos,
+                  np.column_stack([-xl * ones, -xu * ones, -xu * ones, -xl * ones]).ravel())
+    lo = np.column_stack([round_down(-xl * eL), round_down(-xu * eU),
+                          -np.inf * ones, -np.inf * ones]).ravel()
+    hi = np.column_stack([np.inf * ones, np.inf * ones,
+                          round_up(-xu * eL), round_up(-xl * eU)]).ravel()
+    lp.set_row_bounds(rows, lo, hi)
+    wl, wu = _prod_bounds(xl, xu, eL, eU)
+    lp.set_col_bounds(w_cols, wl, wu)
+
+
+class LPPointViews:
+    """Views of an LP point shared by the McCormick relaxations (needs ``p``, ``problem``
+    and the product index arrays ``pw``, ``px``, ``pe``)."""
+
+    def violations(self, x) -> np.ndarray:
+        """Per-theta sum of ``|w - x e|`` at an LP point ``x`` (shape (p,))."""
+        v = np.abs(x[self.pw] - x[self.px] * x[self.pe])
+        return np.bincount(self.px, weights=v, minlength=self.p)
+
+    def split_eta_dx(self, x):
+        """``(eta (N,), dx (K,))`` part of an LP point."""
+        p, n = self.p, self.problem.N
+        return x[p : p + n], x[p + n : p + n + self.problem.n_groups]
+
+
+class McCormickRelaxation(LPPointViews):
     """Persistent McCormick LP relaxation of (22.34) (see module docstring).
 
     Parameters
@@ -180,27 +212,6 @@ class McCormickRelaxation:
         lp.set_col_bounds(changed, box[changed, 0], box[changed, 1])
         for q in changed:
             sel, r, c, pos = self._by_x[q]
-            xl, xu = box[q, 0], box[q, 1]
-            eL, eU = self.eL[sel], self.eU[sel]
-            # e-coefficients of the 4 rows: -xL, -xU, -xU, -xL
-            ecoef = np.column_stack([np.full(sel.size, -xl), np.full(sel.size, -xu),
-                                     np.full(sel.size, -xu), np.full(sel.size, -xl)]).ravel()
-            lp.set_coeffs(r, c, pos, ecoef)
-            lo = np.column_stack([round_down(-xl * eL), round_down(-xu * eU),
-                                  np.full(sel.size, -np.inf), np.full(sel.size, -np.inf)]).ravel()
-            hi = np.column_stack([np.full(sel.size, np.inf), np.full(sel.size, np.inf),
-                                  round_up(-xu * eL), round_up(-xl * eU)]).ravel()
-            lp.set_row_bounds(r, lo, hi)
-            wl, wu = _prod_bounds(xl, xu, eL, eU)
-            lp.set_col_bounds(self.pw[sel], wl, wu)
+            set_envelope(lp, r, c, pos, self.pw[sel], box[q, 0], box[q, 1],
+                         self.eL[sel], self.eU[sel])
         self.box = box.copy()
-
-    def violations(self, x) -> np.ndarray:
-        """Per-theta sum of ``|w - x e|`` at an LP point ``x`` (shape (p,))."""
-        v = np.abs(x[self.pw] - x[self.px] * x[self.pe])
-        return np.bincount(self.px, weights=v, minlength=self.p)
-
-    def split_eta_dx(self, x):
-        """``(eta (N,), dx (K,))`` part of an LP point."""
-        p, n = self.p, self.problem.N
-        return x[p : p + n], x[p + n : p + n + self.problem.n_groups]

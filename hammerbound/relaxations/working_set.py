@@ -28,7 +28,7 @@ import scipy.sparse as sp
 
 from ..tolerances import FEASIBILITY_RTOL
 from ._highs import HighsLP, round_down, round_up
-from .mccormick import _node_options, _prod_bounds
+from .mccormick import LPPointViews, _node_options, _prod_bounds, set_envelope
 from .problem import EIVProblem, equation_scale
 
 #: use the working set by default from this many equations on (below, the full LP is cheap)
@@ -116,7 +116,7 @@ def interval_excess(problem: EIVProblem, theta, tau=None) -> np.ndarray:
     return EquationData(problem).excess(theta, tau)
 
 
-class WorkingSetRelaxation:
+class WorkingSetRelaxation(LPPointViews):
     """Persistent McCormick LP relaxation of (22.34) on a growing set of equations.
 
     Columns ``z = [theta (p), eta (N), dx (K), w (products of the working set)]``: the
@@ -286,29 +286,10 @@ class WorkingSetRelaxation:
             sel, r, c, pos = by_x[q]
             if sel.size == 0:
                 continue
-            xl, xu = box[q, 0], box[q, 1]
-            eL, eU = self.e_lo[self.pe[sel] - self.p], self.e_hi[self.pe[sel] - self.p]
-            ones = np.ones(sel.size)
-            ecoef = np.column_stack([-xl * ones, -xu * ones, -xu * ones, -xl * ones]).ravel()
-            lp.set_coeffs(r, c, pos, ecoef)
-            lo = np.column_stack([round_down(-xl * eL), round_down(-xu * eU),
-                                  -np.inf * ones, -np.inf * ones]).ravel()
-            hi = np.column_stack([np.inf * ones, np.inf * ones,
-                                  round_up(-xu * eL), round_up(-xl * eU)]).ravel()
-            lp.set_row_bounds(r, lo, hi)
-            wl, wu = _prod_bounds(xl, xu, eL, eU)
-            lp.set_col_bounds(self.pw[sel], wl, wu)
+            e = self.pe[sel] - self.p
+            set_envelope(lp, r, c, pos, self.pw[sel], box[q, 0], box[q, 1],
+                         self.e_lo[e], self.e_hi[e])
         self.box = box.copy()
-
-    def violations(self, x) -> np.ndarray:
-        """Per-theta sum of ``|w - x e|`` at an LP point ``x`` (shape (p,))."""
-        v = np.abs(x[self.pw] - x[self.px] * x[self.pe])
-        return np.bincount(self.px, weights=v, minlength=self.p)
-
-    def split_eta_dx(self, x):
-        """``(eta (N,), dx (K,))`` part of an LP point."""
-        p, n = self.p, self.problem.N
-        return x[p : p + n], x[p + n : p + n + self.problem.n_groups]
 
     def separate(self, x, screen=None, limit: int = ADD_PER_ROUND) -> np.ndarray:
         """Equations outside the working set found violated at the LP point ``x`` (at most

@@ -72,57 +72,65 @@ def test_new_candidates_registered_but_not_tried_by_default():
     assert candidate_names(None) == default_candidates()
 
 
-def test_polynomial_found():
+# each candidate at a large and at a small (still detectable: gap > 2 NB) magnitude
+@pytest.mark.parametrize("a2, a3", [(0.3, -0.4), (0.08, -0.1)])
+def test_polynomial_found(a2, a3):
     u = _input(1)
-    y = lfilter(B, A, u + 0.3 * u**2 - 0.4 * u**3) + _noise(1)
-    _, (a2, a3) = _run("polynomial", y, u)
-    assert a2 == pytest.approx(0.3, abs=0.02) and a3 == pytest.approx(-0.4, abs=0.03)
+    y = lfilter(B, A, u + a2 * u**2 + a3 * u**3) + _noise(1)
+    _, (f2, f3) = _run("polynomial", y, u)
+    assert f2 == pytest.approx(a2, abs=0.02) and f3 == pytest.approx(a3, abs=0.03)
 
 
-def test_asym_backlash_found():
+@pytest.mark.parametrize("tml, tcl, tmr, tcr", [(1.1, 0.1, 0.9, 0.2), (1.05, 0.04, 0.95, 0.07)])
+def test_asym_backlash_found(tml, tcl, tmr, tcr):
     u = _input(2)
-    # crossing of the two lines at u_c = -(1.1*0.1 + 0.9*0.2)/0.2 = -1.45: outside the input
-    y = lfilter(B, A, _play(u, 1.1, 0.1, 0.9, 0.2)) + _noise(2)
+    # the two lines cross at u_c = -(ml cl + mr cr)/(ml - mr) (-1.45 and -1.06): outside
+    # the input range
+    y = lfilter(B, A, _play(u, tml, tcl, tmr, tcr)) + _noise(2)
     rep, (ml, cl, mr, cr) = _run("asym_backlash", y, u)
     assert (ml + mr) / 2 == pytest.approx(1.0)  # the normalisation
-    assert ml / mr == pytest.approx(1.1 / 0.9, rel=0.03)
-    assert cl == pytest.approx(0.1, abs=0.01) and cr == pytest.approx(0.2, abs=0.01)
+    assert ml / mr == pytest.approx(tml / tmr, rel=0.03)
+    assert cl == pytest.approx(tcl, abs=0.01) and cr == pytest.approx(tcr, abs=0.01)
     # the refitted numerator carries the gain the normalisation took out of the slopes
     assert rep.refined_model.B[1:3] == pytest.approx(B[1:3], rel=0.05)
 
 
-def test_relay_found():
+@pytest.mark.parametrize("off, on, h", [(0.2, 1.2, 0.3), (0.1, 0.5, 0.15)])
+def test_relay_found(off, on, h):
     u = _input(3)
-    off, on, h = 0.2, 1.2, 0.3
     # at rest since ever with the relay off: the linear block starts in steady state
     x = _relay(u, h, off, on)
     y = lfilter(B, A, x, zi=lfilter_zi(B, A) * off)[0] + _noise(3)
     rep, (hf, o) = _run("relay", y, u)
-    # h is identifiable only up to the input values: same switching, no input in between
-    lo, hi = sorted((hf, h))
-    assert not np.any((np.abs(u) > lo) & (np.abs(u) < hi))
-    assert 0.1 < hf < 0.45
+    # h is identifiable only up to the input values: the fitted threshold switches the
+    # relay at the same samples as the true one
+    np.testing.assert_array_equal(_relay(u, hf, off, on), x)
+    assert 0 < hf < 1.5 * h
     assert o == pytest.approx(off * 1.0, abs=0.03)  # G(1) y_off, G(1) = 1
     assert rep.refined_model.B[1:3] == pytest.approx((on - off) * B[1:3], rel=0.05)
 
 
-def test_output_saturation_found():
+@pytest.mark.parametrize("lo, hi", [(-0.5, 0.6), (-0.85, 0.8)])
+def test_output_saturation_found(lo, hi):
     u = _input(4)
-    y = np.clip(lfilter(B, A, u) + _noise(4), -0.5, 0.6)  # the sensor clips its reading
-    assert np.sum(y == 0.6) >= 5 and np.sum(y == -0.5) >= 5
-    _, (lo, hi) = _run("output_saturation", y, u)
-    assert lo == pytest.approx(-0.5, abs=0.03) and hi == pytest.approx(0.6, abs=0.03)
+    w = lfilter(B, A, u)
+    y = np.clip(w + _noise(4), lo, hi)  # the sensor clips its reading
+    assert np.sum(y == hi) >= 3 and np.sum(y == lo) >= 3
+    assert np.max(np.abs(np.clip(w, lo, hi) - w)) > 2 * NB  # detectable
+    _, (flo, fhi) = _run("output_saturation", y, u)
+    assert flo == pytest.approx(lo, abs=0.03) and fhi == pytest.approx(hi, abs=0.03)
     # input saturation is a different effect: it cannot explain these data
     rep = diagnose(G, u, y, NB, candidates=["saturation"], grid_size=8)
     assert not rep.consistent_after
 
 
-def test_drift_found():
+@pytest.mark.parametrize("g, o1", [(0.3, 0.1), (0.1, 0.05)])
+def test_drift_found(g, o1):
     u = _input(5)
     t = np.arange(N) / N
-    y = (1 + 0.3 * t) * (lfilter(B, A, u) + 0.1 * t) + _noise(5)
-    _, (g, o1) = _run("drift", y, u)
-    assert g == pytest.approx(0.3, abs=0.03) and o1 == pytest.approx(0.1, abs=0.02)
+    y = (1 + g * t) * (lfilter(B, A, u) + o1 * t) + _noise(5)
+    _, (fg, fo1) = _run("drift", y, u)
+    assert fg == pytest.approx(g, abs=0.03) and fo1 == pytest.approx(o1, abs=0.02)
 
 
 def test_no_false_alarm_on_correct_model():

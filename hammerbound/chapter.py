@@ -69,7 +69,8 @@ _TABLE_OF_N = {100: "22.2", 300: "22.3"}
 CLOSING_NOTE = """\
 Notes (measured with 5 seeds; docs/benchmarks.md, section 1, says which numbers are whose):
  * Rows use the exact method: the chapter's delta = 2 relaxation equals the exact intervals
-   wherever both were run (N = 10, 20). The order-1 relaxation (--method moment) is 2.0-3.2x
+   wherever both were run (N = 10-100, within 4e-4 of the width; python -m benchmarks
+   moment2, delta_eta = 0.05). The order-1 relaxation (--method moment) is 2.0-3.2x
    the exact width at delta_eta = 0.3 on seed 0 and is not what the chapter reports.
  * The rest of the difference is the inner-signal radius dx that stage 1 hands to stage 2.
    --stage1 chapter feeds stage 2 the dx implied by the chapter's Table 22.1 (interval

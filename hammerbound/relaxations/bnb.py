@@ -29,7 +29,7 @@ nodes and 55 s -> 17 s for the 8 bounds on 2 cores; ``python -m benchmarks.exact
   violation supplies the first verified point (:meth:`.points._Pool.seek`);
 * on long records (from :data:`.working_set.AUTO_MIN_EQUATIONS` equations), the OBBT and
   node LPs hold a growing **working set** of equations (:mod:`.working_set`): a relaxation
-  of the full LP, so every bound stays certified over all equations (N = 3000: 14.6x
+  of the full LP, so every bound stays certified over all equations (N = 3000: 5.3x
   faster in ``python -m benchmarks.exact_scaling``).
 """
 

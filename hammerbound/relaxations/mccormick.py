@@ -69,9 +69,41 @@ def set_envelope(lp, rows, cols, pos, w_cols, xl, xu, eL, eU):
     lp.set_col_bounds(w_cols, wl, wu)
 
 
-class LPPointViews:
-    """Views of an LP point shared by the McCormick relaxations (needs ``p``, ``problem``
-    and the product index arrays ``pw``, ``px``, ``pe``)."""
+class McCormickBase:
+    """What the full and the working-set McCormick relaxations share: the theta-box update
+    of the product envelopes and views of an LP point. Needs ``p``, ``problem``, ``lp``,
+    the product index arrays ``pw``, ``px``, ``pe``, the rows ``mc_rows`` (P, 4), the error
+    boxes ``e_lo``, ``e_hi``, the current ``box`` and ``_by_x`` (None: recompute)."""
+
+    def _positions(self):
+        """Per theta index: the products, their McCormick rows, the e-columns and their
+        positions in the LP matrix (cached until ``_by_x`` is reset)."""
+        if self._by_x is None:
+            self._by_x = []
+            for q in range(self.p):
+                sel = np.flatnonzero(self.px == q)
+                r = self.mc_rows[sel].ravel()  # (len(sel)*4,) ordered (prod, s)
+                c = np.repeat(self.pe[sel], 4)
+                self._by_x.append((sel, r, c, self.lp.data_positions(r, c)))
+        return self._by_x
+
+    def set_box(self, box):
+        """Update the relaxation in place to the theta box ``box`` (shape (p, 2))."""
+        box = np.asarray(box, dtype=float)
+        changed = np.flatnonzero(np.any(box != self.box, axis=1))
+        if changed.size == 0:
+            return
+        lp = self.lp
+        lp.set_col_bounds(changed, box[changed, 0], box[changed, 1])
+        by_x = self._positions()
+        for q in changed:
+            sel, r, c, pos = by_x[q]
+            if sel.size == 0:
+                continue
+            e = self.pe[sel] - self.p
+            set_envelope(lp, r, c, pos, self.pw[sel], box[q, 0], box[q, 1],
+                         self.e_lo[e], self.e_hi[e])
+        self.box = box.copy()
 
     def violations(self, x) -> np.ndarray:
         """Per-theta sum of ``|w - x e|`` at an LP point ``x`` (shape (p,))."""
@@ -84,7 +116,7 @@ class LPPointViews:
         return x[p : p + n], x[p + n : p + n + self.problem.n_groups]
 
 
-class McCormickRelaxation(LPPointViews):
+class McCormickRelaxation(McCormickBase):
     """Persistent McCormick LP relaxation of (22.34) (see module docstring).
 
     Parameters
@@ -129,7 +161,6 @@ class McCormickRelaxation(LPPointViews):
         self.e_hi = np.concatenate([pr.deta, pr.dx_group])
         eL = self.e_lo[self.pe - p]
         eU = self.e_hi[self.pe - p]
-        self.eL, self.eU = eL, eU
         # ---- rows ---------------------------------------------------------------------
         rows, cols, vals = [], [], []
         eqr = np.arange(m)
@@ -187,31 +218,10 @@ class McCormickRelaxation(LPPointViews):
         ub = np.concatenate([np.asarray(box, float)[:, 1], self.e_hi, np.zeros(P)])
         self.lp = HighsLP(A, np.concatenate(rl), np.concatenate(ru), lb, ub,
                           options=_node_options(pr))
-        # positions of the e-coefficients of every McCormick row, grouped by theta index
-        self._by_x = []
-        for q in range(p):
-            sel = np.flatnonzero(self.px == q)
-            r = self.mc_rows[sel].ravel()  # (len(sel)*4,) ordered (prod, s)
-            c = np.repeat(self.pe[sel], 4)
-            pos = self.lp.data_positions(r, c)
-            self._by_x.append((sel, r, c, pos))
+        self._by_x = None  # filled by set_box (McCormickBase._positions)
         self.box = np.full((p, 2), np.nan)
         self.set_box(box)
 
     @property
     def p(self) -> int:
         return self.problem.p
-
-    def set_box(self, box):
-        """Update the relaxation in place to the theta box ``box`` (shape (p, 2))."""
-        box = np.asarray(box, dtype=float)
-        changed = np.flatnonzero(np.any(box != self.box, axis=1))
-        if changed.size == 0:
-            return
-        lp = self.lp
-        lp.set_col_bounds(changed, box[changed, 0], box[changed, 1])
-        for q in changed:
-            sel, r, c, pos = self._by_x[q]
-            set_envelope(lp, r, c, pos, self.pw[sel], box[q, 0], box[q, 1],
-                         self.eL[sel], self.eU[sel])
-        self.box = box.copy()

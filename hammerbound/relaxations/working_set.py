@@ -28,7 +28,7 @@ import scipy.sparse as sp
 
 from ..tolerances import FEASIBILITY_RTOL
 from ._highs import HighsLP, round_down, round_up
-from .mccormick import LPPointViews, _node_options, _prod_bounds, set_envelope
+from .mccormick import McCormickBase, _node_options, _prod_bounds
 from .problem import EIVProblem, equation_scale
 
 #: use the working set by default from this many equations on (below, the full LP is cheap)
@@ -116,7 +116,7 @@ def interval_excess(problem: EIVProblem, theta, tau=None) -> np.ndarray:
     return EquationData(problem).excess(theta, tau)
 
 
-class WorkingSetRelaxation(LPPointViews):
+class WorkingSetRelaxation(McCormickBase):
     """Persistent McCormick LP relaxation of (22.34) on a growing set of equations.
 
     Columns ``z = [theta (p), eta (N), dx (K), w (products of the working set)]``: the
@@ -262,34 +262,6 @@ class WorkingSetRelaxation(LPPointViews):
         self.used_dx[self.problem.dx_index()[eqs].ravel()] = True
         self._by_x = None
         return int(eqs.size)
-
-    def _positions(self):
-        if self._by_x is None:
-            self._by_x = []
-            for q in range(self.p):
-                sel = np.flatnonzero(self.px == q)
-                r = self.mc_rows[sel].ravel()
-                c = np.repeat(self.pe[sel], 4)
-                self._by_x.append((sel, r, c, self.lp.data_positions(r, c)))
-        return self._by_x
-
-    def set_box(self, box):
-        """Update the relaxation in place to the theta box ``box`` (shape (p, 2))."""
-        box = np.asarray(box, dtype=float)
-        changed = np.flatnonzero(np.any(box != self.box, axis=1))
-        if changed.size == 0:
-            return
-        lp = self.lp
-        lp.set_col_bounds(changed, box[changed, 0], box[changed, 1])
-        by_x = self._positions()
-        for q in changed:
-            sel, r, c, pos = by_x[q]
-            if sel.size == 0:
-                continue
-            e = self.pe[sel] - self.p
-            set_envelope(lp, r, c, pos, self.pw[sel], box[q, 0], box[q, 1],
-                         self.e_lo[e], self.e_hi[e])
-        self.box = box.copy()
 
     def separate(self, x, screen=None, limit: int = ADD_PER_ROUND) -> np.ndarray:
         """Equations outside the working set found violated at the LP point ``x`` (at most

@@ -14,6 +14,16 @@ B_TRUE = np.array([0.0, 2.15, -1.09])
 GAIN_TRUE = B_TRUE.sum() / A_TRUE.sum()
 
 
+def play(u, ml, cl, mr, cr):
+    """Backlash (22.1) at rest, the tests' own implementation (not the package's):
+    ``x_t = min(max(x_{t-1}, mr (u_t - cr)), ml (u_t + cl))`` from ``x = 0``."""
+    x, out = 0.0, np.empty(np.shape(u))
+    for t, v in enumerate(u):
+        x = min(max(x, mr * (v - cr)), ml * (v + cl))
+        out[t] = x
+    return out
+
+
 def make_eiv_problem(N=60, deta=0.05, dx=0.003, two_level=False, seed=0, normalise=True):
     """Chapter example (section 22.5) seen by stage 2, with u* = 2.
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import control
 import numpy as np
 import pytest
+from conftest import play
 from scipy.signal import lfilter
 
 from hammerbound.discrepancy import diagnose
@@ -35,18 +36,9 @@ EFFECTS = {
 }
 
 
-def _play(u, c):
-    """Backlash of half-width c with unit slopes, at rest (own implementation)."""
-    x, out = 0.0, np.empty_like(u)
-    for t, v in enumerate(u):
-        x = min(max(x, v - c), v + c)
-        out[t] = x
-    return out
-
-
 def _truth(effect, value, u):
     if effect == "backlash":
-        return lfilter(B, A, _play(u, value))
+        return lfilter(B, A, play(u, 1.0, value, 1.0, value))
     if effect == "deadzone":
         return lfilter(B, A, np.sign(u) * np.maximum(np.abs(u) - value, 0.0))
     if effect == "saturation":

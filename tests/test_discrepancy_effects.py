@@ -11,6 +11,7 @@ from __future__ import annotations
 import control
 import numpy as np
 import pytest
+from conftest import play
 from scipy.signal import lfilter, lfilter_zi
 
 from hammerbound.discrepancy import REGISTRY, default_candidates, diagnose
@@ -32,15 +33,6 @@ def _noise(seed, n=N):
     e = np.random.default_rng(100 + seed).uniform(-0.9 * NB, 0.9 * NB, n)
     e[n // 3], e[2 * n // 3] = NB, -NB  # exactly at the bound
     return e
-
-
-def _play(u, ml, cl, mr, cr):
-    """Backlash (22.1) from state 0: x_t = min(max(x_{t-1}, mr (u - cr)), ml (u + cl))."""
-    x, p = np.zeros(u.size), 0.0
-    for t, v in enumerate(u):
-        p = min(max(p, mr * (v - cr)), ml * (v + cl))
-        x[t] = p
-    return x
 
 
 def _relay(u, h, off, on):
@@ -86,7 +78,7 @@ def test_asym_backlash_found(tml, tcl, tmr, tcr):
     u = _input(2)
     # the two lines cross at u_c = -(ml cl + mr cr)/(ml - mr) (-1.45 and -1.06): outside
     # the input range
-    y = lfilter(B, A, _play(u, tml, tcl, tmr, tcr)) + _noise(2)
+    y = lfilter(B, A, play(u, tml, tcl, tmr, tcr)) + _noise(2)
     rep, (ml, cl, mr, cr) = _run("asym_backlash", y, u)
     assert (ml + mr) / 2 == pytest.approx(1.0)  # the normalisation
     assert ml / mr == pytest.approx(tml / tmr, rel=0.03)

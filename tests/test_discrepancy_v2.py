@@ -1,6 +1,6 @@
 """Discrepancy diagnosis v2 (issue 17): honest naming, joint search, checked hints.
 
-The data come from the few lines of numpy/scipy below (own play operator, dead zone,
+The data come from the few lines of numpy/scipy below and in conftest (own play operator, dead zone,
 clip, delay, pole, offset), not from the package's simulators; the noise is uniform
 inside the bound or exactly at +-bound.
 """
@@ -14,6 +14,8 @@ import pytest
 from scipy.signal import lfilter
 
 matplotlib.use("Agg")
+
+from conftest import play
 
 from hammerbound.discrepancy import diagnose as _diagnose  # noqa: E402
 from hammerbound.discrepancy import locate  # noqa: E402
@@ -31,14 +33,6 @@ SYSTEMS = {
 NB = 0.02
 
 
-def _play(u, c):
-    x, out = 0.0, np.empty_like(u)
-    for t, v in enumerate(u):
-        x = min(max(x, v - c), v + c)
-        out[t] = x
-    return out
-
-
 def _truth(u, effects, A, B):
     """Noise-free output of the true system: ``effects`` = {name: value} in the order
     input maps, delay, linear block, extra pole, offset."""
@@ -49,7 +43,7 @@ def _truth(u, effects, A, B):
         w = effects["deadzone"]
         x = np.where(x > w, x - w, np.where(x < -w, x + w, 0.0))
     if "backlash" in effects:
-        x = _play(x, effects["backlash"])
+        x = play(x, 1.0, effects["backlash"], 1.0, effects["backlash"])
     if "quadratic" in effects:
         x = x + effects["quadratic"] * x**2
     d = int(effects.get("delay", 0))

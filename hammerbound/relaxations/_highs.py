@@ -370,6 +370,16 @@ class HighsLP:
         return (np.fromiter((int(v) for v in b.col_status), np.int8),
                 np.fromiter((int(v) for v in b.row_status), np.int8))
 
+    def snapshot(self):
+        """The current simplex basis as a HiGHS object (a cheap copy, for warm starts in
+        this process; :meth:`get_basis` gives a picklable one), or None."""
+        b = self.h.getBasis()
+        return b if b.valid else None
+
+    def restore(self, snapshot) -> bool:
+        """Warm start from a :meth:`snapshot` of the same model structure."""
+        return snapshot is not None and self.h.setBasis(snapshot) == highspy.HighsStatus.kOk
+
     def set_basis(self, basis) -> bool:
         """Warm start from a basis returned by :meth:`get_basis` (same model structure)."""
         if basis is None:

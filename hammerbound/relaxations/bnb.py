@@ -14,15 +14,37 @@ The difference is the certified gap. The search stops when the gap is below
 ``tol * max(1, |value|)``; node and time limits return the still-valid outer bound with
 status ``"limit"``.
 
-What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3: 1266 -> 767
-nodes and 55 s -> 17 s for the 8 bounds on 2 cores; ``python -m benchmarks.exact_idle``):
+What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3, two-level inner
+signal: 2297 -> 1770 nodes and 60 s -> 13 s for the 8 bounds on 2 cores; independent
+errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchmarks.md``):
 
+* every end starts from a **near-optimal incumbent**: an SLP local search
+  (:func:`.local.improve`) walks the best verified point down ``sense * theta_k`` before
+  the tree starts, so the tree only has to prove the bound; the tree's own searches
+  (screening node LP points, line searches towards them) then start backed off and back
+  off further (without a cap) while they do not improve the incumbent by more than their
+  resolution; one that does find a better point (another basin) walks it down as well
+  (not on a working set of equations: there one SLP LP over all equations costs more
+  than the walk saves);
+* when no relaxation point is feasible -- noise exactly at its bound on every sample can
+  leave a single point -- Gauss-Newton steps from the OBBT points (:func:`.local.restore`)
+  find the verified point the tree's points never get close enough to;
 * every node box is **capped at the incumbent** (``sense * theta_k <= value``): nothing
   above it can hold the minimum, and the cap tightens every envelope involving theta_k;
 * **reduced-cost bound tightening** removes the part of a node box whose rigorous LP bound
   already exceeds the incumbent (:func:`_reduced_cost_tightening`);
-* line searches towards the LP point (the primal heuristic) back off geometrically while
-  they do not improve the incumbent;
+* every child node starts from its parent's simplex basis (a snapshot kept with the
+  node; one bound away), not from whatever node was solved last: 3-4x fewer simplex
+  iterations on the chapter's two-level data;
+* node LPs stop at a cut-off half the tolerance below the incumbent; a cut-off node whose
+  certified bound still does not close it is solved to the end (a point to branch at)
+  rather than split blindly;
+* on the two-level inner signal (few input-error variables shared by many samples,
+  :func:`.mccormick.shared_groups`) the searches for the ends of the ``b_j`` also branch on
+  those shared variables: the ``b`` interval is set by the unknown levels (``b`` scales with
+  one over their difference), and a narrower level box tightens every ``b_j dx`` envelope
+  at once. The ``a_i`` ends, insensitive to the levels, branch on theta only (measured:
+  ``python -m benchmarks.exact_idle``, notes in ``docs/benchmarks.md``);
 * node LPs use devex dual pricing and, for well-scaled data, no scaling
   (:func:`.mccormick._node_options`);
 * when no relaxation point is feasible (thin sets), a Nelder-Mead search on the screening
@@ -42,7 +64,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError
+from .local import improve, restore
 from .lp import lp_bounds, raise_if_box_limited
+from .mccormick import shared_groups
 from .obbt import _limit_lp, _obbt, _relaxation, _solve
 from .points import _on_gain_plane, _Point, _Pool
 from .problem import EIVProblem
@@ -54,6 +78,12 @@ __all__ = ["exact_bounds"]
 _SPLIT_CLIP = 0.05
 # after a line search that does not improve the incumbent, wait up to this many nodes
 _MAX_SEARCH_GAP = 16
+_MAX_SEARCH_GAP_WALKED = 1024
+# the SLP walk to a near-optimal incumbent (.local.improve), and its resolution (a fraction
+# of the tolerance)
+_LOCAL = True
+_LOCAL_RES = 0.05
+_HEUR = True
 
 
 def _cap(box, k, sense, ub):
@@ -195,11 +225,24 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     c = np.zeros(relax.ncol)
     c[k] = sense
     relax.lp.set_cost(c)
+    # branching variables: theta, then -- for the end of a B coefficient -- the shared
+    # input-error variables (two-level inner signal; see the module docstring)
+    ks = shared_groups(problem) if k >= problem.na else 0
+    bcols = np.concatenate([np.arange(p), relax.dx_columns()[:ks]]).astype(np.int64)
+    if ks:
+        box0 = np.vstack([box0, np.column_stack([-problem.dx_group, problem.dx_group])])
     pool = _Pool(problem, list(points), stop_at=stop_at, working_set=ws is not None)
     if ws is not None:
         pool._ensure_screen()
 
     inc = min(pool.points, key=lambda q: val(q.theta), default=None)
+    # the SLP walk (.local) works on all equations: on long records (working set) one of
+    # its LPs costs more than it saves (N = 10000: 1.8 s per LP, 97 s against 55 s in all)
+    local = _LOCAL and ws is None
+    if inc is not None and local:
+        # a near-optimal incumbent first: the tree then only has to prove the bound
+        inc = improve(pool, inc, k, sense, box0,
+                      _LOCAL_RES * tol * max(1.0, abs(val(inc.theta))), stop_at=stop_at)
     ub = val(inc.theta) if inc is not None else np.inf
     interior = np.mean([q.theta for q in pool.points], axis=0) if pool.points else None
     if interior is not None and (pool._out_of_time() or pool.verify(interior) is None):
@@ -214,13 +257,16 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         pending = (max(end0, root[0]), box0, root[1])
     elif root is not None and ws is not None:
         # the OBBT basis belongs to another working set: solve the root again, from its bound
-        heap.append((max(end0, root[0]), counter, box0))
+        heap.append((max(end0, root[0]), counter, box0, None))
         counter += 1
     else:
-        heap.append((end0, counter, box0))
+        heap.append((end0, counter, box0, None))
         counter += 1
     closed_lb = np.inf  # min bound over leaves closed by bound (not by infeasibility)
-    last_try, try_gap = -1, 1
+    # after the SLP walk the incumbent is near-optimal: the tree's searches start backed off
+    walked = inc is not None and local
+    max_gap = _MAX_SEARCH_GAP_WALKED if walked else _MAX_SEARCH_GAP
+    last_try, try_gap = -1, (_MAX_SEARCH_GAP if walked else 1)
     nodes = 0
     iters = 0
     status = "optimal"
@@ -244,7 +290,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             if nodes >= max_nodes or time.perf_counter() > stop_at:
                 status = "limit"
                 break
-            lb_parent, _, box = heapq.heappop(heap)
+            lb_parent, _, box, basis = heapq.heappop(heap)
             if np.isfinite(ub):
                 # only sense * theta_k <= ub can hold the minimum: cap the box there,
                 # which also tightens every McCormick envelope that involves theta_k
@@ -252,17 +298,27 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 if box is None:
                     continue
             relax.set_box(box)
-            relax.lp.set_cutoff(ub - tol_eff if np.isfinite(ub) else None)
+            if basis is not None:
+                relax.lp.restore(basis)  # the parent's basis: one bound away
+            # HiGHS stops once its objective passes the cutoff; half the tolerance below the
+            # incumbent leaves room for the certified bound to trail HiGHS's own value
+            relax.lp.set_cutoff(ub - 0.5 * tol_eff if np.isfinite(ub) else None)
             _limit_lp(relax.lp, stop_at - time.perf_counter())
             res = _solve(relax, pool.screen)
             nodes += 1
             iters += res.iterations
+            if res.status == "cutoff" and not res.bound >= ub - tol_eff:
+                # cut off, but the certified bound does not close the node: solve it to the
+                # end (a point to branch at) instead of splitting it blindly
+                relax.lp.set_cutoff(None)
+                res = _solve(relax, pool.screen)
+                iters += res.iterations
             if res.status == "infeasible":
                 continue
             lb = max(lb_parent, res.bound)
             x = res.x if res.status == "optimal" else None
             if x is not None:
-                rc_bound, rc = res.bound, res.reduced[:p]
+                rc_bound, rc = res.bound, res.reduced[bcols]
             if nodes == 1 and x is not None:
                 root_value = res.value
         if bar is not None:
@@ -273,8 +329,8 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             continue
         width = box[:, 1] - box[:, 0]
         if x is not None:
-            th = np.clip(x[:p], box[:, 0], box[:, 1])
-            if val(th) < ub - tol_eff:
+            th = np.clip(x[:p], box[:p, 0], box[:p, 1])
+            if _HEUR and val(th) < ub - tol_eff:
                 # the primal heuristic (screening the LP point, then line searches of ~10
                 # LPs each) runs while it pays off, then backs off geometrically: the
                 # lower-bound proof needs no incumbent updates
@@ -290,9 +346,14 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                         pt = None
                 if searching and pt is None and interior is not None:
                     pt = pool.line_search(interior, th, k=k, resolution=0.25 * tol_eff)
+                if pt is not None and local and val(pt.theta) < ub - tol_eff:
+                    # another basin (or the first point): walk it down by SLP as well
+                    pt = improve(pool, pt, k, sense, box0, _LOCAL_RES * tol_eff,
+                                 stop_at=stop_at)
                 if due:
-                    useful = pt is not None and val(pt.theta) < ub
-                    try_gap = 1 if useful else min(2 * try_gap, _MAX_SEARCH_GAP)
+                    # useful: better by more than the searches' resolution
+                    useful = pt is not None and val(pt.theta) < ub - 0.25 * tol_eff
+                    try_gap = 1 if useful else min(2 * try_gap, max_gap)
                 if pt is not None and val(pt.theta) < ub:
                     inc, ub = pt, val(pt.theta)
                     if interior is None:
@@ -306,23 +367,25 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 if cut:
                     closed_lb = min(closed_lb, ub - tol_eff)
                     width = box[:, 1] - box[:, 0]
-            score = relax.violations(x) * width / np.maximum(width0, 1e-300)
+            score = relax.violations(x, ks) * width / np.maximum(width0, 1e-300)
             if score.max() > 0:
                 i = int(np.argmax(score))
             else:
                 i = int(np.argmax(width / np.maximum(width0, 1e-300)))
             margin = _SPLIT_CLIP * width[i]
-            split = float(np.clip(x[i], box[i, 0] + margin, box[i, 1] - margin))
+            split = float(np.clip(x[bcols[i]], box[i, 0] + margin, box[i, 1] - margin))
         else:
             i = int(np.argmax(width / np.maximum(width0, 1e-300)))
             split = 0.5 * (box[i, 0] + box[i, 1])
         if width[i] <= min_w[i]:
             closed_lb = min(closed_lb, lb)  # cannot split further: keep its bound
             continue
+        # children start from this node's basis (a working-set model grows between nodes)
+        basis = relax.lp.snapshot() if ws is None else None
         for side in (0, 1):
             child = box.copy()
             child[i, 1 - side] = split
-            heapq.heappush(heap, (lb, counter, child))
+            heapq.heappush(heap, (lb, counter, child, basis))
             counter += 1
     if bar is not None:
         bar.close()
@@ -349,6 +412,11 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     else:
         msg = f"gap {gap:.3g} <= tol after {nodes} nodes ({pool.checks} check_theta calls)"
     return _Search(bound, ub, inc, nodes, elapsed, status, msg, iters, root_value)
+
+
+def _perf_deadline(deadline):
+    """A :func:`time.time` deadline (or None) as a :func:`time.perf_counter` one."""
+    return None if deadline is None else time.perf_counter() + (deadline - time.time())
 
 
 def exact_bounds(
@@ -453,6 +521,16 @@ def exact_bounds(
             if not time_left():
                 break
             pool.add(th)
+        if not pool.points and time_left():
+            # no relaxation point is feasible (thin set): Gauss-Newton steps from the OBBT
+            # points first (a single-point set, e.g. noise exactly at its bound), then a
+            # Nelder-Mead search on the screening violation
+            n, kg = problem.N, problem.n_groups
+            for root in [r for r in roots.values() if r[1] is not None][:2]:
+                x = root[1]
+                if restore(pool, x[:p], x[p : p + n], x[p + n : p + n + kg], box,
+                           stop_at=_perf_deadline(deadline)) is not None:
+                    break
         if not pool.points and time_left():
             pool.seek(starts, box, deadline=deadline)
         pts = pool.points

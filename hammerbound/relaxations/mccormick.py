@@ -69,11 +69,30 @@ def set_envelope(lp, rows, cols, pos, w_cols, xl, xu, eL, eU):
     lp.set_col_bounds(w_cols, wl, wu)
 
 
+# the input-error variables become branching variables of the search (next to theta) when
+# there are at most this many of them and they are shared by several samples (two-level)
+MAX_SHARED_GROUPS = 16
+
+
+def shared_groups(problem: EIVProblem) -> int:
+    """How many input-error variables ``dx_var`` the search branches on: all ``K`` of them
+    when they are few (``K <= MAX_SHARED_GROUPS``) and shared (``K < N``, e.g. the two-level
+    inner signal, ``K = 2``), else none (independent per-sample errors)."""
+    k = problem.n_groups
+    return k if (k <= MAX_SHARED_GROUPS and k < problem.N) else 0
+
+
 class McCormickBase:
-    """What the full and the working-set McCormick relaxations share: the theta-box update
-    of the product envelopes and views of an LP point. Needs ``p``, ``problem``, ``lp``,
+    """What the full and the working-set McCormick relaxations share: the box update of
+    the product envelopes and views of an LP point. Needs ``p``, ``problem``, ``lp``,
     the product index arrays ``pw``, ``px``, ``pe``, the rows ``mc_rows`` (P, 4), the error
-    boxes ``e_lo``, ``e_hi``, the current ``box`` and ``_by_x`` (None: recompute)."""
+    boxes ``e_lo``, ``e_hi``, the current ``box`` and ``_by_x`` (None: recompute).
+
+    The box is the theta box (p, 2), optionally followed by the boxes (K, 2) of the shared
+    input-error variables ``dx_var`` (:func:`shared_groups`): narrowing those tightens the
+    envelope of every product ``b_j dx_var[g]`` at once, which the branch-and-bound uses on
+    the two-level inner signal. A ``dx_var`` box must lie inside ``[-dx_group, dx_group]``.
+    """
 
     def _positions(self):
         """Per theta index: the products, their McCormick rows, the e-columns and their
@@ -85,15 +104,41 @@ class McCormickBase:
                 r = self.mc_rows[sel].ravel()  # (len(sel)*4,) ordered (prod, s)
                 c = np.repeat(self.pe[sel], 4)
                 self._by_x.append((sel, r, c, self.lp.data_positions(r, c)))
+            self._by_g = None
         return self._by_x
 
+    def _group_positions(self):
+        """Per input-error group: its products, their McCormick rows, the theta columns and
+        the positions of those ``x``-coefficients in the LP matrix (cached like
+        :meth:`_positions`)."""
+        self._positions()
+        if getattr(self, "_by_g", None) is None:
+            self._by_g = []
+            base = self.p + self.problem.N
+            for g in range(self.problem.n_groups):
+                sel = np.flatnonzero(self.pe == base + g)
+                r = self.mc_rows[sel].ravel()
+                c = np.repeat(self.px[sel], 4)
+                self._by_g.append((sel, r, c, self.lp.data_positions(r, c)))
+        return self._by_g
+
+    def dx_columns(self) -> np.ndarray:
+        """LP columns of the input-error variables ``dx_var`` (shape (K,))."""
+        pr = self.problem
+        return pr.p + pr.N + np.arange(pr.n_groups)
+
     def set_box(self, box):
-        """Update the relaxation in place to the theta box ``box`` (shape (p, 2))."""
+        """Update the relaxation in place to ``box``: the theta box (p, 2), optionally
+        followed by the boxes of the ``dx_var`` (see the class docstring)."""
         box = np.asarray(box, dtype=float)
+        p = self.p
+        lp = self.lp
+        if box.shape[0] > p:
+            self._set_dx_box(box[p:])
+            box = box[:p]
         changed = np.flatnonzero(np.any(box != self.box, axis=1))
         if changed.size == 0:
             return
-        lp = self.lp
         lp.set_col_bounds(changed, box[changed, 0], box[changed, 1])
         by_x = self._positions()
         for q in changed:
@@ -105,10 +150,47 @@ class McCormickBase:
                          self.e_lo[e], self.e_hi[e])
         self.box = box.copy()
 
-    def violations(self, x) -> np.ndarray:
-        """Per-theta sum of ``|w - x e|`` at an LP point ``x`` (shape (p,))."""
+    def _set_dx_box(self, dbox):
+        """Narrow (or widen back) the boxes of the ``dx_var``: column bounds, and for every
+        product ``b_j dx_var[g]`` the ``b``-coefficients and bounds of its McCormick rows
+        and the bounds of its column."""
+        pr = self.problem
+        k0 = pr.N  # dx_var g is error index N + g (e_lo / e_hi)
+        cur = np.column_stack([self.e_lo[k0:], self.e_hi[k0:]])
+        changed = np.flatnonzero(np.any(dbox != cur, axis=1))
+        if changed.size == 0:
+            return
+        lp = self.lp
+        self.e_lo[k0 + changed] = dbox[changed, 0]
+        self.e_hi[k0 + changed] = dbox[changed, 1]
+        lp.set_col_bounds(self.dx_columns()[changed], dbox[changed, 0], dbox[changed, 1])
+        by_g = self._group_positions()
+        for g in changed:
+            sel, r, c, pos = by_g[g]
+            if sel.size == 0:
+                continue
+            xq = self.px[sel]
+            xl, xu = self.box[xq, 0], self.box[xq, 1]
+            eL = np.full(sel.size, dbox[g, 0])
+            eU = np.full(sel.size, dbox[g, 1])
+            # x-coefficients of the 4 rows: -eL, -eU, -eL, -eU
+            lp.set_coeffs(r, c, pos, np.column_stack([-eL, -eU, -eL, -eU]).ravel())
+            rows = self.mc_rows[sel].ravel()
+            ecols = np.repeat(self.pe[sel], 4)
+            set_envelope(lp, rows, ecols, lp.data_positions(rows, ecols), self.pw[sel],
+                         xl, xu, eL, eU)
+
+    def violations(self, x, n_shared: int = 0) -> np.ndarray:
+        """Per branching variable, the sum of ``|w - x e|`` over its products at an LP point
+        ``x``: shape (p,), or (p + n_shared,) with the shared ``dx_var`` appended."""
         v = np.abs(x[self.pw] - x[self.px] * x[self.pe])
-        return np.bincount(self.px, weights=v, minlength=self.p)
+        out = np.bincount(self.px, weights=v, minlength=self.p)
+        if n_shared:
+            base = self.p + self.problem.N
+            g = self.pe - base
+            on = g >= 0
+            out = np.concatenate([out, np.bincount(g[on], weights=v[on], minlength=n_shared)])
+        return out
 
     def split_eta_dx(self, x):
         """``(eta (N,), dx (K,))`` part of an LP point."""

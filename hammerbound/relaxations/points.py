@@ -17,6 +17,7 @@ import numpy as np
 
 from ..exceptions import SolverError
 from ._highs import new_highs
+from .local import colwise_structure, colwise_values
 from .problem import EIVProblem, check_theta, equation_scale
 
 
@@ -82,15 +83,9 @@ class _Screen:
         cols = np.concatenate([self._eta_idx[eqs].ravel(), n + self._dx_idx[eqs].ravel()])
         rows2 = np.concatenate([rows, rows + m, loc, loc + m])
         cols2 = np.concatenate([cols, cols, np.full(2 * m, n + k)])
-        order = np.lexsort((rows2, cols2))
-        r_s, c_s = rows2[order], cols2[order]
-        new = np.ones(order.size, dtype=bool)
-        new[1:] = (r_s[1:] != r_s[:-1]) | (c_s[1:] != c_s[:-1])
-        pos = np.cumsum(new) - 1
-        return {"eqs": eqs, "pos": pos, "order": order, "nnz": int(pos[-1]) + 1,
-                "index": r_s[new].astype(np.int32),
-                "start": np.searchsorted(c_s[new], np.arange(n + k + 2)).astype(np.int32),
-                "ones": np.concatenate([-np.ones(m), np.ones(m)])}
+        st = colwise_structure(rows2, cols2, n + k + 1)
+        st.update(eqs=eqs, ones=np.concatenate([-np.ones(m), np.ones(m)]))
+        return st
 
     def violation(self, theta) -> float:
         theta = np.asarray(theta, dtype=float)
@@ -161,8 +156,7 @@ class _Screen:
         eqs = st["eqs"]
         m, nz = eqs.size, self.nz
         vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
-        contrib = np.concatenate([vals, vals, st["ones"]])
-        data = np.bincount(st["pos"], weights=contrib[st["order"]], minlength=st["nnz"])
+        data = colwise_values(st, np.concatenate([vals, vals, st["ones"]]))
         r = pr.simulate_noise_free(theta)[eqs]
         lp = hs.HighsLp()
         lp.num_col_, lp.num_row_ = nz + 1, 2 * m
@@ -216,6 +210,7 @@ class _Pool:
     checks: int = 0
     stop_at: float | None = None  # time.perf_counter() after which heuristics give up
     working_set: bool = False  # screen on a working set of equations (long records)
+    local: object = None  # the SLP step's LP (.local.LinearisedSet), made on first use
 
     def _out_of_time(self) -> bool:
         return self.stop_at is not None and time.perf_counter() > self.stop_at

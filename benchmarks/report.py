@@ -95,21 +95,24 @@ def section_targets(parts):
                      "met" if sp >= 100 else f"**missed** ({100 / sp:.1f}× short)"])
     idle = _json("exact_idle_N300.json")
     idle_ind = [r for r in (idle or {}).get("rows", []) if r["inner_signal"] == "independent"]
-    if idle_ind:
+    for inner in ("independent", "two-level"):
+        runs = [r for r in (idle or {}).get("rows", []) if r["inner_signal"] == inner]
+        if not runs:
+            continue
         # the idle-machine measurement is the one the target is judged on, and on the
         # slowest of the repeated fits (not the median)
         def slowest(r):
             return max(r.get("wall_all_s") or [r["wall_s"]])
 
-        worst = max(idle_ind, key=slowest)
-        n_ok = sum(slowest(r) <= 20 for r in idle_ind)
+        worst = max(runs, key=slowest)
+        n_ok = sum(slowest(r) <= 20 for r in runs)
         reps = len(worst.get("wall_all_s") or [1])
-        rows.append(["Exact intervals, N = 300, all 8 bounds (per noise level, idle machine)",
-                     "≤ 20 s",
-                     f"{fs(min(slowest(r) for r in idle_ind))}–{fs(slowest(worst))} s "
+        rows.append([f"Exact intervals, {inner} inner signal, N = 300, all 8 bounds (per noise "
+                     "level, idle machine)", "≤ 20 s",
+                     f"{fs(min(slowest(r) for r in runs))}–{fs(slowest(worst))} s "
                      f"(slowest of {reps} fits per level; worst Δη = {worst['delta_eta']})",
-                     "met at all levels" if n_ok == len(idle_ind) else
-                     f"**missed** at {len(idle_ind) - n_ok} of {len(idle_ind)} levels "
+                     "met at all levels" if n_ok == len(runs) else
+                     f"**missed** at {len(runs) - n_ok} of {len(runs)} levels "
                      f"(worst {slowest(worst) / 20:.1f}× over)"])
     if ch:
         ex300 = [r for r in ch["runs"] if r.get("method") == "exact" and r.get("N") == 300 and "wall_s" in r]
@@ -167,6 +170,25 @@ def section_targets(parts):
         out += table(["inner signal"] + [f"Δη = {d:g}" for d in levels], trows) + "\n\n"
         out += env_line(idle).replace(" (shared machine)", "") + "\n"
     return out
+
+
+def section_ablation():
+    """What each part of the exact search buys (benchmarks/exact_ablation.py)."""
+    j = _json("exact_ablation.json")
+    if not j or not j.get("rows"):
+        return ""
+    rows = [[r["inner_signal"], f"{r['delta_eta']:g}", r["variant"], f"{fs(r['wall_s'])} s",
+             r["nodes"], r["iterations"], ", ".join(r["statuses"]),
+             f"{r['max_bound_diff']:.1e}", r["loadavg_start"]] for r in j["rows"]]
+    out = ("Each part of the exact search switched off in turn (`python -m "
+           "benchmarks.exact_ablation`; chapter example, seed 0, N = "
+           f"{j['rows'][0]['N']}, stage 2 only, 1 job, so the time is the sum over the 8 "
+           "ends; *all*: everything on; |Δ bounds|: largest difference of a bound from *all*, "
+           "within the tolerance 1e-4·max(1, |value|) as every variant certifies the same "
+           "intervals):\n\n")
+    out += table(["inner signal", "Δη", "variant", "time", "nodes", "simplex iterations",
+                  "status", "|Δ bounds|", "load"], rows) + "\n\n"
+    return out + env_line(j) + "\n"
 
 
 def section_scaling():
@@ -297,7 +319,7 @@ def section_chapter_seeds():
            "--methods exact --n-jobs 1` (`hammerbound.chapter.reproduce_chapter`). *stage 1 = "
            "chapter*: stage 2 receives the inner-signal bounds implied by the chapter's Table "
            "22.1 (interval arithmetic on its box of (m, c), printed ends moved outward by half a "
-           "unit of the last digit, u\* = 1); *stage 1 = experiment*: our exact stage 1 on our "
+           r"unit of the last digit, u\* = 1); *stage 1 = experiment*: our exact stage 1 on our "
            "square-wave data. Half-widths: median over the seeds (min–max); *ratio* = median / "
            "chapter's δ = 2 half-width; *inside*: the true value is inside the interval of every "
            "seed.\n"]
@@ -343,7 +365,7 @@ def section_chapter_seeds():
                  f(r["chapter_lower"], 5), f(r["chapter_upper"], 5),
                  f(r["chapter_half_width"], 5), f(r["ratio"], 2),
                  "yes" if all(r["inside"]) else "**NO**"] for r in xs]
-        out.append("Inner-signal levels at u\* = 1: radius Δx of our exact stage 1 (median over "
+        out.append(r"Inner-signal levels at u\* = 1: radius Δx of our exact stage 1 (median over "
                    "the seeds, min–max) against the range implied by Table 22.1:\n")
         out.append(table(["Δη", "level", "true", "our Δx median (min–max)", "implied min",
                           "implied max", "implied Δx", "ratio", "inside"], rows) + "\n")
@@ -390,7 +412,7 @@ def section_stage1_draws():
              f"{r['seed0_snr_db']:.1f} ({r['seed0_snr_percentile']:.0f})"] for r in j["rows"]]
     return ("Stage 1 over many draws (`python benchmarks/chapter_stage1_draws.py --draws "
             f"{j['args']['draws']} --levels {' '.join(map(str, j['args']['levels']))}`): the "
-            "inner-signal radius Δx at u\* = 1 of our exact stage 1 (M = 50, uniform noise) for "
+            r"inner-signal radius Δx at u\* = 1 of our exact stage 1 (M = 50, uniform noise) for "
             "three amplitude designs, against the Δx implied by Table 22.1; *reaching* = draws "
             "with both radii ≤ the implied ones; seed 0's percentile among the draws (Δx̄ / Δx̲; "
             "transient SNR of the N = 100 PRBS in dB, percentile in brackets).\n\n"
@@ -610,7 +632,7 @@ def section_moment2():
 def main(argv=None):
     replot()
     doc = [notes_section("intro"), "## Performance targets\n", section_targets(None),
-           notes_section("targets"),
+           section_ablation(), notes_section("targets"),
            "## 1. Chapter reproduction (section 22.5)\n", notes_section("chapter-setup"),
            section_chapter(), notes_section("chapter-findings"),
            section_chapter_seeds(), section_stage1_draws(), notes_section("chapter-seeds-findings"),

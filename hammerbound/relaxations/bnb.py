@@ -15,7 +15,7 @@ The difference is the certified gap. The search stops when the gap is below
 status ``"limit"``.
 
 What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3, two-level inner
-signal: 2297 -> 1770 nodes and 60 s -> 13 s for the 8 bounds on 2 cores; independent
+signal: 2297 -> 1768 nodes and 60 s -> 14 s for the 8 bounds on 2 cores; independent
 errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchmarks.md``):
 
 * every end starts from a **near-optimal incumbent**: an SLP local search
@@ -34,8 +34,8 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
 * **reduced-cost bound tightening** removes the part of a node box whose rigorous LP bound
   already exceeds the incumbent (:func:`_reduced_cost_tightening`);
 * every child node starts from its parent's simplex basis (a snapshot kept with the
-  node; one bound away), not from whatever node was solved last: 3-4x fewer simplex
-  iterations on the chapter's two-level data;
+  node; one bound away), not from whatever node was solved last: 3.5x fewer simplex
+  iterations on the chapter's two-level data (``python -m benchmarks.exact_ablation``);
 * node LPs stop at a cut-off half the tolerance below the incumbent; a cut-off node whose
   certified bound still does not close it is solved to the end (a point to branch at)
   rather than split blindly;
@@ -43,8 +43,9 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
   :func:`.mccormick.shared_groups`) the searches for the ends of the ``b_j`` also branch on
   those shared variables: the ``b`` interval is set by the unknown levels (``b`` scales with
   one over their difference), and a narrower level box tightens every ``b_j dx`` envelope
-  at once. The ``a_i`` ends, insensitive to the levels, branch on theta only (measured:
-  ``python -m benchmarks.exact_idle``, notes in ``docs/benchmarks.md``);
+  at once. The ``a_i`` ends, insensitive to the levels, branch on theta only. Measured a
+  wash (``python -m benchmarks.exact_ablation``: fewer nodes at Delta eta = 0.15 and 0.2,
+  3 % more at 0.3);
 * node LPs use devex dual pricing and, for well-scaled data, no scaling
   (:func:`.mccormick._node_options`);
 * when no relaxation point is feasible (thin sets), a Nelder-Mead search on the screening

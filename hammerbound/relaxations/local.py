@@ -12,10 +12,11 @@ search box). Its solution is close to the set, not in it (the dropped terms are
 point that :func:`.problem.check_theta` accepts. The trust region grows when a step goes
 most of the way and shrinks when it does not.
 
-On the chapter's two-level data (N = 300, Delta eta = 0.3) this finds every end to within
-about the branch-and-bound tolerance in 4-24 LPs (0.1-0.9 s), where line searches towards
-node LP points needed hundreds of searches spread over the whole tree: the tree then only
-has to prove the bound (``python -m benchmarks.exact_idle``, notes in
+On the chapter's two-level data (N = 300, Delta eta = 0.3) the walk takes 4-12 LPs
+(0.06-0.4 s) per interval end, after which no search of the tree finds a point better by
+more than the tolerance. Before, 644 line searches towards node LP points, spread over the
+whole tree, did that work (17 of 48 s); now the tree only has to prove the bound (8 ends:
+39-42 -> 24-25 s on one core, ``python -m benchmarks.exact_ablation``; notes in
 ``docs/benchmarks.md``).
 
 Nothing here bounds anything: a point is an incumbent only after ``check_theta`` accepts it.

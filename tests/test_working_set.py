@@ -192,3 +192,22 @@ def test_check_theta_witness_only_saves_the_lp_never_changes_the_rule():
     assert not check_theta(pr, bad).feasible
     assert not check_theta(pr, bad, witness=(ref.eta, ref.dx)).feasible
     assert not check_theta(pr, bad, witness=(np.full(pr.N, 9.0), np.zeros(pr.n_groups))).feasible
+
+
+def test_automatic_working_set_only_for_independent_input_errors():
+    """working_set=None: a working set from AUTO_MIN_EQUATIONS equations on, but not with
+    input errors shared by groups of samples (two-level), where the full LPs with the SLP
+    walk are faster; either way the bounds are certified and the truth is inside."""
+    from conftest import make_two_level
+
+    from hammerbound.relaxations.working_set import AUTO_MIN_EQUATIONS
+
+    n = AUTO_MIN_EQUATIONS + 20
+    shared, truth = make_two_level(0, N=n, deta=0.05)
+    res = exact_bounds(shared, tol=1e-4, max_nodes=50)
+    assert res.extra["working_set"] is None
+    assert np.all((res.bounds[:, 0] <= truth) & (truth <= res.bounds[:, 1]))
+    indep, truth = make_eiv_problem(N=n, deta=0.05, dx=0.003, seed=1)
+    res = exact_bounds(indep, tol=1e-4, max_nodes=50)
+    assert res.extra["working_set"] is not None
+    assert np.all((res.bounds[:, 0] <= truth) & (truth <= res.bounds[:, 1]))

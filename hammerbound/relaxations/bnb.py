@@ -50,8 +50,8 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
   (:func:`.mccormick._node_options`);
 * when no relaxation point is feasible (thin sets), a Nelder-Mead search on the screening
   violation supplies the first verified point (:meth:`.points._Pool.seek`);
-* on long records (from :data:`.working_set.AUTO_MIN_EQUATIONS` equations), the OBBT and
-  node LPs hold a growing **working set** of equations (:mod:`.working_set`): a relaxation
+* on long records (from :data:`.working_set.AUTO_MIN_EQUATIONS` equations, independent
+  input errors), the OBBT and node LPs hold a growing **working set** of equations (:mod:`.working_set`): a relaxation
   of the full LP, so every bound stays certified over all equations (N = 3000: 5.3x
   faster in ``python -m benchmarks.exact_scaling``).
 """
@@ -472,7 +472,9 @@ def exact_bounds(
         Solve the OBBT and node LPs on a growing working set of equations
         (:mod:`.working_set`; the bounds stay certified over all equations, the working-set
         LPs relax the full ones). ``None``: from
-        :data:`.working_set.AUTO_MIN_EQUATIONS` equations on (long records).
+        :data:`.working_set.AUTO_MIN_EQUATIONS` equations on (long records), unless the
+        input errors are shared by groups of samples (the two-level inner signal), where
+        the full LPs with the SLP walk are faster.
 
     Returns
     -------
@@ -512,7 +514,10 @@ def exact_bounds(
         parallel.__enter__()
     try:
         if working_set is None:
-            working_set = problem.equation_times.size >= AUTO_MIN_EQUATIONS
+            # not with shared input errors (two-level): their products couple every
+            # equation, and full LPs with the SLP walk were 3-6x faster at N = 900
+            working_set = (problem.equation_times.size >= AUTO_MIN_EQUATIONS
+                           and not shared_groups(problem))
         ws = initial_equations(problem, lp.bounds) if working_set else None
         box, roots, thetas, ws = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel,
                                        deadline=deadline, ws=ws)

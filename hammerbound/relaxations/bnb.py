@@ -372,11 +372,12 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
             if score.max() > 0:
                 i = int(np.argmax(score))
             else:
-                i = int(np.argmax(width / np.maximum(width0, 1e-300)))
+                i = int(np.argmax(width[:p] / np.maximum(width0[:p], 1e-300)))
             margin = _SPLIT_CLIP * width[i]
             split = float(np.clip(x[bcols[i]], box[i, 0] + margin, box[i, 1] - margin))
         else:
-            i = int(np.argmax(width / np.maximum(width0, 1e-300)))
+            # no LP point: the widest theta (a shared input error may be in no equation)
+            i = int(np.argmax(width[:p] / np.maximum(width0[:p], 1e-300)))
             split = 0.5 * (box[i, 0] + box[i, 1])
         if width[i] <= min_w[i]:
             closed_lb = min(closed_lb, lb)  # cannot split further: keep its bound

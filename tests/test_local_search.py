@@ -149,7 +149,7 @@ def test_restore_finds_the_single_point_of_a_set_at_the_noise_bound(seed):
     # restore on its own, from the root box centre with zero errors (not a feasible point)
     box = res.extra["root_box"]
     pool = _Pool(pr)
-    pt = restore(pool, box.mean(axis=1), np.zeros(pr.N), np.zeros(pr.n_groups), box)
+    pt = restore(pool, [(box.mean(axis=1), np.zeros(pr.N), np.zeros(pr.n_groups))], box)
     assert pt is not None and _inside(pr, pt.theta)
 
 
@@ -160,5 +160,5 @@ def test_restore_gives_up_on_an_empty_linearisation():
     bad = EIVProblem(pr.y + 10.0 * np.sign(np.sin(np.arange(pr.N))), pr.x, pr.dx, pr.deta,
                      2, 2, gain=1.0, groups=pr.groups)
     box = np.array([[-2.0, 2.0], [-1.0, 1.0], [-10.0, 10.0], [-10.0, 10.0]])
-    assert restore(_Pool(bad), box.mean(axis=1), np.zeros(bad.N), np.zeros(bad.n_groups),
+    assert restore(_Pool(bad), [(box.mean(axis=1), np.zeros(bad.N), np.zeros(bad.n_groups))],
                    box) is None

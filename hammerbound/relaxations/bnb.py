@@ -51,9 +51,9 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
 * when no relaxation point is feasible (thin sets), a Nelder-Mead search on the screening
   violation supplies the first verified point (:meth:`.points._Pool.seek`);
 * on long records (from :data:`.working_set.AUTO_MIN_EQUATIONS` equations, independent
-  input errors), the OBBT and node LPs hold a growing **working set** of equations (:mod:`.working_set`): a relaxation
-  of the full LP, so every bound stays certified over all equations (N = 3000: 5.3x
-  faster in ``python -m benchmarks.exact_scaling``).
+  input errors), the OBBT and node LPs hold a growing **working set** of equations
+  (:mod:`.working_set`): a relaxation of the full LP, so every bound stays certified over
+  all equations (N = 3000: 5.3x faster in ``python -m benchmarks.exact_scaling``).
 """
 
 from __future__ import annotations
@@ -84,7 +84,6 @@ _MAX_SEARCH_GAP_WALKED = 1024
 # of the tolerance)
 _LOCAL = True
 _LOCAL_RES = 0.05
-_HEUR = True
 
 
 def _cap(box, k, sense, ub):
@@ -331,7 +330,7 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         width = box[:, 1] - box[:, 0]
         if x is not None:
             th = np.clip(x[:p], box[:p, 0], box[:p, 1])
-            if _HEUR and val(th) < ub - tol_eff:
+            if val(th) < ub - tol_eff:
                 # the primal heuristic (screening the LP point, then line searches of ~10
                 # LPs each) runs while it pays off, then backs off geometrically: the
                 # lower-bound proof needs no incumbent updates
@@ -533,11 +532,9 @@ def exact_bounds(
             # points first (a single-point set, e.g. noise exactly at its bound), then a
             # Nelder-Mead search on the screening violation
             n, kg = problem.N, problem.n_groups
-            for root in [r for r in roots.values() if r[1] is not None][:2]:
-                x = root[1]
-                if restore(pool, x[:p], x[p : p + n], x[p + n : p + n + kg], box,
-                           stop_at=_perf_deadline(deadline)) is not None:
-                    break
+            xs = [r[1] for r in roots.values() if r[1] is not None][:2]
+            restore(pool, [(x[:p], x[p : p + n], x[p + n : p + n + kg]) for x in xs], box,
+                    stop_at=_perf_deadline(deadline))
         if not pool.points and time_left():
             pool.seek(starts, box, deadline=deadline)
         pts = pool.points

@@ -53,6 +53,31 @@ def colwise_values(st: dict, vals) -> np.ndarray:
     return np.bincount(st["pos"], weights=np.asarray(vals)[st["order"]], minlength=st["nnz"])
 
 
+def solve_colwise(h, st: dict, vals, cost, col_lo, col_hi, row_lo, row_hi, basis=None):
+    """Pass the LP ``min cost'z, row_lo <= A z <= row_hi, col_lo <= z <= col_hi`` with ``A``
+    of the pattern ``st`` (:func:`colwise_structure`) and entry values ``vals`` to the HiGHS
+    instance ``h``, warm-start it from ``basis`` (same pattern) and solve. Returns the new
+    basis, or None when the LP is not solved to optimality."""
+    import highspy as hs
+
+    lp = hs.HighsLp()
+    lp.num_col_, lp.num_row_ = len(cost), len(row_lo)
+    lp.col_cost_ = cost
+    lp.col_lower_, lp.col_upper_ = col_lo, col_hi
+    lp.row_lower_, lp.row_upper_ = row_lo, row_hi
+    lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
+    lp.a_matrix_.start_ = st["start"]
+    lp.a_matrix_.index_ = st["index"]
+    lp.a_matrix_.value_ = colwise_values(st, vals)
+    h.passModel(lp)
+    if basis is not None:
+        h.setBasis(basis)
+    h.run()
+    if h.getModelStatus() != hs.HighsModelStatus.kOptimal:
+        return None
+    return h.getBasis()
+
+
 class LinearisedSet:
     """The LP of one SLP step (see the module docstring), kept on one HiGHS instance and
     warm-started from the previous step's basis (the sparsity never changes).
@@ -132,26 +157,13 @@ class LinearisedSet:
             vals = np.concatenate([vals, self.gain[0]])
             row_lo = np.concatenate([row_lo, [self.gain[1]]])
             row_hi = np.concatenate([row_hi, [self.gain[1]]])
-        lp = hs.HighsLp()
-        lp.num_col_, lp.num_row_ = self.ncol, self.nrow
-        lp.col_cost_ = cost
-        lp.col_lower_ = np.concatenate([lo, self.err_lo])
-        lp.col_upper_ = np.concatenate([hi, self.err_hi])
-        lp.row_lower_ = row_lo
-        lp.row_upper_ = row_hi
-        lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = self.st["start"]
-        lp.a_matrix_.index_ = self.st["index"]
-        lp.a_matrix_.value_ = colwise_values(self.st, vals)
-        self.h.passModel(lp)
-        if self.basis is not None:
-            self.h.setBasis(self.basis)
-        self.h.run()
+        self.basis = solve_colwise(self.h, self.st, vals, cost,
+                                   np.concatenate([lo, self.err_lo]),
+                                   np.concatenate([hi, self.err_hi]), row_lo, row_hi,
+                                   self.basis)
         self.solves += 1
-        if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
-            self.basis = None
+        if self.basis is None:
             return None
-        self.basis = self.h.getBasis()
         z = np.asarray(self.h.getSolution().col_value)
         return z[:p].copy(), z[p : p + n].copy(), z[p + n : p + n + pr.n_groups].copy()
 
@@ -203,12 +215,12 @@ def improve(pool, start, k: int, sense: float, box, resolution: float, *,
     return best
 
 
-def restore(pool, theta0, eta0, dx0, box, *, max_lps: int = 12,
-            stop_at: float | None = None):
-    """Gauss-Newton on (22.34) from an unverified point (e.g. a relaxation's LP point):
-    each step minimises the largest linearised residual ``s`` (elastic LP) inside ``box``
-    and re-linearises at the solution, until :func:`.problem.check_theta` accepts a step's
-    theta. Returns the verified point or None.
+def restore(pool, starts, box, *, max_lps: int = 12, stop_at: float | None = None):
+    """Gauss-Newton on (22.34) from unverified points (e.g. a relaxation's LP points):
+    from each start ``(theta0, eta0, dx0)`` in turn, each step minimises the largest
+    linearised residual ``s`` (elastic LP) inside ``box`` and re-linearises at the
+    solution, until :func:`.problem.check_theta` accepts a step's theta (at most
+    ``max_lps`` steps per start). Returns the verified point or None.
 
     For sets too thin for any relaxation point to be feasible -- noise exactly at its bound
     on every sample makes the set a single point, as in stage 1 -- the steps converge
@@ -218,17 +230,18 @@ def restore(pool, theta0, eta0, dx0, box, *, max_lps: int = 12,
     pr = pool.problem
     lin = LinearisedSet(pr, elastic=True)
     box = np.asarray(box, dtype=float)[: pr.p]
-    th = np.clip(np.asarray(theta0, dtype=float), box[:, 0], box[:, 1])
-    eta = np.clip(np.asarray(eta0, dtype=float), -pr.deta, pr.deta)
-    dxv = np.clip(np.asarray(dx0, dtype=float), -pr.dx_group, pr.dx_group)
-    for _ in range(max_lps):
-        if stop_at is not None and time.perf_counter() > stop_at:
-            return None
-        out = lin.solve(th, eta, dxv, 0, 1.0, box[:, 0], box[:, 1])
-        if out is None:
-            return None
-        th, eta, dxv = out
-        pt = pool.add(th)
-        if pt is not None:
-            return pt
+    for theta0, eta0, dx0 in starts:
+        th = np.clip(np.asarray(theta0, dtype=float), box[:, 0], box[:, 1])
+        eta = np.clip(np.asarray(eta0, dtype=float), -pr.deta, pr.deta)
+        dxv = np.clip(np.asarray(dx0, dtype=float), -pr.dx_group, pr.dx_group)
+        for _ in range(max_lps):
+            if stop_at is not None and time.perf_counter() > stop_at:
+                return None
+            out = lin.solve(th, eta, dxv, 0, 1.0, box[:, 0], box[:, 1])
+            if out is None:
+                break
+            th, eta, dxv = out
+            pt = pool.add(th)
+            if pt is not None:
+                return pt
     return None

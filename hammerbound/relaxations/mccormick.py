@@ -109,8 +109,8 @@ class McCormickBase:
 
     def _group_positions(self):
         """Per input-error group: its products, their McCormick rows, the theta columns and
-        the positions of those ``x``-coefficients in the LP matrix (cached like
-        :meth:`_positions`)."""
+        the positions of those ``x``-coefficients in the LP matrix, and the group's column
+        and the positions of its ``e``-coefficients (cached like :meth:`_positions`)."""
         self._positions()
         if getattr(self, "_by_g", None) is None:
             self._by_g = []
@@ -119,7 +119,9 @@ class McCormickBase:
                 sel = np.flatnonzero(self.pe == base + g)
                 r = self.mc_rows[sel].ravel()
                 c = np.repeat(self.px[sel], 4)
-                self._by_g.append((sel, r, c, self.lp.data_positions(r, c)))
+                ec = np.repeat(self.pe[sel], 4)
+                self._by_g.append((sel, r, c, self.lp.data_positions(r, c), ec,
+                                   self.lp.data_positions(r, ec)))
         return self._by_g
 
     def dx_columns(self) -> np.ndarray:
@@ -166,7 +168,7 @@ class McCormickBase:
         lp.set_col_bounds(self.dx_columns()[changed], dbox[changed, 0], dbox[changed, 1])
         by_g = self._group_positions()
         for g in changed:
-            sel, r, c, pos = by_g[g]
+            sel, r, c, pos, ec, epos = by_g[g]
             if sel.size == 0:
                 continue
             xq = self.px[sel]
@@ -175,10 +177,7 @@ class McCormickBase:
             eU = np.full(sel.size, dbox[g, 1])
             # x-coefficients of the 4 rows: -eL, -eU, -eL, -eU
             lp.set_coeffs(r, c, pos, np.column_stack([-eL, -eU, -eL, -eU]).ravel())
-            rows = self.mc_rows[sel].ravel()
-            ecols = np.repeat(self.pe[sel], 4)
-            set_envelope(lp, rows, ecols, lp.data_positions(rows, ecols), self.pw[sel],
-                         xl, xu, eL, eU)
+            set_envelope(lp, r, ec, epos, self.pw[sel], xl, xu, eL, eU)
 
     def violations(self, x, n_shared: int = 0) -> np.ndarray:
         """Per branching variable, the sum of ``|w - x e|`` over its products at an LP point

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..exceptions import SolverError
 from ._highs import new_highs
-from .local import colwise_structure, colwise_values
+from .local import colwise_structure, solve_colwise
 from .problem import EIVProblem, check_theta, equation_scale
 
 
@@ -156,28 +156,15 @@ class _Screen:
         eqs = st["eqs"]
         m, nz = eqs.size, self.nz
         vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
-        data = colwise_values(st, np.concatenate([vals, vals, st["ones"]]))
         r = pr.simulate_noise_free(theta)[eqs]
-        lp = hs.HighsLp()
-        lp.num_col_, lp.num_row_ = nz + 1, 2 * m
         c = np.zeros(nz + 1)
         c[-1] = 1.0
-        lp.col_cost_ = c
-        lp.col_lower_, lp.col_upper_ = self.lb, self.ub
-        lp.row_lower_ = np.concatenate([np.full(m, -hs.kHighsInf), r])
-        lp.row_upper_ = np.concatenate([r, np.full(m, hs.kHighsInf)])
-        lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = st["start"]
-        lp.a_matrix_.index_ = st["index"]
-        lp.a_matrix_.value_ = data
-        self.h.passModel(lp)
-        if self.bases.get(keep) is not None:
-            self.h.setBasis(self.bases[keep])
-        self.h.run()
-        if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
-            self.bases[keep] = None
+        self.bases[keep] = solve_colwise(
+            self.h, st, np.concatenate([vals, vals, st["ones"]]), c, self.lb, self.ub,
+            np.concatenate([np.full(m, -hs.kHighsInf), r]),
+            np.concatenate([r, np.full(m, hs.kHighsInf)]), self.bases.get(keep))
+        if self.bases[keep] is None:
             return np.inf
-        self.bases[keep] = self.h.getBasis()
         v = float(self.h.getInfo().objective_function_value)
         if v > self.tol_at(theta):
             y = np.abs(np.asarray(self.h.getSolution().row_dual))

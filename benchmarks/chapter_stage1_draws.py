@@ -3,7 +3,7 @@
 For each noise level and square-wave amplitude design, fit the exact stage 1 on ``--draws``
 independent noise realisations (M = 50, uniform noise, the chapter's backlash) and compare
 the inner-signal radius dx at u* = 1 with the radius implied by the chapter's Table 22.1
-(:func:`hammerbound.chapter.chapter_inner_bounds`). Also records where seed 0 falls among the
+(:func:`hammerbound.app.chapter.chapter_inner_bounds`). Also records where seed 0 falls among the
 draws (inner radius and transient SNR of the N = 100 PRBS).
 
     python benchmarks/chapter_stage1_draws.py --draws 100 --levels 0.05 0.3
@@ -22,8 +22,8 @@ except ImportError:  # run as a script
     import _common as C
 
 import hammerbound as hb
-from hammerbound.chapter import chapter_inner_bounds
-from hammerbound.experiments import CHAPTER_AMPLITUDES, CHAPTER_U_STAR, chapter_example
+from hammerbound.app.chapter import chapter_inner_bounds
+from hammerbound.systems.experiments import CHAPTER_AMPLITUDES, CHAPTER_U_STAR, chapter_example
 
 DESIGNS = {
     "ours [0.25, 2.5]": CHAPTER_AMPLITUDES,

@@ -10,7 +10,7 @@ same data -- together with the order-1 moment relaxation and the polytopic LP.
     python benchmarks/chapter_tables.py --quick        # N = 100 only
     python benchmarks/chapter_tables.py --methods exact,moment1,lp --N 100 300
 
-Over several noise draws, both stage-1 modes (hammerbound.chapter.reproduce_chapter; the
+Over several noise draws, both stage-1 modes (hammerbound.app.chapter.reproduce_chapter; the
 chapter's delta = 2 numbers beside our exact intervals, median and spread over the seeds,
 ratio ours/chapter of the half-widths):
 
@@ -32,7 +32,7 @@ except ImportError:  # run as a script
     import _common as C
 
 import hammerbound as hb
-from hammerbound.experiments import CHAPTER_NOISE_LEVELS
+from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS
 
 
 def load_reference():
@@ -55,7 +55,7 @@ def main(argv=None):
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--time-limit", type=float, default=300.0, help="exact method, per bound")
     ap.add_argument("--seeds", type=int, nargs="+", default=None,
-                    help="several noise draws through hammerbound.chapter (see above)")
+                    help="several noise draws through hammerbound.app.chapter (see above)")
     ap.add_argument("--stage1", nargs="+", default=["chapter", "experiment"],
                     choices=["chapter", "experiment"], help="with --seeds")
     ap.add_argument("--rounding", default="outward", choices=["outward", "as-printed"],
@@ -139,7 +139,7 @@ def main(argv=None):
 
 def main_seeds(args):
     """Medians over seeds for each stage-1 mode and method (one results file per pair)."""
-    from hammerbound.chapter import reproduce_chapter, reproduction_misses
+    from hammerbound.app.chapter import reproduce_chapter, reproduction_misses
 
     Ns = args.N or ([100] if args.quick else [100, 300])
     env = C.environment()

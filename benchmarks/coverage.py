@@ -28,7 +28,7 @@ try:
 except ImportError:  # run as a script
     import _common as C
 
-from hammerbound.experiments import CHAPTER_NOISE_LEVELS
+from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS
 
 DEFAULT_METHODS = "lp:100,moment1:3,exact-2level:2"
 QUICK_METHODS = "lp:10,lp-2level:10,moment1:2"

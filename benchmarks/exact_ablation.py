@@ -6,7 +6,7 @@ The stage-2 problem of the identifier (chapter example, seed 0, two-level or ind
 inner signal) is built once per level; then ``exact_bounds`` runs on one core (``n_jobs=1``,
 so the total is the sum over the 8 ends) with every feature on, and with each of these off:
 
-* ``no-local``: the SLP walk to a near-optimal incumbent (:mod:`hammerbound.relaxations.local`);
+* ``no-local``: the SLP walk to a near-optimal incumbent (:mod:`hammerbound.relaxations.exact.local`);
 * ``no-shared-branching``: branching on the shared input errors of the two-level signal;
 * ``no-parent-basis``: children start from their parent's simplex basis.
 
@@ -38,8 +38,8 @@ def _problem(deta, N, inner):
 
 
 def _run(problem, variant, tol):
-    import hammerbound.relaxations._highs as highs
-    import hammerbound.relaxations.bnb as bnb
+    import hammerbound.relaxations.exact.bnb as bnb
+    import hammerbound.solvers.highs as highs
 
     saved = (bnb._LOCAL, bnb.shared_groups, highs.HighsLP.restore)
     try:

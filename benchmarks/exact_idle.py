@@ -17,7 +17,7 @@ import numpy as np
 
 import hammerbound as hb
 from benchmarks import _common as C
-from hammerbound.experiments import CHAPTER_NOISE_LEVELS
+from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS
 
 
 def main(argv=None) -> int:

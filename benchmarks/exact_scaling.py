@@ -25,7 +25,7 @@ import numpy as np
 
 import hammerbound as hb
 from benchmarks import _common as C
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 
 
 class _PeakRSS:

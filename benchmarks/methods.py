@@ -26,7 +26,7 @@ except ImportError:  # run as a script
     import _common as C
 
 import hammerbound as hb
-from hammerbound.experiments import (
+from hammerbound.systems.experiments import (
     CHAPTER_AMPLITUDES,
     CHAPTER_BACKLASH,
     CHAPTER_U_STAR,
@@ -34,7 +34,7 @@ from hammerbound.experiments import (
     prbs_experiment,
     square_wave_experiment,
 )
-from hammerbound.systems import HammersteinSystem
+from hammerbound.systems.models import HammersteinSystem
 
 PARTS = ("same", "delta2", "scaling", "order")
 

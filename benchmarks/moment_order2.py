@@ -31,10 +31,10 @@ except ImportError:  # run as a script
     import _common as C
 
 import hammerbound as hb
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.moment import moment_bounds
-from hammerbound.relaxations.moment_size import estimate_moment_relaxation
+from hammerbound.relaxations.moment.relaxation import moment_bounds
+from hammerbound.relaxations.moment.size import estimate_moment_relaxation
 
 OUT = C.RESULTS / "moment_order2.json"
 

@@ -316,7 +316,7 @@ def section_chapter_seeds():
         return ""
     out = ["### Over several noise draws: exact method, both stage-1 modes\n",
            "`python benchmarks/chapter_tables.py --seeds 0 1 2 3 4 --stage1 chapter experiment "
-           "--methods exact --n-jobs 1` (`hammerbound.chapter.reproduce_chapter`). *stage 1 = "
+           "--methods exact --n-jobs 1` (`hammerbound.app.chapter.reproduce_chapter`). *stage 1 = "
            "chapter*: stage 2 receives the inner-signal bounds implied by the chapter's Table "
            "22.1 (interval arithmetic on its box of (m, c), printed ends moved outward by half a "
            r"unit of the last digit, u\* = 1); *stage 1 = experiment*: our exact stage 1 on our "

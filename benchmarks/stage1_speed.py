@@ -22,7 +22,7 @@ except ImportError:  # run as a script
     import _common as C
 
 import hammerbound as hb
-from hammerbound.experiments import CHAPTER_BACKLASH
+from hammerbound.systems.experiments import CHAPTER_BACKLASH
 
 
 def steady_data(M: int, noise: float, seed: int):

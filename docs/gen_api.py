@@ -7,14 +7,14 @@ from pathlib import Path
 
 MODULES = [
     ("hammerbound", None),
-    ("hammerbound.experiments", None),
+    ("hammerbound.systems.experiments", None),
     ("hammerbound.relaxations.lp", ["lp_bounds"]),
-    ("hammerbound.relaxations.moment", ["moment_bounds", "MomentRelaxation"]),
-    ("hammerbound.relaxations.bnb", ["exact_bounds"]),
+    ("hammerbound.relaxations.moment.relaxation", ["moment_bounds", "MomentRelaxation"]),
+    ("hammerbound.relaxations.exact.bnb", ["exact_bounds"]),
     ("hammerbound.relaxations.result", ["IntervalResult", "BoundInfo"]),
     ("hammerbound.solvers", ["available_solvers", "get_solver"]),
     ("hammerbound.discrepancy", ["diagnose", "locate", "DiagnosisReport", "RefinedModel"]),
-    ("hammerbound.report", ["write_report"]),
+    ("hammerbound.app.report", ["write_report"]),
     ("hammerbound.plotting", None),
 ]
 

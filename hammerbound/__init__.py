@@ -6,8 +6,8 @@ Stage 1 (:class:`BacklashSetEstimator`) bounds the backlash from steady-state da
 errors-in-variables problem; :class:`HammersteinBacklashIdentifier` runs both.
 """
 
-from .backlash import BacklashSetEstimator, InnerSignalBounds
-from .eiv import LinearEIVSetEstimator
+from . import _compat
+from .data.iodata import IOData
 from .exceptions import (
     DataScaleError,
     DataValidationError,
@@ -24,13 +24,25 @@ from .exceptions import (
     SolverOptionError,
     UnboundedSetError,
 )
-from .experiments import chapter_example, prbs_experiment, square_wave_experiment
-from .feasible_set import FeasibleSet, PolygonFeasibleSet
-from .hammerstein import HammersteinBacklashIdentifier
-from .iodata import IOData
+from .hammerstein.identifier import HammersteinBacklashIdentifier
 from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
-from .systems import Backlash, HammersteinSystem, simulate_backlash
+from .stage1.estimator import BacklashSetEstimator, InnerSignalBounds
+from .stage1.feasible_set import FeasibleSet, PolygonFeasibleSet
+from .stage2.estimator import LinearEIVSetEstimator
+from .systems.experiments import chapter_example, prbs_experiment, square_wave_experiment
+from .systems.models import Backlash, HammersteinSystem, simulate_backlash
+
+_compat.install()
+
+
+def __getattr__(name):
+    # ``hammerbound.experiments`` etc. as attributes (old layout): deprecated, see _compat
+    if name in _compat.MOVED:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 try:
     from importlib.metadata import PackageNotFoundError, version

@@ -22,7 +22,7 @@ class ParameterValidationError(HammerboundError, ValueError):
 
 class DataScaleError(DataValidationError):
     """The data's magnitudes lie outside the range the arithmetic can certify (see
-    :func:`hammerbound.validation.check_scale`); rescale the signals and bounds."""
+    :func:`hammerbound.data.validation.check_scale`); rescale the signals and bounds."""
 
 
 class NotEnoughAmplitudesError(DataValidationError):

@@ -117,7 +117,7 @@ def csv_file(name, text: str | bytes) -> Path:
 
 
 def read(name, text, columns=("u", "y")):
-    from hammerbound.io import read_columns
+    from hammerbound.data.csv_reader import read_columns
 
     return read_columns(csv_file(name, text), list(columns))
 
@@ -369,7 +369,7 @@ CASES: list[ErrorCase] = [
       "HammersteinBacklashIdentifier().fit(u_prbs with u[0] = 0.5, y_prbs, steady_state=...)",
       lambda: hb.HammersteinBacklashIdentifier().fit(
           with_value(u_prbs(), 0, 0.5), y_prbs(), steady_state=(u_ss(), y_ss())),
-      DataValidationError, "prbs_level="),
+      DataValidationError, "ordinary record"),
     C("h-length-mismatch", "identifier", "PRBS input and output of different lengths",
       "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs[:-1], steady_state=...)",
       lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs()[:-1],
@@ -437,18 +437,18 @@ CASES: list[ErrorCase] = [
     C("sys-not-backlash", "systems", "backlash given as a tuple",
       "HammersteinSystem((0.25, 0.06, 0.26, 0.05), (A, B))",
       lambda: hb.HammersteinSystem((0.25, 0.06, 0.26, 0.05), (SYS.A, SYS.B)),
-      ParameterValidationError, "hammerbound.systems.Backlash"),
+      ParameterValidationError, "hammerbound.systems.models.Backlash"),
     C("sys-input-past-crossing", "systems", "simulation past the line crossing",
       "system.simulate([1.0, 5.0])",
       lambda: SYS.simulate([1.0, 5.0]),
       IllPosedBacklashError, "keep the input inside"),
     C("sys-gain-zero", "systems", "normalising a zero-gain block (A2)",
       "normalize_gain([1, -0.5], [0, 0])",
-      lambda: __import__("hammerbound.systems").systems.normalize_gain([1, -0.5], [0, 0]),
+      lambda: __import__("hammerbound.systems.models").systems.normalize_gain([1, -0.5], [0, 0]),
       ParameterValidationError, "assumption A2"),
     C("sys-gain-negative", "systems", "negative gain moved into the backlash",
       "normalize_gain([1, -0.5], [0, -1], backlash)",
-      lambda: __import__("hammerbound.systems").systems.normalize_gain(
+      lambda: __import__("hammerbound.systems.models").systems.normalize_gain(
           [1, -0.5], [0, -1], SYS.backlash),
       ParameterValidationError, "slopes must stay > 0"),
     # ------------------------------------------------------------- experiments
@@ -511,7 +511,8 @@ CASES: list[ErrorCase] = [
       DataValidationError, "no data rows"),
     C("csv-no-file", "io", "CSV path that does not exist",
       "read_columns('<tmp>/nope.csv', ['u', 'y'])",
-      lambda: __import__("hammerbound.io").io.read_columns(CSV_DIR / "nope.csv", ["u", "y"]),
+      lambda: __import__("hammerbound.data.csv_reader").data.csv_reader.read_columns(
+          CSV_DIR / "nope.csv", ["u", "y"]),
       DataValidationError, "check the path"),
     C("csv-binary", "io", "binary (non-UTF-8) file",
       "read_columns('<tmp>/binary.csv', ['u', 'y'])",
@@ -738,7 +739,7 @@ CASES: list[ErrorCase] = [
       DataValidationError, "shape (N,) or (N, 1)"),
     C("noise-wrong-length", "experiments", "per-sample noise bound of the wrong length",
       "uniform_noise(5, [0.1, 0.2])",
-      lambda: __import__("hammerbound.experiments", fromlist=["x"]).uniform_noise(
+      lambda: __import__("hammerbound.systems.experiments", fromlist=["x"]).uniform_noise(
           5, [0.1, 0.2]),
       DataValidationError, "one value per sample"),
     C("backlash-sim-text", "systems", "text input to the backlash simulation",
@@ -749,14 +750,14 @@ CASES: list[ErrorCase] = [
 
 
 def _check_output(path, force=False):
-    from hammerbound.cli_paths import check_output_file
+    from hammerbound.app.paths import check_output_file
 
     return check_output_file(path, force=force)
 
 
 def _check_report_dir():
-    from hammerbound.cli_paths import check_output_dir
-    from hammerbound.report import REPORT_FILES
+    from hammerbound.app.paths import check_output_dir
+    from hammerbound.app.report import REPORT_FILES
 
     (CSV_DIR / "report-dir").mkdir(parents=True, exist_ok=True)
     csv_file("report-dir/report.md", "# earlier report\n")
@@ -764,7 +765,7 @@ def _check_report_dir():
 
 
 def _chapter():
-    import hammerbound.chapter as chapter
+    import hammerbound.app.chapter as chapter
 
     return chapter
 

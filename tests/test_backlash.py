@@ -5,12 +5,15 @@ import pytest
 from sklearn.base import clone
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from hammerbound.backlash import BacklashSetEstimator
 from hammerbound.exceptions import (
-    DataValidationError, EmptyFeasibleSetError, NotEnoughAmplitudesError,
-    ParameterValidationError, ResultOneViolationError,
+    DataValidationError,
+    EmptyFeasibleSetError,
+    NotEnoughAmplitudesError,
+    ParameterValidationError,
+    ResultOneViolationError,
 )
-from hammerbound.experiments import CHAPTER_NOISE_LEVELS, chapter_example
+from hammerbound.stage1.estimator import BacklashSetEstimator
+from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS, chapter_example
 
 
 def _random_side_data(rng, M):

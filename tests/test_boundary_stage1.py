@@ -273,7 +273,7 @@ def test_inner_signal_bounds_contain_true_levels_at_the_boundary(method, pattern
 def test_farkas_certificate_exact():
     from fractions import Fraction
 
-    from hammerbound.feasible_set import farkas_certificate
+    from hammerbound.stage1.feasible_set import farkas_certificate
 
     # x <= 0, -x <= -1e-300 (x >= 1e-300), y <= 1: empty by the tiniest margin, exactly
     lam = farkas_certificate([(1.0, 0.0, 0.0), (-1.0, 0.0, -1e-300), (0.0, 1.0, 1.0)])
@@ -286,7 +286,7 @@ def test_farkas_certificate_exact():
 
 
 def test_polygon_from_halfplanes_degenerate_sets_are_returned():
-    from hammerbound.feasible_set import Constraint, polygon_from_halfplanes
+    from hammerbound.stage1.feasible_set import Constraint, polygon_from_halfplanes
 
     def box(x0, x1, y0, y1):
         return [Constraint((1.0, 0.0), x1, 0, "+"), Constraint((-1.0, 0.0), -x0, 0, "-"),
@@ -303,7 +303,7 @@ def test_polygon_from_halfplanes_degenerate_sets_are_returned():
 
 
 def test_intersection_of_nearly_parallel_lines_has_small_residuals():
-    from hammerbound.feasible_set import Constraint, _intersect
+    from hammerbound.stage1.feasible_set import Constraint, _intersect
 
     rng = np.random.default_rng(0)
     worst = 0.0

@@ -24,9 +24,9 @@ from scipy.signal import lfilter
 
 from hammerbound import LinearEIVSetEstimator
 from hammerbound.exceptions import SearchLimitWarning
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds, touches_box
-from hammerbound.relaxations.moment import moment_bounds
+from hammerbound.relaxations.moment.relaxation import moment_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta
 
 PATTERNS = ("alternating", "random", "constant", "inside")

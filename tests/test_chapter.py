@@ -1,4 +1,4 @@
-"""hammerbound.chapter: the Table 22.1 -> inner-signal mapping, the records, the demo."""
+"""hammerbound.app.chapter: the Table 22.1 -> inner-signal mapping, the records, the demo."""
 
 from __future__ import annotations
 
@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 
 from hammerbound import LinearEIVSetEstimator
-from hammerbound.chapter import (
+from hammerbound.app.chapter import (
     chapter_inner_bounds,
     reproduce_chapter,
     reproduction_misses,
     stdout_to_stderr,
 )
-from hammerbound.cli import main
+from hammerbound.app.cli import main
 from hammerbound.exceptions import ParameterValidationError
-from hammerbound.experiments import CHAPTER_NOISE_LEVELS, CHAPTER_U_STAR, chapter_example
+from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS, CHAPTER_U_STAR, chapter_example
 
 CSV = Path(__file__).resolve().parents[1] / "hammerbound" / "data" / "chapter22_tables.csv"
 TRUE = {"ml": 0.25, "cl": 0.0628, "mr": 0.26, "cr": 0.0489}

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from hammerbound.cli import main
-from hammerbound.io import example_data_path
+from hammerbound.app.cli import main
+from hammerbound.data.csv_reader import example_data_path
 
 ROOT = Path(__file__).resolve().parents[1]
 LRIC_EXACT = np.array([[-0.9217, -0.8830], [0.7195, 0.7935], [-0.3227, -0.2428]])
@@ -50,7 +50,7 @@ def test_eiv_json_lric_exact(capsys):
 def test_eiv_json_subprocess_stdout_is_only_json(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     proc = subprocess.run(
-        [sys.executable, "-m", "hammerbound.cli", "eiv", str(example_data_path()),
+        [sys.executable, "-m", "hammerbound", "eiv", str(example_data_path()),
          *LRIC_ARGS, "--method", "lp", "--json"],
         capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stderr

@@ -16,13 +16,13 @@ import json
 import os
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
+import tomllib
 
-from hammerbound.report import REPORT_FILES
+from hammerbound.app.report import REPORT_FILES
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -270,7 +270,7 @@ def test_diagnose_plot_checked_and_force(data, tmp_path):
 
 
 def _has_subcommand(name):
-    from hammerbound.cli import build_parser
+    from hammerbound.app.cli import build_parser
 
     sub = next(a for a in build_parser()._actions if a.dest == "command")
     return name in sub.choices

@@ -17,13 +17,13 @@ from scipy.signal import lfilter
 
 matplotlib.use("Agg")
 
+from hammerbound.app.cli import diagnose_cli_main  # noqa: E402
 from hammerbound.discrepancy import (  # noqa: E402
     DiagnosisReport,
     RefinedModel,
     apply_effect,
     default_candidates,
     diagnose,
-    diagnose_cli_main,
     locate,
     read_io_csv,
 )
@@ -32,7 +32,7 @@ from hammerbound.exceptions import (  # noqa: E402
     HammerboundError,
     ParameterValidationError,
 )
-from hammerbound.systems import Backlash, HammersteinSystem  # noqa: E402
+from hammerbound.systems.models import Backlash, HammersteinSystem  # noqa: E402
 
 A = np.array([1.0, -1.2, 0.5])
 B = np.array([0.0, 0.2, 0.1])  # unit steady-state gain, one sample of delay

@@ -92,7 +92,7 @@ def test_cli_exits_0_on_a_correct_model_with_noise_at_the_bound(effect, tmp_path
     path.write_text("u,y\n" + "".join(f"{a!r},{b!r}\n" for a, b in
                                       zip(u.tolist(), y.tolist(), strict=True)))
     r = subprocess.run(
-        [sys.executable, "-m", "hammerbound.cli", "diagnose", str(path), "--num", "0 0.2 0.1",
+        [sys.executable, "-m", "hammerbound", "diagnose", str(path), "--num", "0 0.2 0.1",
          "--den", "1 -1.2 0.5", "--noise-bound", repr(NB), "--candidates", effect],
         capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert r.returncode == 0, r.stdout + r.stderr

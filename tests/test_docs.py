@@ -97,7 +97,7 @@ def test_matcher_numbers_words_and_ellipsis():
 
 def _run_console(body):
     """``[(command, expected, actual)]`` for the ``$ hammerbound ...`` lines of a block."""
-    from hammerbound.cli import main
+    from hammerbound.app.cli import main
 
     runs, cmd, lines = [], None, []
     for line in body.splitlines() + ["$"]:

@@ -9,9 +9,9 @@ import pytest
 
 import hammerbound as hb
 from hammerbound.discrepancy import diagnose
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.moment import moment_bounds
+from hammerbound.relaxations.moment.relaxation import moment_bounds
 
 ESTIMATORS = [hb.BacklashSetEstimator, hb.LinearEIVSetEstimator, hb.HammersteinBacklashIdentifier]
 FUNCTIONS = [lp_bounds, moment_bounds, exact_bounds, diagnose,

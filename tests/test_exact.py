@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 from scipy.signal import lfilter
 
 from hammerbound.exceptions import EmptyFeasibleSetError, UnboundedSetError
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds, touches_box
-from hammerbound.relaxations.moment import moment_bounds
+from hammerbound.relaxations.moment.relaxation import moment_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta
 
 ATOL = 1e-7  # slack of check_theta's acceptance, see tests/test_lp.py
@@ -304,8 +304,8 @@ def test_property_true_theta_inside_lp_and_exact(system):
 
 @pytest.mark.parametrize("k,sense", [(0, 1.0), (2, -1.0), (3, 1.0)])
 def test_reduced_cost_tightening_cuts_only_parts_above_the_target(k, sense):
-    from hammerbound.relaxations.bnb import _reduced_cost_tightening
-    from hammerbound.relaxations.mccormick import McCormickRelaxation
+    from hammerbound.relaxations.exact.bnb import _reduced_cost_tightening
+    from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
 
     pr, _ = make_eiv_problem(N=30, deta=0.1, seed=4)
     box = lp_bounds(pr).bounds
@@ -341,7 +341,7 @@ def test_reduced_cost_tightening_cuts_only_parts_above_the_target(k, sense):
 
 
 def test_cap_keeps_only_the_part_below_the_incumbent():
-    from hammerbound.relaxations.bnb import _cap
+    from hammerbound.relaxations.exact.bnb import _cap
 
     box = np.array([[0.0, 1.0], [-2.0, 2.0]])
     np.testing.assert_array_equal(_cap(box, 1, 1.0, 0.5), [[0.0, 1.0], [-2.0, 0.5]])
@@ -352,7 +352,7 @@ def test_cap_keeps_only_the_part_below_the_incumbent():
 
 
 def test_seek_finds_a_verified_point_from_an_infeasible_start():
-    from hammerbound.relaxations.points import _Pool
+    from hammerbound.relaxations.exact.points import _Pool
 
     pr, theta = make_eiv_problem(N=60, deta=0.1, two_level=True, seed=2)
     box = lp_bounds(pr).bounds
@@ -367,8 +367,8 @@ def test_seek_finds_a_verified_point_from_an_infeasible_start():
 
 
 def test_node_lp_options_keep_scaling_for_badly_scaled_data():
-    from hammerbound.relaxations._highs import HighsLP
-    from hammerbound.relaxations.mccormick import McCormickRelaxation
+    from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
+    from hammerbound.solvers.highs import HighsLP
 
     pr, _ = make_eiv_problem(N=20, deta=0.05, seed=1)
     box = lp_bounds(pr).bounds
@@ -386,8 +386,8 @@ def test_node_lp_options_keep_scaling_for_badly_scaled_data():
 
 
 def test_unscaled_node_lp_turns_scaling_on_when_its_bound_trails(monkeypatch):
-    from hammerbound.relaxations import _highs
-    from hammerbound.relaxations.mccormick import McCormickRelaxation
+    from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
+    from hammerbound.solvers import highs as _highs
 
     pr, _ = make_eiv_problem(N=20, deta=0.05, seed=1)
     relax = McCormickRelaxation(pr, lp_bounds(pr).bounds)

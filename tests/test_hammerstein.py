@@ -19,7 +19,7 @@ from hammerbound import (
     chapter_example,
     prbs_experiment,
 )
-from hammerbound.experiments import CHAPTER_NOISE_LEVELS
+from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS
 
 
 def _ident(deta, method="lp", inner="independent", **kw):

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from conftest import make_eiv_problem, make_two_level, min_error_scale
 
-import hammerbound.relaxations.bnb as bnb
-from hammerbound.relaxations.bnb import exact_bounds
-from hammerbound.relaxations.local import LinearisedSet, improve, restore
+import hammerbound.relaxations.exact.bnb as bnb
+from hammerbound.relaxations.exact.bnb import exact_bounds
+from hammerbound.relaxations.exact.local import LinearisedSet, improve, restore
+from hammerbound.relaxations.exact.points import _Pool
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.points import _Pool
 from hammerbound.relaxations.problem import EIVProblem
 
 TOL = 1e-4

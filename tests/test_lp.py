@@ -16,7 +16,7 @@ from hammerbound.exceptions import (
     ParameterValidationError,
     UnboundedSetError,
 )
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta
 

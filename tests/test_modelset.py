@@ -124,7 +124,7 @@ def lric_fit():
 
 
 def _lric():
-    from hammerbound.io import example_data_path
+    from hammerbound.data.csv_reader import example_data_path
 
     return np.loadtxt(example_data_path(), delimiter=",", skiprows=1)
 

@@ -11,10 +11,9 @@ import itertools
 
 import numpy as np
 import pytest
+from test_modelset import own_feasible, play, responses
 
 import hammerbound as hb
-
-from test_modelset import own_feasible, play, responses
 
 pytestmark = pytest.mark.slow
 

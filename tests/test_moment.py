@@ -14,9 +14,9 @@ from hammerbound.exceptions import (
     SolverNotAvailableError,
     SolverOptionError,
 )
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.moment import MomentRelaxation, moment_bounds
+from hammerbound.relaxations.moment.relaxation import MomentRelaxation, moment_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta
 from hammerbound.solvers import available_solvers, get_solver
 from hammerbound.solvers.clarabel_picos import ClarabelConic

@@ -14,10 +14,10 @@ from test_moment import assert_sound, feasible_points, first_order_problem
 
 from hammerbound import LinearEIVSetEstimator
 from hammerbound.exceptions import ParameterValidationError
-from hammerbound.relaxations import moment_size
-from hammerbound.relaxations.bnb import exact_bounds
+from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.moment import MomentRelaxation, moment_bounds
+from hammerbound.relaxations.moment import size as moment_size
+from hammerbound.relaxations.moment.relaxation import MomentRelaxation, moment_bounds
 from hammerbound.relaxations.problem import check_theta
 
 

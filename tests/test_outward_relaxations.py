@@ -8,10 +8,10 @@ import pytest
 from scipy.signal import lfilter
 
 import hammerbound as hb
-from hammerbound.backlash import InnerSignalBounds
 from hammerbound.exceptions import DataValidationError, EmptyFeasibleSetError
-from hammerbound.relaxations.mccormick import McCormickRelaxation
+from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
 from hammerbound.relaxations.problem import EIVProblem, equation_scale, outward_problem
+from hammerbound.stage1.estimator import InnerSignalBounds
 from hammerbound.tolerances import FEASIBILITY_RTOL
 
 

@@ -34,8 +34,8 @@ from hammerbound.exceptions import (
     SolverError,
     UnboundedSetError,
 )
-from hammerbound.experiments import chapter_example, prbs_experiment, square_wave_experiment
-from hammerbound.systems import normalize_gain
+from hammerbound.systems.experiments import chapter_example, prbs_experiment, square_wave_experiment
+from hammerbound.systems.models import normalize_gain
 
 #: Typed refusals that are acceptable answers (never a wrong interval).
 REFUSALS = (UnboundedSetError, ResultOneViolationError, NotEnoughAmplitudesError)
@@ -476,7 +476,7 @@ def test_nearly_parallel_constraints_only(method):
 def test_slow_prbs_nearly_collinear_regressors(method):
     """A PRBS held for 25 samples: consecutive regressors nearly parallel."""
     sys_ = chapter_example(0.01, N=10).system
-    u = hb.experiments.prbs(100, 1.0, hold=25, random_state=3)
+    u = hb.systems.experiments.prbs(100, 1.0, hold=25, random_state=3)
     x = sys_.inner(u)
     y = sys_.simulate(u) + np.random.default_rng(3).uniform(-0.01, 0.01, 100)
     est = hb.LinearEIVSetEstimator(noise_bound=0.01, method=method)

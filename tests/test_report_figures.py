@@ -26,7 +26,7 @@ def fitted():
 
 
 def test_report_fraction_over_banded_samples_and_figures(fitted, tmp_path):
-    from hammerbound.report import write_report
+    from hammerbound.app.report import write_report
 
     ex, ident = fitted
     path = write_report(ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, tmp_path)

@@ -11,7 +11,7 @@ from conftest import make_eiv_problem
 
 from hammerbound.exceptions import SolverNotAvailableError, SolverOptionError
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.moment import moment_bounds
+from hammerbound.relaxations.moment.relaxation import moment_bounds
 from hammerbound.solvers import (
     ClarabelSolver,
     available_solvers,

@@ -13,9 +13,9 @@ from sklearn.base import clone
 import hammerbound as hb
 from hammerbound import LinearEIVSetEstimator
 from hammerbound.exceptions import RelaxationTooLargeError, SearchLimitWarning
-from hammerbound.relaxations import moment_size
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.moment import MomentRelaxation, moment_bounds
+from hammerbound.relaxations.moment import size as moment_size
+from hammerbound.relaxations.moment.relaxation import MomentRelaxation, moment_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta, default_theta_box
 
 THETA = np.array([-0.76, 0.82, 2.15, -1.09])
@@ -90,7 +90,7 @@ def test_identifier_passes_the_budget_to_stage_2():
 
 def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
     """on_failure="box" with an uncertifiable solve reports the LP bound."""
-    import hammerbound.relaxations.moment as moment_module
+    import hammerbound.relaxations.moment.relaxation as moment_module
 
     x, y = chapter_record(15)
     pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, gain=1.0)

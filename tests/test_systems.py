@@ -3,11 +3,15 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from hammerbound.exceptions import IllPosedBacklashError, ParameterValidationError, DataValidationError
-from hammerbound.experiments import (
-    CHAPTER_BACKLASH, chapter_system, prbs, prbs_experiment, square_wave_experiment,
+from hammerbound.exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
+from hammerbound.systems.experiments import (
+    CHAPTER_BACKLASH,
+    chapter_system,
+    prbs,
+    prbs_experiment,
+    square_wave_experiment,
 )
-from hammerbound.systems import Backlash, HammersteinSystem, as_polynomials, normalize_gain
+from hammerbound.systems.models import Backlash, HammersteinSystem, as_polynomials, normalize_gain
 
 
 def chapter_three_case(u, bl, x0=0.0):

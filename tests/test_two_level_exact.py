@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 from conftest import make_two_level, min_error_scale
 
-import hammerbound.relaxations.bnb as bnb
-from hammerbound.relaxations._highs import LPSolve
-from hammerbound.relaxations.bnb import exact_bounds
+import hammerbound.relaxations.exact.bnb as bnb
+from hammerbound.relaxations.exact.bnb import exact_bounds
+from hammerbound.relaxations.exact.mccormick import McCormickRelaxation, shared_groups
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.mccormick import McCormickRelaxation, shared_groups
 from hammerbound.relaxations.problem import EIVProblem
+from hammerbound.solvers.highs import LPSolve
 
 TOL = 1e-4
 

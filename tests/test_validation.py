@@ -1,4 +1,4 @@
-"""One validation for every entry point (hammerbound.validation): shapes, types, scale.
+"""One validation for every entry point (hammerbound.data.validation): shapes, types, scale.
 
 The data are simulated here (numpy/scipy), not produced by the package's generators.
 """
@@ -14,8 +14,8 @@ import pytest
 from scipy.signal import lfilter
 
 import hammerbound as hb
+from hammerbound.data.validation import SCALE_MAX, SCALE_MIN, as_bound, as_real, as_theta, check_scale
 from hammerbound.exceptions import DataScaleError, DataValidationError, ParameterValidationError
-from hammerbound.validation import SCALE_MAX, SCALE_MIN, as_bound, as_real, as_theta, check_scale
 
 ROOT = Path(__file__).resolve().parents[1]
 ML, CL, MR, CR = 0.25, 0.0628, 0.26, 0.0489
@@ -203,7 +203,7 @@ def test_cli_identify_refuses_extreme_scale_before_the_work(tmp_path):
     (tmp_path / "pr.csv").write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in
                                                      zip(up * s, yp * s, strict=True)))
     r = subprocess.run(
-        [sys.executable, "-m", "hammerbound.cli", "identify", "--steady", str(tmp_path / "ss.csv"),
+        [sys.executable, "-m", "hammerbound", "identify", "--steady", str(tmp_path / "ss.csv"),
          "--prbs", str(tmp_path / "pr.csv"), "--steady-noise", "2e298", "--prbs-noise", "2e298",
          "--method", "lp"],
         capture_output=True, text=True, timeout=300, cwd=ROOT)

@@ -11,12 +11,12 @@ from conftest import make_eiv_problem
 from scipy.optimize import linprog
 from scipy.signal import lfilter
 
-from hammerbound.relaxations.bnb import exact_bounds
-from hammerbound.relaxations.mccormick import McCormickRelaxation
-from hammerbound.relaxations.obbt import _solve
-from hammerbound.relaxations.points import _Screen
+from hammerbound.relaxations.exact.bnb import exact_bounds
+from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
+from hammerbound.relaxations.exact.obbt import _solve
+from hammerbound.relaxations.exact.points import _Screen
+from hammerbound.relaxations.exact.working_set import WorkingSetRelaxation, interval_excess
 from hammerbound.relaxations.problem import EIVProblem
-from hammerbound.relaxations.working_set import WorkingSetRelaxation, interval_excess
 
 TOL = 1e-3
 
@@ -200,7 +200,7 @@ def test_automatic_working_set_only_for_independent_input_errors():
     walk are faster; either way the bounds are certified and the truth is inside."""
     from conftest import make_two_level
 
-    from hammerbound.relaxations.working_set import AUTO_MIN_EQUATIONS
+    from hammerbound.relaxations.exact.working_set import AUTO_MIN_EQUATIONS
 
     n = AUTO_MIN_EQUATIONS + 20
     shared, truth = make_two_level(0, N=n, deta=0.05)

@@ -47,7 +47,7 @@ Workflow (see ``docs/discrepancy.md``)
 Guarantees. Every reported minimax error is *achieved* by the returned parameters
 (it is recomputed from the residual of the refined model), so "consistent" is a
 certificate. ``report.gap_before_lower`` is a rigorous lower bound of the original
-class's gap (weak duality, :mod:`hammerbound.relaxations.safe_lp`) over a coefficient box
+class's gap (weak duality, :mod:`hammerbound.solvers.safe_lp`) over a coefficient box
 (each refitted column may contribute at most ``coef_box`` times the output scale): when
 it exceeds ``Delta`` the model is *certified* inconsistent.
 For grid-searched candidates, inconsistency is only established on the grid.
@@ -55,8 +55,7 @@ For grid-searched candidates, inconsistency is only established on the grid.
 
 from __future__ import annotations
 
-from ..cli import diagnose_cli_main
-from ..io import read_io_csv
+from ..data.csv_reader import read_io_csv
 from .diagnose import diagnose
 from .effects import CANDIDATES, REGISTRY, Effect, default_candidates, register
 from .locate import locate
@@ -75,8 +74,21 @@ __all__ = [
     "apply_effect",
     "default_candidates",
     "diagnose",
-    "diagnose_cli_main",
     "locate",
     "read_io_csv",
     "register",
 ]
+
+
+def __getattr__(name):
+    # deprecated in 0.2.0, removed in 0.3.0: the CLI lives in the application layer
+    if name == "diagnose_cli_main":
+        import warnings
+
+        warnings.warn("hammerbound.discrepancy.diagnose_cli_main is deprecated (removed in "
+                      "0.3.0); use hammerbound.app.cli.diagnose_cli_main or the "
+                      "`hammerbound diagnose` command.", DeprecationWarning, stacklevel=2)
+        from ..app.cli import diagnose_cli_main
+
+        return diagnose_cli_main
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,12 +1,12 @@
 """Argument checks of :func:`~.diagnose` and :func:`~.locate` (through
-:mod:`hammerbound.validation`: one validation of signals and bounds for the package)."""
+:mod:`hammerbound.data.validation`: one validation of signals and bounds for the package)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..data.validation import as_real, as_signal, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
-from ..validation import as_real, as_signal, check_scale
 from . import effects as _effects
 from .model import as_structure
 

@@ -41,7 +41,7 @@ def diagnose(
     ----------
     model : control.TransferFunction, HammersteinSystem, RefinedModel or object
         A *discrete-time*, stable SISO transfer function (powers of ``q^-1`` as in
-        :func:`hammerbound.systems.as_polynomials`), a Hammerstein system, a model
+        :func:`hammerbound.systems.models.as_polynomials`), a Hammerstein system, a model
         returned by a previous :func:`diagnose` (to look for a second effect), or any
         object with ``.predict(u) -> y`` (a black box).
     u, y : array_like

@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.signal import lfilter
 
-from ..relaxations.safe_lp import safe_minimize
+from ..solvers.safe_lp import safe_minimize
 from ..tolerances import feasibility_tol
 from . import effects as _effects
 from .model import RefinedModel, _shift, black_box_predict

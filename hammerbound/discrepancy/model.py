@@ -8,7 +8,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..exceptions import DataValidationError, HammerboundError, ParameterValidationError
-from ..systems import Backlash, HammersteinSystem, as_polynomials
+from ..systems.models import Backlash, HammersteinSystem, as_polynomials
 from . import effects as _effects
 
 __all__ = ["RefinedModel", "apply_effect"]
@@ -93,7 +93,7 @@ class RefinedModel:
     input_ops : tuple of (str, tuple)
         Input effects (name, parameters) applied first.
     inner : Backlash or None
-        Backlash of the original :class:`~hammerbound.systems.HammersteinSystem`.
+        Backlash of the original :class:`~hammerbound.systems.models.HammersteinSystem`.
     inner_x0 : float
         Its initial state.
     base : object or None
@@ -200,7 +200,7 @@ class RefinedModel:
         return yh
 
     def to_hammerstein(self) -> HammersteinSystem:
-        """Return a :class:`~hammerbound.systems.HammersteinSystem` when representable.
+        """Return a :class:`~hammerbound.systems.models.HammersteinSystem` when representable.
 
         Possible when the model is linear-structure, has no offset, and its input
         nonlinearity is a single backlash: an added one (unit slopes, state 0), the
@@ -268,7 +268,7 @@ def as_structure(model) -> RefinedModel:
     """Convert the user's model into a :class:`RefinedModel` (no effects added).
 
     Accepted, in this order: a :class:`RefinedModel`; a discrete
-    ``control.TransferFunction``; a :class:`~hammerbound.systems.HammersteinSystem`; a
+    ``control.TransferFunction``; a :class:`~hammerbound.systems.models.HammersteinSystem`; a
     fitted hammerbound estimator exposing its central model as ``system_`` (a
     ``HammersteinSystem``, e.g. ``HammersteinBacklashIdentifier``); any object with
     ``.predict(u)`` (black box).
@@ -303,7 +303,7 @@ def as_structure(model) -> RefinedModel:
         )
     raise ParameterValidationError(
         f"model of type {name} is not supported: pass a discrete control.TransferFunction, "
-        "a hammerbound.systems.HammersteinSystem, a fitted hammerbound identifier (with a "
+        "a hammerbound.systems.models.HammersteinSystem, a fitted hammerbound identifier (with a "
         "system_ attribute), or an object with a .predict(u) method."
     )
 
@@ -335,7 +335,7 @@ def _fitted_system(model):
     if not isinstance(system, HammersteinSystem):
         raise ParameterValidationError(
             f"{type(model).__name__}.system_ is a {type(system).__name__}, expected a "
-            "hammerbound.systems.HammersteinSystem (the fitted central model)."
+            "hammerbound.systems.models.HammersteinSystem (the fitted central model)."
         )
     return system
 

@@ -32,14 +32,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..data.validation import as_signal
 from ..exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
-from ..validation import as_signal
 
 __all__ = ["BacklashInverse", "build_inverse"]
 
 
 def _signal(v):
-    """Commanded values: a number or a 1-D array (:func:`~hammerbound.validation.as_signal`)."""
+    """Commanded values: a number or a 1-D array (:func:`~hammerbound.data.validation.as_signal`)."""
     return as_signal("v", [v] if np.ndim(v) == 0 and isinstance(v, (int, float, np.number))
                      else v)
 

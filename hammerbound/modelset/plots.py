@@ -93,7 +93,7 @@ def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):
     a2.axhline(-mr * cr, color="k", ls="--", lw=0.8, label="no dead-band inverse, rising")
     a2.axhline(ml * cl, color="k", ls=":", lw=0.8, label="no dead-band inverse, falling")
     if samples is not None:
-        from ..systems import simulate_backlash
+        from ..systems.models import simulate_backlash
 
         cyc = np.concatenate([np.linspace(inv.x0, inv.v_range[1], n // 2),
                               np.linspace(inv.v_range[1], inv.v_range[0], n),

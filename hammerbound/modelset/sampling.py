@@ -122,7 +122,7 @@ class _WitnessLP:
         self.lb = np.concatenate([-pr.deta, -pr.dx_group])
         self.ub = np.concatenate([pr.deta, pr.dx_group])
         self.hs = highspy
-        from ..relaxations._highs import new_highs
+        from ..solvers.highs import new_highs
 
         self.h = new_highs()  # no "threads" option: see _highs.new_highs
         self.basis = None
@@ -243,7 +243,7 @@ def _project(problem, theta):
 def _seek(problem, box, seeds, ver):
     """A first feasible point by minimising the violation (the exact method's search)."""
     try:
-        from ..relaxations.points import _Pool
+        from ..relaxations.exact.points import _Pool
 
         pool = _Pool(problem)
         starts = [np.asarray(s, dtype=float) for s in seeds] or [box.mean(axis=1)]

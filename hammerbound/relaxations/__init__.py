@@ -1,0 +1,20 @@
+"""Stage 2's bounding methods on one :class:`EIVProblem` (22.34): the polytopic LP
+(:func:`lp_bounds`), sparse moment relaxations (:func:`moment_bounds`) and the exact
+branch-and-bound (:func:`exact_bounds`), with :func:`check_theta` to verify a point."""
+
+from .exact.bnb import exact_bounds
+from .lp import lp_bounds
+from .moment import moment_bounds
+from .problem import EIVProblem, FeasibilityCheck, check_theta
+from .result import BoundInfo, IntervalResult
+
+__all__ = [
+    "BoundInfo",
+    "EIVProblem",
+    "FeasibilityCheck",
+    "IntervalResult",
+    "check_theta",
+    "exact_bounds",
+    "lp_bounds",
+    "moment_bounds",
+]

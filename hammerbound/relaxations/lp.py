@@ -28,8 +28,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
+from ..solvers.highs import HighsLP
 from ..tolerances import feasibility_tol
-from ._highs import HighsLP
 from .problem import EIVProblem
 from .result import BoundInfo, IntervalResult
 

@@ -37,15 +37,15 @@ from math import comb
 
 import numpy as np
 
+from ..data.validation import as_bound, as_signal
 from ..exceptions import DataValidationError, ParameterValidationError
-from ..validation import as_bound, as_signal
 
 DEFAULT_B_BOUND = 1.0e4
 
 
 def _as_1d(name, v, n=None, *, positive=False, nonneg=False):
     """A signal (shape (N,) or (N, 1)) or, with ``positive``/``nonneg``, a scalar or
-    per-sample bound, validated by :mod:`hammerbound.validation`."""
+    per-sample bound, validated by :mod:`hammerbound.data.validation`."""
     if positive or nonneg:
         return as_bound(name, v, n, allow_zero=nonneg, shape_error=DataValidationError,
                         error=DataValidationError, sign_error=ParameterValidationError)

@@ -83,7 +83,7 @@ class IntervalResult:
 
     def contains(self, theta, tol: float = 0.0) -> bool:
         """Whether ``theta`` lies in every interval (a NaN entry raises DataValidationError)."""
-        from ..validation import as_theta
+        from ..data.validation import as_theta
 
         theta = as_theta(theta, self.bounds.shape[0], self.param_names)
         return bool(np.all(theta >= self.bounds[:, 0] - tol) and np.all(theta <= self.bounds[:, 1] + tol))

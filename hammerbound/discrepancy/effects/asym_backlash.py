@@ -9,7 +9,7 @@ asymmetry, in ``[-0.3, 0.3]``: slope ratios up to 1.86), ``c_l``, ``c_r`` (each 
 ``(m_l, c_l, m_r, c_r)``. With ``s = 0`` and ``c_l = c_r`` it is ``backlash``.
 
 Where the input passes the crossing of two non-parallel lines ((22.1) is ill-posed there,
-:func:`~hammerbound.systems.simulate_backlash` raises) the right line wins, so that the
+:func:`~hammerbound.systems.models.simulate_backlash` raises) the right line wins, so that the
 search can evaluate any parameter value; such values fit badly and are not chosen. The
 crossing is at ``u_c = -(m_l c_l + m_r c_r) / (m_l - m_r)``: a strongly asymmetric backlash
 is only well defined on a narrow input range.

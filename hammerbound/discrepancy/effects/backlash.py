@@ -1,6 +1,6 @@
 """``backlash``: play operator of half-width ``c`` (unit slopes, state 0 at rest)."""
 
-from ...systems import simulate_backlash
+from ...systems.models import simulate_backlash
 from .base import Effect, Param
 
 

@@ -1,0 +1,58 @@
+"""Old module paths (before the layout of 0.2.0), kept importable with a DeprecationWarning.
+
+``import hammerbound.eiv`` still works and gives :mod:`hammerbound.stage2.estimator`; the
+old paths are removed in 0.3.0 (see CHANGELOG.md). The public top-level names
+(``hammerbound.LinearEIVSetEstimator`` ...) are not affected.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.abc
+import importlib.machinery
+import sys
+import warnings
+
+REMOVAL = "0.3.0"
+#: old module (under ``hammerbound.``) -> new module
+MOVED = {
+    "backlash": "stage1.estimator",
+    "feasible_set": "stage1.feasible_set",
+    "side_polygon": "stage1.side_polygon",
+    "eiv": "stage2.estimator",
+    "linear_model": "stage2.linear_model",
+    "experiments": "systems.experiments",
+    "iodata": "data.iodata",
+    "io": "data.csv_reader",
+    "validation": "data.validation",
+    "chapter": "app.chapter",
+    "cli": "app.cli",
+    "cli_paths": "app.paths",
+    "report": "app.report",
+}
+
+
+class _MovedModule(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Finds ``hammerbound.<old>`` and hands out the module at its new path."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        prefix = "hammerbound."
+        if not fullname.startswith(prefix) or fullname[len(prefix):] not in MOVED:
+            return None
+        return importlib.machinery.ModuleSpec(fullname, self)
+
+    def create_module(self, spec):
+        new = "hammerbound." + MOVED[spec.name[len("hammerbound."):]]
+        warnings.warn(f"{spec.name} is deprecated and will be removed in {REMOVAL}; import "
+                      f"{new} (or the top-level hammerbound names) instead.",
+                      DeprecationWarning, stacklevel=2)
+        return importlib.import_module(new)
+
+    def exec_module(self, module):  # the module at the new path is already executed
+        return None
+
+
+def install() -> None:
+    """Put the finder on ``sys.meta_path`` (once)."""
+    if not any(isinstance(f, _MovedModule) for f in sys.meta_path):
+        sys.meta_path.append(_MovedModule())

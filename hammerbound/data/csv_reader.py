@@ -1,0 +1,238 @@
+"""Reading experiment data from CSV files, with errors that say what to fix."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import DataValidationError
+
+__all__ = ["csv_header", "example_data_path", "load_chapter_tables", "read_columns",
+           "read_io_csv"]
+
+
+def read_columns(path, columns) -> dict[str, np.ndarray]:
+    """Read named numeric columns from a CSV file with a header row.
+
+    Parameters
+    ----------
+    path : str or Path
+    columns : sequence of str
+        Header names to read.
+
+    Returns
+    -------
+    dict name -> float ndarray
+
+    Raises
+    ------
+    DataValidationError
+        Missing file, missing header or column, non-numeric or non-finite value (the
+        message names the row and column), empty file.
+    """
+    try:
+        cols = None if isinstance(columns, (str, bytes)) else list(columns)
+    except TypeError:
+        cols = None
+    if not cols or not all(isinstance(c, str) for c in cols):
+        raise DataValidationError(
+            f"columns must be a non-empty list of header names such as ['u', 'y']; got "
+            f"{columns!r}."
+        )
+    columns = cols
+    path = Path(path)
+    if not path.is_file():
+        raise DataValidationError(f"{path}: no such file; check the path.")
+    try:
+        return _read_columns(path, columns)
+    except UnicodeDecodeError as exc:
+        raise DataValidationError(
+            f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
+            "as plain UTF-8 CSV."
+        ) from None
+
+
+def csv_header(path) -> list[str]:
+    """The header row (column names) of a CSV file."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataValidationError(f"{path}: no such file; check the path.")
+    try:
+        with path.open(newline="") as fh:
+            row = next(csv.reader(fh), None)
+    except UnicodeDecodeError as exc:
+        raise DataValidationError(
+            f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
+            "as plain UTF-8 CSV.") from None
+    if row is None:
+        raise DataValidationError(f"{path}: the file is empty; expected a header row.")
+    return [h.strip() for h in row]
+
+
+def example_data_path(name: str = "eiv_first_order_2017.csv") -> Path:
+    """Path of a data set shipped with hammerbound (``hammerbound/data``).
+
+    ``eiv_first_order_2017.csv``: 30 samples (dt = 0.1) of a first-order system with input
+    and output errors bounded by 0.05, from the public course repository P0li22/LRIC
+    (Politecnico di Torino, exam of 22 February 2017); see ``README-lric.md`` beside it.
+    """
+    path = Path(__file__).resolve().parent / name
+    if not path.is_file():
+        raise DataValidationError(f"no shipped data set named {name!r}.")
+    return path
+
+
+def _read_columns(path, columns):
+    with path.open(newline="") as fh:
+        reader = csv.reader(fh)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise DataValidationError(f"{path}: the file is empty; expected a header row "
+                                      f"with columns {list(columns)}.") from None
+        missing = [c for c in columns if c not in header]
+        if missing:
+            raise DataValidationError(
+                f"{path}: missing column(s) {missing}; the header has {header}. Rename the "
+                "columns or pass the right names (see --help)."
+            )
+        idx = [header.index(c) for c in columns]
+        out = {c: [] for c in columns}
+        for lineno, row in enumerate(reader, start=2):
+            if not row or all(not f.strip() for f in row):
+                continue
+            for c, i in zip(columns, idx, strict=True):
+                if i >= len(row):
+                    raise DataValidationError(
+                        f"{path}, line {lineno}: the row has {len(row)} field(s), column "
+                        f"{c!r} is missing."
+                    )
+                try:
+                    v = float(row[i])
+                except ValueError:
+                    raise DataValidationError(
+                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not a number."
+                    ) from None
+                if not np.isfinite(v):
+                    raise DataValidationError(
+                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not finite."
+                    )
+                out[c].append(v)
+    if not out[columns[0]]:
+        raise DataValidationError(f"{path}: no data rows after the header.")
+    return {c: np.asarray(v, dtype=float) for c, v in out.items()}
+
+
+def load_chapter_tables(path=None) -> list[dict]:
+    """Rows of the chapter's Tables 22.1-22.3 (CSV with columns table, N, delta_eta,
+    snr_db, param, true, lower, center, upper, half_width)."""
+    if path is None:
+        for cand in (Path(__file__).resolve().parent / "chapter22_tables.csv",):
+            if cand.is_file():
+                path = cand
+                break
+        else:
+            return []
+    with Path(path).open(newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _column_index(spec, header, ncols, which, default, path):
+    """Position of column ``spec`` (a header name or a 0-based index)."""
+    spec = str(spec).strip()
+    cols = None if header is None else [h.strip() for h in header]
+    if cols is not None and spec.lower() in [c.lower() for c in cols]:
+        j = [c.lower() for c in cols].index(spec.lower())
+    elif spec.isdigit():
+        j = int(spec)
+    elif cols is None and spec == which:
+        j = default
+    elif cols is None:
+        raise DataValidationError(
+            f"{path} has no header line, so the {which} column cannot be found by the name "
+            f"{spec!r}; add a header (e.g. 'u,y') or give a 0-based column index."
+        )
+    else:
+        raise DataValidationError(
+            f"column {spec!r} (the {which} column) not found in the header of {path}; columns "
+            f"are {cols}. Rename it or pass --{which}-column NAME."
+        )
+    if j >= ncols:
+        found = f"{ncols} column(s)" + ("" if cols is None else f" {cols}")
+        raise DataValidationError(
+            f"{path} needs an input and an output column (u,y) but the {which} column "
+            f"(index {j}) is missing: found {found}."
+        )
+    return j
+
+
+def read_io_csv(path, u_column="u", y_column="y", delimiter=","):
+    """Read an input/output record from a CSV file.
+
+    The file may start with a header line naming the columns (then ``u_column`` and
+    ``y_column`` are looked up by name, case-insensitively); without a header the
+    columns are taken by 0-based index (default: the first two columns are ``u, y``).
+    Blank lines and lines starting with ``#`` are ignored.
+
+    Returns
+    -------
+    u, y : ndarray
+
+    Raises
+    ------
+    DataValidationError
+        Unreadable file, missing column, non-numeric or incomplete rows (the message lists
+        the offending line numbers), fewer than two columns.
+    """
+    try:
+        with open(path, newline="") as fh:
+            rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh, delimiter=delimiter))]
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise DataValidationError(f"cannot read {path}: {exc}") from exc
+    rows = [(ln, r) for ln, r in rows
+            if r and any(f.strip() for f in r) and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise DataValidationError(f"{path} contains no data rows.")
+
+    def numeric(field):
+        try:
+            float(field)
+            return True
+        except ValueError:
+            return False
+
+    header = None
+    if not all(numeric(f) for f in rows[0][1]):
+        header, rows = rows[0][1], rows[1:]
+    ncols = len(header) if header is not None else len(rows[0][1])
+    ju = _column_index(u_column, header, ncols, "u", 0, path)
+    jy = _column_index(y_column, header, ncols, "y", 1, path)
+    if ju == jy:
+        raise DataValidationError(
+            f"the u and y columns of {path} are the same column (index {ju}); pass "
+            "--u-column / --y-column."
+        )
+    if not rows:
+        raise DataValidationError(f"{path} has a header but no data rows.")
+    u, y, bad = [], [], []
+    for ln, r in rows:
+        try:
+            uv, yv = float(r[ju]), float(r[jy])
+        except (IndexError, ValueError):
+            bad.append((ln, delimiter.join(r)))
+            continue
+        if not (np.isfinite(uv) and np.isfinite(yv)):
+            bad.append((ln, delimiter.join(r)))
+            continue
+        u.append(uv)
+        y.append(yv)
+    if bad:
+        shown = "; ".join(f"line {ln}: {text!r}" for ln, text in bad[:5])
+        more = f" (and {len(bad) - 5} more)" if len(bad) > 5 else ""
+        raise DataValidationError(
+            f"{path}: {len(bad)} row(s) without two finite numbers in the u and y columns - "
+            f"{shown}{more}. Fix or remove them (keep u and y aligned)."
+        )
+    return np.array(u), np.array(y)

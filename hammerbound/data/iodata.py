@@ -1,0 +1,260 @@
+"""Input/output data with a sampling time, names and units (in the spirit of MATLAB's iddata).
+
+:class:`IOData` carries one SISO record ``(u, y)``, its sampling time ``dt`` and the names
+and units of both signals. Every estimator's ``fit`` accepts it in place of ``(X, y)``;
+``dt`` then flows into ``to_transfer_function()`` and the names into the reports. pandas is
+optional: :meth:`IOData.from_frame` reads a DataFrame, :meth:`IOData.from_csv` a CSV file
+with a header row.
+
+Sampling time convention (python-control): ``dt=None`` means "discrete, sampling time not
+given"; transfer functions built from such data get ``dt=True``.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from ..exceptions import DataValidationError, ParameterValidationError
+from .validation import as_signal
+
+__all__ = ["IOData"]
+
+
+def _check_dt(dt):
+    if dt is None:
+        return None
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not np.isfinite(dt) \
+            or dt <= 0:
+        raise ParameterValidationError(
+            f"dt (sampling time) must be a finite number > 0 or None (not given); got {dt!r}.")
+    return float(dt)
+
+
+def uniform_step(t, name="t") -> float:
+    """The constant step of the time vector ``t``, or a DataValidationError naming the
+    first irregular sample."""
+    t = as_signal(name, t)
+    if t.size < 2:
+        raise DataValidationError(f"the time column {name!r} needs at least two samples.")
+    d = np.diff(t)
+    step = float(np.median(d))
+    if step <= 0:
+        raise DataValidationError(f"the time column {name!r} must increase.")
+    bad = np.flatnonzero(np.abs(d - step) > 1e-6 * step)
+    if bad.size:
+        k = int(bad[0])
+        raise DataValidationError(
+            f"the time column {name!r} is not uniformly sampled: {name}[{k + 1}] - "
+            f"{name}[{k}] = {d[k]:g}, expected {step:g}. Resample the record (set-membership "
+            "identification of a difference equation needs a constant sampling time).")
+    return step
+
+
+class IOData:
+    """One SISO input/output record with sampling time, names and units.
+
+    Parameters
+    ----------
+    u, y : array-like of shape (N,)
+        Input and measured output, one value per sample.
+    dt : float or None, default None
+        Sampling time (in the time unit of your choice, e.g. seconds). ``None``: not given
+        (python-control's ``dt=True``).
+    input_name, output_name : str, default "u", "y"
+    input_unit, output_unit : str, default ""
+    t0 : float, default 0.0
+        Time of the first sample.
+
+    Attributes
+    ----------
+    N : int
+    time : ndarray of shape (N,)
+        ``t0 + k dt`` (``k`` when ``dt`` is None).
+    sample_index : ndarray of shape (N,)
+        Index of every sample in the original record; a subset taken by ``data[idx]``
+        keeps it, so estimators can refuse non-contiguous subsets.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> data = IOData(np.ones(5), np.zeros(5), dt=0.1, input_name="voltage", input_unit="V")
+    >>> data
+    IOData(N=5, dt=0.1, input='voltage' [V], output='y')
+    >>> data[1:3].time
+    array([0.1, 0.2])
+    """
+
+    def __init__(self, u, y, dt=None, *, input_name="u", output_name="y", input_unit="",
+                 output_unit="", t0=0.0, sample_index=None):
+        self.u = as_signal("u", u)
+        self.y = as_signal("y", y)
+        if self.u.shape != self.y.shape:
+            raise DataValidationError(
+                f"u and y must have the same number of samples; got {self.u.size} and "
+                f"{self.y.size}.")
+        self.dt = _check_dt(dt)
+        for k, v in (("input_name", input_name), ("output_name", output_name),
+                     ("input_unit", input_unit), ("output_unit", output_unit)):
+            if not isinstance(v, str):
+                raise ParameterValidationError(f"{k} must be a string; got {v!r}.")
+        self.input_name, self.output_name = input_name, output_name
+        self.input_unit, self.output_unit = input_unit, output_unit
+        if not (isinstance(t0, numbers.Real) and np.isfinite(t0)):
+            raise ParameterValidationError(f"t0 must be a finite number; got {t0!r}.")
+        self.t0 = float(t0)
+        idx = np.arange(self.u.size) if sample_index is None else np.asarray(sample_index)
+        if idx.shape != self.u.shape or not np.issubdtype(idx.dtype, np.integer):
+            raise DataValidationError("sample_index must be N integers.")
+        self.sample_index = idx
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_csv(cls, path, *, u="u", y="y", t="t", dt=None, **names) -> IOData:
+        """Read the columns ``u`` and ``y`` (header names) of a CSV file.
+
+        A column named ``t`` (if present) is the time base: it must be uniformly sampled,
+        and gives ``dt`` and ``t0``. If ``dt`` is also given, the two must agree, except
+        for a ``t`` column that counts samples (0, 1, 2, ...: steps of exactly 1), which
+        is then read as sample numbers in units of ``dt``. Other keywords: the names and
+        units of :class:`IOData` (names default to the column names).
+        """
+        from .csv_reader import csv_header, read_columns
+
+        header = csv_header(path)
+        cols = [u, y] + ([t] if t and t in header else [])
+        data = read_columns(path, cols)
+        dt = _check_dt(dt)
+        t0 = 0.0
+        if len(cols) == 3:
+            tt = data[t]
+            step = uniform_step(tt, t)
+            if dt is None:
+                dt, t0 = step, float(tt[0])
+            elif abs(step - dt) <= 1e-6 * dt:
+                t0 = float(tt[0])
+            elif step == 1.0 and np.all(tt == np.round(tt)):
+                t0 = float(tt[0]) * dt           # a sample counter
+            else:
+                raise DataValidationError(
+                    f"{path}: the time column {t!r} has step {step:g} but dt={dt:g} was "
+                    f"given; drop one of them (or pass t=None to ignore the column).")
+        names.setdefault("input_name", u)
+        names.setdefault("output_name", y)
+        return cls(data[u], data[y], dt, t0=t0, **names)
+
+    @classmethod
+    def from_frame(cls, frame, *, u="u", y="y", t=None, dt=None, **names) -> IOData:
+        """Build from a pandas DataFrame (or any mapping of columns): columns ``u``, ``y``
+        and optionally a time column ``t`` (same rules as :meth:`from_csv`)."""
+        try:
+            uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
+        except KeyError as exc:
+            raise DataValidationError(
+                f"column {exc} not found; the frame has {list(frame)}.") from None
+        dt = _check_dt(dt)
+        t0 = 0.0
+        if t is not None:
+            tt = np.asarray(frame[t], dtype=float)
+            step = uniform_step(tt, t)
+            if dt is not None and abs(step - dt) > 1e-6 * dt:
+                raise DataValidationError(
+                    f"the time column {t!r} has step {step:g} but dt={dt:g} was given.")
+            dt, t0 = step, float(tt[0])
+        names.setdefault("input_name", str(u))
+        names.setdefault("output_name", str(y))
+        return cls(uu, yy, dt, t0=t0, **names)
+
+    # ------------------------------------------------------------------ views
+    @property
+    def N(self) -> int:  # noqa: N802 - system identification notation
+        return int(self.u.size)
+
+    @property
+    def time(self) -> np.ndarray:
+        step = 1.0 if self.dt is None else self.dt
+        return self.t0 + step * (self.sample_index - self.sample_index[0]) if self.N else \
+            np.zeros(0)
+
+    @property
+    def tf_dt(self):
+        """``dt`` for ``control.tf``: the sampling time, or ``True`` when not given."""
+        return True if self.dt is None else self.dt
+
+    @property
+    def shape(self) -> tuple:
+        """``(N, 1)``: one input column, so that scikit-learn can index and split it."""
+        return (self.N, 1)
+
+    def __len__(self) -> int:
+        return self.N
+
+    def __getitem__(self, key) -> IOData:
+        if isinstance(key, tuple):  # scikit-learn's _safe_indexing uses data[key, ...]
+            if len(key) == 2 and key[1] is Ellipsis:
+                key = key[0]
+            else:
+                raise DataValidationError("IOData supports data[rows] only.")
+        if isinstance(key, numbers.Integral):
+            key = [key]
+        idx = np.arange(self.N)[key]
+        if idx.size > 1 and np.any(np.diff(idx) != 1):
+            k = int(np.flatnonzero(np.diff(idx) != 1)[0])
+            raise DataValidationError(
+                f"IOData can only be cut into consecutive samples (a jump from sample "
+                f"{idx[k]} to {idx[k + 1]} was asked): identification data are a time series "
+                "and the model relates consecutive samples. Cross-validate with "
+                "sklearn.model_selection.TimeSeriesSplit (contiguous, forward folds), not "
+                "KFold/ShuffleSplit.")
+        return IOData(self.u[idx], self.y[idx], self.dt, input_name=self.input_name,
+                      output_name=self.output_name, input_unit=self.input_unit,
+                      output_unit=self.output_unit,
+                      t0=float(self.time[idx[0]]) if idx.size else self.t0,
+                      sample_index=self.sample_index[idx])
+
+    def is_contiguous(self) -> bool:
+        """Whether the samples are consecutive in the original record."""
+        return bool(np.all(np.diff(self.sample_index) == 1))
+
+    def to_frame(self):
+        """A pandas DataFrame with columns time, input, output (pandas must be installed)."""
+        import pandas as pd
+
+        return pd.DataFrame({"t": self.time, self.input_name: self.u,
+                             self.output_name: self.y})
+
+    def __repr__(self) -> str:
+        def sig(name, unit):
+            return repr(name) + (f" [{unit}]" if unit else "")
+
+        dt = "None (not given)" if self.dt is None else f"{self.dt:g}"
+        return (f"IOData(N={self.N}, dt={dt}, input={sig(self.input_name, self.input_unit)}, "
+                f"output={sig(self.output_name, self.output_unit)})")
+
+
+def unpack(X, y, *, what="X"):
+    """``(u, y, data)`` from ``fit(X, y)`` or ``fit(IOData)``; ``data`` is the IOData or None.
+
+    Raises DataValidationError for a non-contiguous IOData subset (e.g. a KFold training
+    fold): a difference equation needs consecutive samples.
+    """
+    if isinstance(X, IOData):
+        if y is not None:
+            raise DataValidationError(
+                f"{what} is an IOData, which already holds the output: call fit(data) "
+                "without y.")
+        if not X.is_contiguous():
+            gaps = np.flatnonzero(np.diff(X.sample_index) != 1)
+            k = int(gaps[0])
+            raise DataValidationError(
+                "the samples are not consecutive (a jump from sample "
+                f"{X.sample_index[k]} to {X.sample_index[k + 1]}): identification data are "
+                "a time series and the model relates consecutive samples. Cross-validate "
+                "with sklearn.model_selection.TimeSeriesSplit (contiguous, forward folds), "
+                "not KFold/ShuffleSplit.")
+        return X.u, X.y, X
+    if y is None:
+        raise DataValidationError(
+            f"fit needs the output y (or pass an IOData as {what}).")
+    return X, y, None

@@ -1,0 +1,454 @@
+"""Sparse Lasserre (moment) relaxations of the EIV parameter bounds (22.36)-(22.37).
+
+The feasible set (22.34) is a basic semi-algebraic set in ``(theta, eta, dx)`` defined by
+bilinear equalities (one per equation ``t``), boxes and the linear gain equality (22.8).
+Its correlative sparsity is exploited as in Lasserre (2006) / Waki et al. (2006) and
+Cerone, Piga & Regruto (reference [5] of the chapter): clique ``I_t`` holds theta and the
+noise variables equation ``t`` touches (``eta_{t-i}``, ``i = 0..na`` and the input-error
+variables ``dx[g(t-j)]``, see :meth:`EIVProblem.dx_index`). At relaxation order ``delta``:
+
+* one moment matrix ``M_delta(y, I_t) >= 0`` per clique;
+* localizing matrices ``M_{delta-1}((1 - v^2) y, I_t) >= 0`` for every (scaled) variable
+  ``v`` of the clique (the boxes on eta, dx and theta);
+* localizing equalities ``L_y(h_t x^alpha) = 0`` for ``|alpha| <= 2 delta - 2`` (``h_t`` is
+  equation ``t``, degree 2);
+* the gain equality (22.8) is removed by *facial reduction*: one coefficient is eliminated
+  (it is affine in the others), its box becomes a degree-2 localizing constraint.
+
+Monomials shared by several cliques are one moment variable. All variables are scaled to
+``[-1, 1]``, so every moment of a feasible point satisfies ``|y_alpha| <= 1``; these a priori
+bounds turn each (possibly inaccurate) dual solution into a *guaranteed* bound through
+:func:`hammerbound.solvers.conic.verified_lower_bound`. A bound that cannot be certified
+falls back to the a priori box end; the solver's objective value is never reported.
+"""
+
+from __future__ import annotations
+
+import time
+from math import comb
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...exceptions import ParameterValidationError, SolverError
+from ...solvers import get_solver
+from ...solvers.conic import (
+    EPS,
+    ConicData,
+    extract_conic_data,
+    repair_dual,
+    verified_lower_bound,
+)
+from ..problem import EIVProblem
+from ..result import BoundInfo, IntervalResult
+from .basis import (  # noqa: F401 - re-exported for compatibility
+    BASES,
+    _affine,
+    _clique_constraints,
+    _monomials,
+    _pmul,
+    _ScaledPOP,
+    _sparse_basis,
+)
+
+
+class MomentRelaxation:
+    """Sparse moment relaxation of order ``delta`` of the EIV set, formulated in PICOS.
+
+    Parameters
+    ----------
+    problem : EIVProblem
+    order : int
+        Relaxation order ``delta >= 1`` (moments up to degree ``2 delta``).
+    theta_box : ndarray, shape (p, 2), optional
+        A priori box (default ``problem.theta_box``).
+    basis : {"sparse", "full"}, default "sparse"
+        Monomials indexing each clique's moment matrix (scaled variables: ``theta`` the
+        free coefficients, ``e`` the clique's noise variables ``eta``, ``dx``):
+
+        * ``"full"``: every monomial of degree ``<= delta`` (Lasserre 2006, Waki et al.
+          2006); localizing matrices ``(1 - v^2) M_{delta-1}`` for every clique variable and
+          equality products ``h_t x^alpha``, ``|alpha| <= 2 delta - 2``;
+        * ``"sparse"`` (term sparsity; differs from ``"full"`` for ``delta >= 2``): the
+          equations are bilinear in ``theta x e``, so the basis is ``theta^a e^b`` with
+          ``|b| <= 1``, ``|a| + |b| <= delta``, without the pure-theta monomials of
+          degree ``delta`` (order 2: ``1, theta, e, theta e``, 24 instead of 45 monomials
+          for ``na = nb = 2``). A noise box ``(1 - e^2) >= 0`` is localized on the largest
+          basis whose products stay inside the moment matrix (order 2: ``1, theta``), the
+          theta boxes are scalar, and an equality product ``h_t x^alpha = 0`` is kept when
+          all its monomials are entries of the moment matrix. Every constraint is one of a
+          valid relaxation, so this is a valid (possibly looser) relaxation; identical
+          localizing matrices of overlapping cliques are added once. Measured equal to
+          the exact intervals within ``1e-4`` of their width on the chapter example
+          (``docs/benchmarks.md``).
+
+    Attributes
+    ----------
+    picos_problem : picos.Problem
+        The relaxation with a placeholder objective (minimise ``theta_1``).
+    data : ConicData
+        Conic form extracted once from :attr:`picos_problem`.
+    n_moments : int
+    n_psd_blocks : int
+        Matrix blocks of side >= 2.
+    psd_sides : dict
+        Side -> number of blocks (side 1: scalar inequalities).
+    """
+
+    def __init__(self, problem: EIVProblem, order: int = 2, theta_box=None,
+                 basis: str = "sparse"):
+        import picos
+
+        if int(order) != order or order < 1:
+            raise ParameterValidationError(f"order must be an integer >= 1; got {order!r}.")
+        if basis not in BASES:
+            raise ParameterValidationError(
+                f"basis must be one of {', '.join(map(repr, BASES))}; got {basis!r}.")
+        self.order = order = int(order)
+        self.basis = basis
+        box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+        if box.shape != (problem.p, 2) or not np.all(np.isfinite(box)) or np.any(
+            box[:, 0] > box[:, 1]
+        ):
+            raise ParameterValidationError(
+                f"theta_box must be a finite ({problem.p}, 2) array with lower <= upper."
+            )
+        self.problem = problem
+        self.box = box
+        pop = _ScaledPOP(problem, box)
+        self.pop = pop
+        # --- enumerate moments --------------------------------------------------------
+        index = {}
+
+        def idx(m):
+            j = index.get(m)
+            if j is None:
+                j = index[m] = len(index)
+            return j
+
+        idx(())  # y_0 = 1, eliminated below
+        for j in range(pop.q):
+            idx((j,))
+        blocks = []  # (rows, cols, vals, dim): vec (column-major) of a matrix over moments
+        eqs = []  # lists of polynomials (dict mono->coef) == 0
+        q_vars = list(range(pop.q))
+        seen = set()  # identical localizing matrices of overlapping cliques: once
+        for cvars, hs in pop.cliques:
+            for g, b in _clique_constraints(cvars, hs, pop, order, basis):
+                if g is None:  # equalities h x^alpha = 0
+                    for h in hs:
+                        for a in b:
+                            eqs.append({tuple(sorted(m + a)): c for m, c in h.items()})
+                    continue
+                key = (tuple(sorted(g.items())), tuple(b))
+                if key in seen:
+                    continue
+                seen.add(key)
+                blocks.append(self._loc_matrix(g, b, idx))
+        if not pop.cliques:  # no equation: only theta-box constraints
+            basis_ = _monomials(q_vars, order)
+            blocks.append(self._loc_matrix({(): 1.0}, basis_, idx))
+        # equality moments are registered too (a moment outside every matrix is a free
+        # variable, still bounded by |y| <= 1 for the certificate)
+        erows, ecols, evals, ecst = [], [], [], np.zeros(len(eqs))
+        for i, h in enumerate(eqs):
+            for mono, coef in h.items():
+                j = idx(mono)
+                if j == 0:
+                    ecst[i] += coef
+                else:
+                    erows.append(i)
+                    ecols.append(j - 1)
+                    evals.append(coef)
+        m = len(index) - 1  # moment variables y_alpha, alpha != 0 (column j-1)
+        self.index = index
+        self.n_moments = m
+        y = picos.RealVariable("y", m)
+        P = picos.Problem()
+        for k, (rows, cols, vals, dim) in enumerate(blocks):
+            expr = _affine(y, rows, cols, vals, dim, f"M{k}")
+            if dim == 1:
+                P.add_constraint(expr >= 0)
+            else:
+                P.add_constraint(expr >> 0)
+        if eqs:
+            Aeq = sp.csc_matrix((evals, (erows, ecols)), shape=(len(eqs), m))
+            P.add_constraint(picos.Constant(Aeq) * y == picos.Constant(-ecst))
+        obj = self._objective(0)
+        P.set_objective("min", picos.Constant(obj[0].reshape(1, -1)) * y)
+        self.picos_problem = P
+        self.y = y
+        sides = sorted({dim for *_, dim in blocks})
+        self.psd_sides = {int(d): sum(1 for *_, dd in blocks if dd == d) for d in sides}
+        self.n_psd_blocks = sum(1 for *_, dim in blocks if dim > 1)
+        self.data = extract_conic_data(P)
+        self.xub = np.ones(m)  # |y_alpha| <= 1 for every point of [-1, 1]^n
+
+    @staticmethod
+    def _loc_matrix(g, basis, idx):
+        """Coefficients of ``vec(M(g y))`` (column-major) as COO lists over moment indices."""
+        dim = len(basis)
+        rows, cols, vals = [], [], []
+        for jcol, bj in enumerate(basis):
+            for irow, bi in enumerate(basis):
+                base = bi + bj
+                for mono, coef in g.items():
+                    rows.append(irow + jcol * dim)
+                    cols.append(idx(tuple(sorted(base + mono))))
+                    vals.append(coef)
+        return rows, cols, vals, dim
+
+    def _objective(self, k: int):
+        """``theta_k = c0_k + q . y`` with ``q`` of shape (n_moments,)."""
+        q = np.zeros(self.n_moments)
+        for j in range(self.pop.q):
+            q[self.index[(j,)] - 1] = self.pop.T[k, j]
+        return q, float(self.pop.c0[k])
+
+    def objectives(self):
+        """The ``2 p`` minimisation objectives ``(k, sense, q, q0)``: ``min theta_k`` and
+        ``min -theta_k``."""
+        out = []
+        for k in range(self.problem.p):
+            q, c = self._objective(k)
+            out.append((k, "min", q, c))
+            out.append((k, "max", -q, -c))
+        return out
+
+
+# ---------------------------------------------------------------------------------------
+# solving
+# ---------------------------------------------------------------------------------------
+
+
+def _solve_group(data: ConicData, xub, jobs, solver: str, solver_options: dict | None):
+    """Worker: solve several objectives on one conic data set and certify each."""
+    backend = get_solver(solver)
+    out = []
+    try:
+        inst = backend.conic(data, solver_options)
+    except Exception as exc:  # noqa: BLE001 - reported per bound below
+        return [(j, None, None, f"{type(exc).__name__}: {exc}") for j in jobs]
+    for jid, q, q0 in jobs:
+        try:
+            sol = inst.solve(q, q0)
+        except Exception as exc:  # noqa: BLE001
+            out.append((jid, None, None, f"{type(exc).__name__}: {exc}"))
+            continue
+        vb = None
+        if sol.z is not None:
+            vb = verified_lower_bound(data, q, sol.z, xub, q0)
+            if np.all(np.isfinite(sol.z)):
+                # a least-squares repair of the dual residual is another dual vector:
+                # certify it too and keep the better (both bounds are rigorous)
+                try:
+                    vb2 = verified_lower_bound(data, q, repair_dual(data, q, sol.z), xub, q0)
+                except (ValueError, ArithmeticError):  # pragma: no cover - keep the first
+                    vb2 = None
+                if vb2 is not None and vb2.bound > vb.bound:
+                    vb = vb2
+        out.append((jid, sol, vb, ""))
+    return out
+
+
+def moment_bounds(
+    problem: EIVProblem,
+    order: int = 2,
+    solver: str = "clarabel",
+    solver_options: dict | None = None,
+    n_jobs: int = 1,
+    theta_box=None,
+    *,
+    on_failure: str = "box",
+    fallback=None,
+    max_work: float | None = None,
+    basis: str = "sparse",
+) -> IntervalResult:
+    """Guaranteed parameter uncertainty intervals (22.35) from the sparse moment relaxation.
+
+    Solves the ``2 p`` relaxed problems ``min / max theta_k`` over the order-``order`` sparse
+    Lasserre relaxation of (22.34) (see the module docstring) and certifies each bound from
+    the dual solution (:func:`~hammerbound.solvers.conic.verified_lower_bound`).
+
+    Parameters
+    ----------
+    problem : EIVProblem
+        The EIV problem (22.34).
+    order : int, default 2
+        Relaxation order ``delta``.
+    solver : {"clarabel", "cvxopt", "mosek"}
+    solver_options : dict, optional
+        Native solver options (e.g. ``{"max_iter": 50}`` for Clarabel).
+    n_jobs : int, default 1
+        Worker processes (joblib) over the ``2 p`` objectives.
+    theta_box : ndarray, shape (p, 2), optional
+        A priori box (default ``problem.theta_box``), e.g. from the polytopic LP bounds. The
+        reported intervals always lie inside it.
+    on_failure : {"box", "raise"}
+        When no certificate can be computed for a bound: report the fallback end
+        (``certified=False``: the bound is still guaranteed, by the fallback's certificate)
+        or raise :class:`SolverError`.
+    fallback : ndarray, shape (p, 2), optional
+        Certified outer bounds already known (e.g. the polytopic LP result): every reported
+        interval is intersected with it, and it is what ``on_failure="box"`` falls back to.
+        Default: ``theta_box`` when one is given (the estimator passes the LP bounds),
+        else the polytopic LP bounds computed here, so a failed certificate never reports
+        the (wider) a priori box where the LP bound is tighter.
+    max_work : float, optional
+        Size budget ``rows x moments`` of the relaxation, checked *before* it is built
+        (:mod:`.moment_size`); default ``MOMENT_MAX_WORK = 2.5e8`` (about 1 GB and ten
+        minutes of build time; order 1 with ``na = nb = 2`` reaches it at N ~ 900).
+        Above ``MOMENT_WARN_WORK = 2e7`` a :class:`RuntimeWarning` is issued; ``inf``
+        skips the check (and the warning).
+    basis : {"sparse", "full"}, default "sparse"
+        Monomial basis of the moment matrices (see :class:`MomentRelaxation`). Order 1:
+        both are the same. Order 2: ``"sparse"`` (``1, theta, e, theta e`` per clique) is
+        the one usable at the chapter's N = 100 (about 40x smaller PSD blocks); ``"full"``
+        (every monomial of degree <= 2, Lasserre's dense-per-clique relaxation) is at
+        least as tight and costs minutes already at N = 10-20.
+
+    Returns
+    -------
+    IntervalResult
+        ``bounds`` shape ``(p, 2)``; ``infos`` holds ``2 p`` :class:`BoundInfo` (p0 min,
+        p0 max, ...); method ``"moment"``; ``extra`` has the relaxation size and build time.
+
+    Raises
+    ------
+    SolverNotAvailableError, SolverOptionError
+        Unknown/missing solver or options.
+    SolverError
+        With ``on_failure="raise"`` when a bound cannot be certified.
+    RelaxationTooLargeError
+        The relaxation's estimated size exceeds ``max_work`` (the message gives the
+        estimate and the alternatives ``method="lp"`` / ``"exact"``).
+    """
+    from .size import check_moment_budget, estimate_moment_relaxation
+
+    if on_failure not in ("box", "raise"):
+        raise ParameterValidationError("on_failure must be 'box' or 'raise'.")
+    if basis not in BASES:
+        raise ParameterValidationError(
+            f"basis must be one of {', '.join(map(repr, BASES))}; got {basis!r}.")
+    t_start = time.perf_counter()
+    backend = get_solver(solver)
+    opts = backend.check_options(solver_options)
+    if theta_box is not None:
+        tb = np.asarray(theta_box, dtype=float)
+        if tb.shape != (problem.p, 2) or not np.all(np.isfinite(tb)) or np.any(
+            tb[:, 0] > tb[:, 1]
+        ):
+            raise ParameterValidationError(
+                f"theta_box must be a finite ({problem.p}, 2) array with lower <= upper."
+            )
+    if int(order) == order and order >= 1 and not max_work == np.inf:
+        # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
+        size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
+        check_moment_budget(size, max_work=max_work)
+    if fallback is None:
+        if theta_box is not None:
+            fallback = np.asarray(theta_box, dtype=float)
+        else:
+            from ..lp import lp_bounds
+
+            fallback = lp_bounds(problem, check_box=False).bounds
+    fallback = np.asarray(fallback, dtype=float)
+    if fallback.shape != (problem.p, 2):
+        raise ParameterValidationError(
+            f"fallback must be an array of shape ({problem.p}, 2); got {fallback.shape}.")
+    # tolerance policy: the relaxation (and its dual certificate) is built on the data with
+    # every equation relaxed outward by FEASIBILITY_RTOL x the magnitudes of its terms
+    from ..problem import outward_problem
+
+    scale_box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+    relax = MomentRelaxation(outward_problem(problem, scale_box), order, theta_box,
+                             basis=basis)
+    t_build = time.perf_counter() - t_start
+    box = relax.box
+    objs = relax.objectives()
+    jobs = [(i, q, q0) for i, (_, _, q, q0) in enumerate(objs)]
+    data = relax.data.strip_picos()
+    n_jobs = max(1, min(int(n_jobs), len(jobs)))
+    if n_jobs > 1 and backend.name == "clarabel" and "max_threads" not in opts:
+        # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
+        opts = {**opts, "max_threads": 1}
+    if n_jobs == 1:
+        results = _solve_group(data, relax.xub, jobs, backend.name, opts)
+    else:
+        from joblib import Parallel, delayed
+
+        groups = [jobs[i::n_jobs] for i in range(n_jobs)]
+        parts = Parallel(n_jobs=n_jobs)(
+            delayed(_solve_group)(data, relax.xub, g, backend.name, opts) for g in groups
+        )
+        results = [r for part in parts for r in part]
+    results.sort(key=lambda r: r[0])
+    names = problem.param_names
+    bounds = box.copy()
+    infos = []
+    for (jid, sol, vb, err), (k, sense, _q, _q0) in zip(results, objs, strict=True):
+        assert jid == len(infos)
+        # monotone knowledge: never wider than the a priori box or the fallback bounds
+        lo_box = max(box[k, 0], fallback[k, 0])
+        hi_box = min(box[k, 1], fallback[k, 1])
+        if vb is not None and np.isfinite(vb.bound):
+            # vb.bound <= min of (+-theta_k); add a rounding margin for the sign flip
+            lb = vb.bound - 2 * EPS * abs(vb.bound)
+            val = lb if sense == "min" else -lb
+            certified = True
+        else:
+            val = lo_box if sense == "min" else hi_box
+            certified = False
+        if sense == "min":
+            bnd = max(val, lo_box)
+        else:
+            bnd = min(val, hi_box)
+        status = "failed" if sol is None else sol.status
+        if not certified and on_failure == "raise":
+            raise SolverError(
+                f"{backend.name}: could not certify the {sense} of {names[k]} "
+                f"(status {status}{': ' + err if err else ''}); try another solver, "
+                "tighter tolerances or on_failure='box'."
+            )
+        sv = np.nan
+        if sol is not None and np.isfinite(sol.primal_value):
+            sv = sol.primal_value if sense == "min" else -sol.primal_value
+        extra = {}
+        if vb is not None:
+            extra = {
+                "dual_value": vb.dual_value if sense == "min" else -vb.dual_value,
+                "psd_correction": vb.psd_correction,
+                "residual_correction": vb.residual_correction,
+                "cone_correction": vb.cone_correction,
+            }
+        msg = err
+        if sol is not None:
+            msg = f"{backend.name}: {sol.native_status}" + (f"; {err}" if err else "")
+        if not certified:
+            msg += "; no certificate, the fallback (LP / a priori box) end reported"
+        infos.append(
+            BoundInfo(
+                param=names[k], sense=sense, bound=float(bnd), solver_value=float(sv),
+                status=status, certified=certified,
+                time=float(sol.time) if sol is not None else 0.0,
+                iterations=None if sol is None else sol.iterations, message=msg, extra=extra,
+            )
+        )
+        bounds[k, 0 if sense == "min" else 1] = bnd
+    return IntervalResult(
+        bounds=bounds, infos=tuple(infos), method="moment", param_names=tuple(names),
+        time=time.perf_counter() - t_start,
+        extra={
+            "order": relax.order, "basis": relax.basis, "solver": backend.name,
+            "n_moments": relax.n_moments, "n_psd_blocks": relax.n_psd_blocks,
+            "psd_sides": relax.psd_sides, "nnz": int(relax.data.A.nnz),
+            "n_cliques": len(relax.pop.cliques), "build_time": t_build,
+            "eliminated": None if relax.pop.elim is None else names[relax.pop.elim],
+            "n_rows": relax.data.m,
+        },
+    )
+
+
+def relaxation_size(n_vars_clique: int, order: int) -> int:
+    """Side of the moment matrix of one clique: ``binom(n + delta, delta)``."""
+    return comb(n_vars_clique + order, order)

@@ -1,0 +1,258 @@
+"""Size of a sparse moment relaxation, estimated *before* it is built (memory/time guard).
+
+The relaxation is built in PICOS (coefficients passed directly as sparse matrices, so the
+build is about linear in the record length N) and solved by an interior-point method whose
+cost per iteration is dominated by the dense Hessian blocks of the PSD cones: a block of
+side ``s`` has ``t = s (s + 1) / 2`` rows and costs about ``t^3`` per factorisation. The
+full order-2 basis on ``na = nb = 2`` has 45 x 45 moment matrices (``t = 1035``): 404 s for
+the 8 bounds at N = 10; the term-sparse basis (24 x 24, ``t = 300``) runs N = 100 in
+minutes (``docs/benchmarks.md``). :func:`estimate_moment_relaxation` counts the cliques,
+conic rows, moment variables and PSD blocks from the problem's structure (cheap: no
+polynomial is formed) and :func:`check_moment_budget` refuses
+(:class:`~hammerbound.exceptions.RelaxationTooLargeError`) or warns against the module
+budgets below.
+
+Budgets (change them at module level, e.g. ``moment_size.MOMENT_MAX_WORK = float("inf")``
+to lift the refusal):
+
+``MOMENT_WARN_WORK = 2e7``
+    ``rows x moments`` above which a :class:`RuntimeWarning` says the relaxation will take
+    minutes (order 1 at N ~ 300, sparse order 2 at N ~ 25, full order 2 at N ~ 10 with
+    ``na = nb = 2``).
+``MOMENT_MAX_WORK = 8e8``
+    ``rows x moments`` above which the moment method refuses (order 1 at N ~ 1500, sparse
+    order 2 at N ~ 150, full order 2 at N ~ 25). Use ``method="lp"`` (seconds) or
+    ``method="exact"`` (tight, with ``total_time_limit``) instead.
+"""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+from dataclasses import dataclass
+from math import comb
+
+import numpy as np
+
+from ...exceptions import RelaxationTooLargeError
+from ..problem import EIVProblem
+
+__all__ = ["MOMENT_MAX_WORK", "MOMENT_WARN_WORK", "MomentSize", "check_moment_budget",
+           "estimate_moment_relaxation"]
+
+#: ``rows x moments`` above which building the relaxation is refused.
+MOMENT_MAX_WORK = 8.0e8
+#: ``rows x moments`` above which a warning says the build will take minutes.
+MOMENT_WARN_WORK = 2.0e7
+# rough cost model (2-core machine under load, measured for issue 15): build ~ per conic
+# row; solve ~ 2 p objectives x ~25 iterations x sum over PSD blocks of t^3 (t = svec rows)
+_SEC_PER_ROW = 2.0e-4
+_SEC_PER_PSD_FLOP = 1.0e-9
+_ITERATIONS = 25
+_BYTES_PER_ROW = 2.0e3  # build (PICOS expressions, conic data)
+_BYTES_PER_PSD = 32.0  # x sum t^2: the dense KKT blocks and their factors
+# enumerate monomials to count the moments exactly up to this many tuples
+_MAX_ENUMERATE = 2_000_000
+
+
+@dataclass(frozen=True)
+class MomentSize:
+    """Estimated size of a sparse moment relaxation (see :func:`estimate_moment_relaxation`).
+
+    Attributes
+    ----------
+    order : int
+    n_cliques : int
+        Distinct cliques (one moment matrix each).
+    clique_vars : int
+        Largest number of variables in a clique.
+    psd_side : int
+        Side of the largest moment matrix, ``binom(clique_vars + order, order)``.
+    n_rows : int
+        Conic rows (symmetric-vectorised PSD blocks, localizing and equality rows).
+    n_moments : int
+        Moment variables (exact when ``moments_exact``, else an upper bound).
+    moments_exact : bool
+    work : float
+        ``n_rows * n_moments``, the measure the budgets apply to.
+    est_seconds, est_bytes : float
+        Rough time (build and the ``2 p`` conic solves, one core) and memory.
+    psd_work : float
+        ``sum t^3`` over the PSD blocks (``t = s (s + 1) / 2`` for side ``s``): the cost
+        of one interior-point factorisation.
+    basis : str
+    """
+
+    order: int
+    n_cliques: int
+    clique_vars: int
+    psd_side: int
+    n_rows: int
+    n_moments: int
+    moments_exact: bool
+    work: float
+    est_seconds: float
+    est_bytes: float
+    psd_work: float = 0.0
+    basis: str = "sparse"
+
+    def describe(self) -> str:
+        """One sentence with the sizes and the rough build cost (used in messages)."""
+        b = f" ({self.basis} basis)" if self.order >= 2 else ""
+        return (f"order {self.order}{b}: {self.n_cliques} cliques of up to {self.clique_vars} "
+                f"variables (moment matrices {self.psd_side} x {self.psd_side}), "
+                f"{self.n_rows} conic rows x {'' if self.moments_exact else '<= '}"
+                f"{self.n_moments} moments = {self.work:.3g}; building and solving it would take "
+                f"about {self.est_seconds:.0f} s (one core) and "
+                f"{self.est_bytes / 2**20:.0f} MB")
+
+
+def _clique_sets(problem: EIVProblem, theta_box) -> tuple[int, int, list]:
+    """``(q, n_extra, [(variables, n_equations)])`` as :class:`.moment._ScaledPOP` builds them."""
+    box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+    half = 0.5 * (box[:, 1] - box[:, 0])
+    fixed = half <= 0
+    g = problem.gain_row()
+    elim = None
+    if g is not None and np.any(np.abs(g[0]) * half > 0):
+        elim = int(np.argmax(np.abs(g[0]) * half))
+    q = sum(1 for k in range(problem.p) if k != elim and not fixed[k])
+    n = problem.N
+    eta = problem.eta_index() + q  # variable ids: theta 0..q-1, eta q.., dx q+N..
+    dxi = problem.dx_index()
+    dx_ok = problem.dx_group[dxi] > 0
+    dxv = np.where(dx_ok, dxi + q + n, -1)
+    counts: dict = {}
+    base = tuple(range(q))
+    for e in range(eta.shape[0]):
+        key = base + tuple(sorted(set(eta[e].tolist()) | {v for v in dxv[e].tolist() if v >= 0}))
+        counts[key] = counts.get(key, 0) + 1
+    return q, (1 if elim is not None else 0), list(counts.items())
+
+
+def _t3(side: int) -> float:
+    """Factorisation cost ``t^3`` of a PSD block of ``side`` (``t`` svec rows); 0 for
+    scalars."""
+    if side <= 1:
+        return 0.0
+    return float(side * (side + 1) // 2) ** 3
+
+
+def _seconds(rows: int, psd: float, p: int) -> float:
+    return _SEC_PER_ROW * rows + 2 * p * _ITERATIONS * _SEC_PER_PSD_FLOP * psd
+
+
+def _bytes(rows: int, psd: float) -> float:
+    # sum t^2 >= (sum t^3)^(2/3) / n_blocks^(1/3); blocks of one size dominate: use the sum
+    # of t^2 of the same blocks, recovered as psd^(2/3) times a safety factor of 4
+    return _BYTES_PER_ROW * rows + 4.0 * _BYTES_PER_PSD * psd ** (2.0 / 3.0)
+
+
+def _sparse_counts(q: int, n_extra: int, cliques, d: int):
+    """Rows and moments of ``basis="sparse"`` (see :func:`.moment._clique_constraints`)."""
+    from .basis import _sparse_basis
+
+    rows = q + n_extra  # scalar theta boxes, once
+    psd = 0.0
+    noise_seen = set()
+    seen = set()
+    side_max = 0
+    for cv, nh in cliques:
+        tv = [v for v in cv if v < q]
+        nv = [v for v in cv if v >= q]
+        mb = _sparse_basis(tv, nv, d)
+        s = len(mb)
+        side_max = max(side_max, s)
+        rows += s * (s + 1) // 2 + nh * s  # moment matrix; h times every basis monomial
+        psd += _t3(s)
+        lb = len(_sparse_basis(tv, [], d - 1)) if d > 1 else 1  # (1 - e^2) x {1, theta..}
+        for v in nv:
+            if v not in noise_seen:
+                noise_seen.add(v)
+                rows += lb * (lb + 1) // 2
+                psd += _t3(lb)
+        seen.update(tuple(sorted(a + b)) for a in mb for b in mb)
+    seen.discard(())
+    return rows, len(seen), side_max, psd
+
+
+def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None,
+                               basis: str = "sparse") -> MomentSize:
+    """Estimate the size of :class:`.moment.MomentRelaxation` without building it.
+
+    The rows are counted exactly (PSD blocks in symmetric vectorisation); the moments are
+    counted exactly by enumerating the cliques' monomials when that is cheap (up to
+    ``2e6`` monomials), else bounded from above. ``basis``: as in
+    :class:`.moment.MomentRelaxation` (``"sparse"`` and ``"full"`` coincide at order 1).
+    """
+    d = int(order)
+    q, n_extra, cliques = _clique_sets(problem, theta_box)
+    if not cliques:
+        cliques = [(tuple(range(q)), 0)]
+    if basis == "sparse" and d >= 2 and any(nh for _, nh in cliques):
+        rows, moments, side, psd = _sparse_counts(q, n_extra, cliques, d)
+        nv_max = max(len(cv) for cv, _ in cliques)
+        work = float(rows) * float(moments)
+        return MomentSize(order=d, n_cliques=len(cliques), clique_vars=nv_max,
+                          psd_side=side, n_rows=int(rows), n_moments=int(moments),
+                          moments_exact=True, work=work,
+                          est_seconds=_seconds(rows, psd, problem.p),
+                          est_bytes=_bytes(rows, psd), psd_work=psd, basis="sparse")
+    rows = 0
+    nv_max = 0
+    psd = 0.0
+    if d == 1:  # scalar localizers (1 - v^2 >= 0, the extra box): identical ones once
+        rows += len(set().union(*[set(cv) for cv, _ in cliques])) + n_extra
+    for cv, nh in cliques:
+        nv = len(cv)
+        nv_max = max(nv_max, nv)
+        s = comb(nv + d, d)
+        sl = comb(nv + d - 1, d - 1)
+        rows += s * (s + 1) // 2
+        if d > 1:
+            rows += (nv + n_extra) * sl * (sl + 1) // 2
+            psd += (nv + n_extra) * _t3(sl)
+        psd += _t3(s)
+        rows += nh * comb(nv + 2 * d - 2, 2 * d - 2)
+    per = comb(nv_max + 2 * d, 2 * d)
+    exact = len(cliques) * per <= _MAX_ENUMERATE
+    if exact:
+        seen = set()
+        for cv, _ in cliques:
+            for deg in range(1, 2 * d + 1):
+                seen.update(itertools.combinations_with_replacement(cv, deg))
+        moments = len(seen)
+    else:
+        theta_only = comb(q + 2 * d, 2 * d)
+        moments = len(cliques) * (per - theta_only) + theta_only - 1
+    work = float(rows) * float(moments)
+    return MomentSize(order=d, n_cliques=len(cliques), clique_vars=nv_max,
+                      psd_side=comb(nv_max + d, d), n_rows=int(rows), n_moments=int(moments),
+                      moments_exact=exact, work=work,
+                      est_seconds=_seconds(rows, psd, problem.p),
+                      est_bytes=_bytes(rows, psd), psd_work=psd,
+                      basis="full" if d >= 2 else "sparse")
+
+
+def check_moment_budget(size: MomentSize, max_work: float | None = None,
+                        warn_work: float | None = None) -> None:
+    """Refuse or warn when a relaxation of ``size`` exceeds the budgets.
+
+    Raises
+    ------
+    RelaxationTooLargeError
+        ``size.work > max_work`` (default :data:`MOMENT_MAX_WORK`).
+    """
+    max_work = MOMENT_MAX_WORK if max_work is None else max_work
+    warn_work = MOMENT_WARN_WORK if warn_work is None else warn_work
+    if size.work > max_work:
+        raise RelaxationTooLargeError(
+            f"the moment relaxation is too large: {size.describe()}, above the budget "
+            f"rows x moments <= {max_work:.3g} (hammerbound.relaxations.moment.size."
+            "MOMENT_MAX_WORK). Use method='lp' (polytopic outer bounds, seconds) or "
+            "method='exact' (tight bounds; bound its time with total_time_limit), a shorter "
+            "record, or a lower relaxation_order.")
+    if size.work > warn_work:
+        warnings.warn(
+            f"large moment relaxation: {size.describe()}. method='lp' or method='exact' "
+            "(with total_time_limit) may be faster.", RuntimeWarning, stacklevel=3)

@@ -1,0 +1,533 @@
+"""Stage 2: guaranteed bounds on the linear block from errors-in-variables data.
+
+:class:`LinearEIVSetEstimator` bounds the coefficients ``theta = (a_1..a_na, b_..)`` of
+``A(q^-1) w_t = B(q^-1) x_t`` (22.3) from the central input ``x^c`` (the inner signal
+delivered by stage 1, or a measured input) with ``|x_t - x^c_t| <= dx_t`` and the output
+``y_t = w_t + eta_t`` with ``|eta_t| <= deta_t``: the feasible parameter set is (22.34)
+and the parameter uncertainty intervals (PUIs) are (22.35)-(22.37).
+
+Three methods, all *guaranteed* (every feasible ``theta`` lies inside every reported
+interval):
+
+``"lp"``
+    The polytopic outer approximation of Cerone (1993) / Cerone & Regruto (2007): each
+    equation is decoupled, ``|e_t(theta)| <= deta_t + sum |a_i| deta + sum |b_j| dx``, and
+    split into sign orthants; one LP per parameter, sense and orthant (HiGHS), made
+    rigorous by a dual bound. Fast and the most conservative.
+``"moment"``
+    The sparse Lasserre relaxation of order ``relaxation_order`` (chapter section 22.4),
+    formulated in PICOS, solved by a swappable conic backend (Clarabel by default) and
+    *certified* from the dual solution: an inaccurate solve gives a looser, never a
+    tighter, bound. The a priori box on ``theta`` is the LP result.
+``"exact"``
+    Spatial branch-and-bound over ``theta`` with McCormick LP relaxations: the tight
+    intervals (22.36)-(22.37) to within ``tol``, each end with a verified-feasible witness.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+
+from ..data.validation import as_bound, as_real, as_signal, check_excited, check_scale
+from ..exceptions import (
+    DataValidationError,
+    EmptyFeasibleSetError,
+    ParameterValidationError,
+    UnboundedSetError,
+)
+from ..modelset.estimator import ModelSetMixin
+from ..relaxations.problem import EIVProblem
+from ..stage1.feasible_set import FeasibleSet
+from .linear_model import LinearModelMixin
+
+__all__ = ["LinearEIVSetEstimator", "METHODS"]
+
+METHODS = ("moment", "lp", "exact")
+
+
+class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, BaseEstimator):
+    """Guaranteed parameter intervals of ``G(q^-1) = B/A`` from bounded-error EIV data.
+
+    Parameters
+    ----------
+    na, nb : int, default 2
+        Orders of ``A`` (``1 + a_1 q^-1 + ... + a_na q^-na``) and ``B`` (``nb``
+        coefficients ``b_1 .. b_nb`` as in the chapter, plus ``b_0`` when ``nk = 0``).
+    nk : int or None, default None
+        Input delay (first lag of ``B``, MATLAB's ``nk`` in ``[na nb nk]``): ``nk = 1`` is
+        the chapter's ``B = b_1 q^-1 + ... + b_nb q^-nb``; ``nk = 0`` adds the direct term
+        ``b_0`` (same as ``b0=True``); ``nk > 1`` delays further, ``B = b_nk q^-nk + ... +
+        b_{nk+nb-1} q^-(nk+nb-1)``. ``None``: ``0`` if ``b0`` else ``1``. (MATLAB's
+        ``[na nb nk]`` maps unchanged for ``nk >= 1``; MATLAB's ``nk = 0`` with ``nb``
+        coefficients is ``nb - 1`` here.)
+    b0 : bool, default False
+        Whether ``B`` has a direct term ``b_0``; shorthand for ``nk=0``.
+    noise_bound : float or array of shape (N,), default 0.05
+        Output error bound ``deta`` (22.5).
+    steady_state_gain : float or None, default None
+        Imposes ``B(1) / A(1) = steady_state_gain`` (22.8) as a linear equality. ``None``
+        (default): a plain EIV problem, no gain constraint. Inside
+        :class:`HammersteinBacklashIdentifier` stage 2 always uses the normalisation
+        ``steady_state_gain=1`` (22.8) that stage 1 assumes.
+    method : {"moment", "lp", "exact"}, default "moment"
+        See the module docstring.
+    relaxation_order : int, default 1
+        Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
+        priori box, order 1 is already close to the exact intervals at a fraction of the
+        cost. Order 2 (term-sparse basis, ``relaxation_basis="sparse"``) equals the exact
+        intervals within 1e-3 of their width on the chapter example and takes minutes at
+        N = 100 (see ``docs/benchmarks.md``). The relaxation's size is estimated before it
+        is built: above ``rows x moments = 8e8`` (order 1 at N ~ 1500, order 2 at
+        N ~ 150) the fit raises :class:`~hammerbound.exceptions.RelaxationTooLargeError`
+        (use ``"lp"`` or ``"exact"``), above ``2e7`` it warns (module
+        :mod:`hammerbound.relaxations.moment.size`).
+    relaxation_basis : {"sparse", "full"}, default "sparse"
+        Monomial basis of the moment matrices (order >= 2; both coincide at order 1):
+        ``"sparse"`` uses ``1, theta, e, theta e`` (the equations are bilinear in
+        parameters x noise), ``"full"`` every monomial of degree <= ``relaxation_order``
+        (at least as tight, ~50x slower: 404 s for N = 10). See
+        :class:`~hammerbound.relaxations.moment.relaxation.MomentRelaxation`.
+    solver : {"clarabel", "cvxopt", "mosek"}, default "clarabel"
+        Conic backend of the moment method.
+    solver_options : dict or None
+        Native options of the backend (e.g. ``{"max_iter": 200}`` for Clarabel).
+    theta_box : array of shape (p, 2) or None
+        A priori box on ``theta``; default ``|a_i| <= binom(na, i)`` (every stable ``A``
+        lies in it) and ``|b_j| <= 1e4``.
+    tol, max_nodes, time_limit : float, int, float
+        Stopping rules of the exact method, per interval end (gap ``<= tol * max(1, |v|)``).
+        An end stopped by ``max_nodes`` or ``time_limit`` reports the best certified outer
+        bound found so far (never wider than the LP bound) with status ``"limit"``, and
+        the fit warns (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends.
+    total_time_limit : float or None, default None
+        Wall-time budget in seconds for the whole fit of the exact method, shared by the
+        ``2 p`` interval ends and the joblib workers (``time_limit`` is per end). It starts
+        when :meth:`fit` is called; the polytopic LP and the first OBBT round always run
+        (set-up, usually well under a second to a few seconds), then each end searches for
+        at most ``min(time_limit, time left)``; ends that find no time left report their
+        LP/OBBT bound with status ``"limit"``. The result is always finite and guaranteed
+        where the LP bound is. ``None``: no total budget. The LP method needs none; the
+        moment method is guarded by its size budget instead (see ``relaxation_order``).
+    on_failure : {"box", "raise"}, default "raise"
+        Moment method: when a bound cannot be certified, raise :class:`SolverError`
+        (default) or report the LP bound for it (still guaranteed).
+    n_jobs : int, default 1
+        The ``2 p`` bound problems run in parallel (joblib).
+    progress : bool, default False
+        Progress bars during long exact searches.
+
+    Attributes
+    ----------
+    bounds_ : ndarray of shape (p, 2)
+        Guaranteed parameter intervals, rows in :attr:`param_names_` order.
+    center_, radius_ : ndarray of shape (p,)
+        Central estimate ``theta^c`` and uncertainty ``Delta theta`` (22.23).
+    coef_ : ndarray of shape (p,)
+        Same as ``center_``.
+    param_names_ : tuple of str
+        ``("a1", ..., "b1", ...)``.
+    feasible_set_ : FeasibleSet
+        Outer-bounding orthotope; for ``method="lp"``, ``polytopes`` holds the orthant
+        polytopes ``A theta <= b`` whose union contains the feasible set.
+    bound_info_ : tuple of BoundInfo
+        Per bound: status, objective, certificate, time, iterations (and witness/gap for
+        the exact method).
+    result_ : IntervalResult
+        The raw result of the method.
+    problem_ : EIVProblem
+        The problem (22.34) that was bounded.
+    box_limited_ : tuple of str
+        Interval ends set by the a priori box rather than by the data (e.g. ``"a2 upper"``
+        when only stability, A1, bounds ``a_2``). They are still guaranteed under A1.
+    n_features_in_ : int
+        Always 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.signal import lfilter
+    >>> rng = np.random.default_rng(0)
+    >>> x = np.where(rng.random(80) < 0.5, 1.0, -1.0)
+    >>> y = lfilter([0, 0.5], [1, -0.5], x) + rng.uniform(-0.02, 0.02, 80)
+    >>> est = LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="exact")
+    >>> est.fit(x, y, input_bound=0.0).contains([-0.5, 0.5])
+    True
+    """
+
+    def __init__(self, na=2, nb=2, *, nk=None, b0=False, noise_bound=0.05,
+                 steady_state_gain=None,
+                 method="moment", relaxation_order=1, relaxation_basis="sparse",
+                 solver="clarabel", solver_options=None, theta_box=None, tol=1e-4,
+                 max_nodes=20000, time_limit=600.0,
+                 total_time_limit=None, on_failure="raise", n_jobs=1, progress=False):
+        self.na = na
+        self.nb = nb
+        self.nk = nk
+        self.b0 = b0
+        self.noise_bound = noise_bound
+        self.steady_state_gain = steady_state_gain
+        self.method = method
+        self.relaxation_order = relaxation_order
+        self.relaxation_basis = relaxation_basis
+        self.solver = solver
+        self.solver_options = solver_options
+        self.theta_box = theta_box
+        self.tol = tol
+        self.max_nodes = max_nodes
+        self.time_limit = time_limit
+        self.total_time_limit = total_time_limit
+        self.on_failure = on_failure
+        self.n_jobs = n_jobs
+        self.progress = progress
+
+    # ------------------------------------------------------------------ validation
+    def _check_params(self):
+        for name in ("na", "nb"):
+            v = getattr(self, name)
+            if not isinstance(v, numbers.Integral) or isinstance(v, bool) or v < 0:
+                raise ParameterValidationError(f"{name} must be an integer >= 0; got {v!r}.")
+        if not isinstance(self.b0, (bool, np.bool_)):
+            raise ParameterValidationError(f"b0 must be True or False; got {self.b0!r}.")
+        nk = self.nk
+        if nk is not None and (not isinstance(nk, numbers.Integral) or isinstance(nk, bool)
+                               or nk < 0):
+            raise ParameterValidationError(
+                f"nk (input delay) must be an integer >= 0 or None; got {nk!r}.")
+        if nk is not None and self.b0 and nk != 0:
+            raise ParameterValidationError(
+                f"b0=True means a direct term (nk=0) but nk={nk}: pass only nk.")
+        mn = self.max_nodes
+        if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
+            raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
+        tl = self.time_limit
+        if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
+            raise ParameterValidationError(
+                f"time_limit must be a number of seconds >= 0; got {tl!r}."
+            )
+        ttl = self.total_time_limit
+        if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
+                                or not ttl >= 0):
+            raise ParameterValidationError(
+                f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
+            )
+        if self.nb == 0 and self._nk() != 0:
+            raise ParameterValidationError(
+                "B has no coefficient: use nb >= 1 or b0=True."
+            )
+        if self.method not in METHODS:
+            raise ParameterValidationError(
+                f"method must be one of {METHODS}; got {self.method!r}."
+            )
+        r = self.relaxation_order
+        if not isinstance(r, numbers.Integral) or isinstance(r, bool) or r < 1:
+            raise ParameterValidationError(
+                f"relaxation_order must be an integer >= 1 (the chapter uses 2); got {r!r}."
+            )
+        if self.on_failure not in ("box", "raise"):
+            raise ParameterValidationError(
+                f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
+            )
+        if self.relaxation_basis not in ("sparse", "full"):
+            raise ParameterValidationError(
+                f"relaxation_basis must be 'sparse' or 'full'; got {self.relaxation_basis!r}."
+            )
+        as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
+                example="1.0")
+        if not (isinstance(self.tol, numbers.Real) and self.tol > 0):
+            raise ParameterValidationError(f"tol must be > 0; got {self.tol!r}.")
+        if not (isinstance(self.n_jobs, numbers.Integral) and (self.n_jobs >= 1 or self.n_jobs == -1)):
+            raise ParameterValidationError(f"n_jobs must be a positive integer or -1; got {self.n_jobs!r}.")
+        if self.solver_options is not None and not isinstance(self.solver_options, dict):
+            from ..exceptions import SolverOptionError
+
+            raise SolverOptionError(
+                f"solver_options must be a dict of native solver options or None; got "
+                f"{type(self.solver_options).__name__}."
+            )
+
+    def _output_bound(self, n, output_bound=None):
+        """``deta`` of shape (n,): the fit-time ``output_bound`` or the ``noise_bound``."""
+        if output_bound is not None:
+            return as_bound("output_bound", output_bound, n)
+        try:
+            return as_bound("noise_bound", self.noise_bound, n)
+        except DataValidationError as exc:
+            raise DataValidationError(
+                f"{exc} In cross-validation pass per-sample bounds to fit (output_bound=..., "
+                "input_bound=...): scikit-learn splits fit arguments with the samples, not "
+                "constructor parameters.") from None
+
+    def _build_problem(self, X, y, input_bound, groups, output_bound=None):
+        x = as_signal("X", X)
+        yy = as_signal("y", y)
+        if x.shape != yy.shape:
+            raise DataValidationError(
+                f"X and y must have the same number of samples; got {x.size} and {yy.size}."
+            )
+        n = x.size
+        deta = self._output_bound(n, output_bound)
+        dx = as_bound("input_bound", input_bound, n, allow_zero=True)
+        check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
+        check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
+                    {"noise_bound": deta, "input_bound": dx},
+                    hint=" (scaling X, y and both bounds by the same factor leaves theta "
+                         "unchanged)")
+        last = int(self._lags()[-1])
+        n0 = max(self.na, last)
+        if n <= n0 + 1:
+            what = "max(na, nb)" if last == self.nb else "max(na, nk + nb - 1)"
+            raise DataValidationError(
+                f"need more than {what} + 1 = {n0 + 1} samples; got {n}."
+            )
+        return EIVProblem(yy, x, dx, deta, na=self.na, nb=self.nb, nk=self._nk(),
+                          gain=self.steady_state_gain, groups=groups,
+                          theta_box=self.theta_box)
+
+    def _nk(self) -> int:
+        """The input delay: ``nk``, or ``0``/``1`` from ``b0``."""
+        return int(self.nk) if self.nk is not None else (0 if self.b0 else 1)
+
+    def _lags(self) -> np.ndarray:
+        from ..relaxations.problem import b_lags_of
+
+        return b_lags_of(self.nb, self._nk())
+
+    def _assumptions(self, problem) -> str:
+        """One sentence naming every assumption that shaped the feasible set."""
+        lags = problem.b_lags
+        b_terms = " + ".join(f"b{j}" + (f" q^-{j}" if j else "") for j in lags)
+        a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
+        g = self.steady_state_gain
+        gain = ("no steady-state gain constraint" if g is None else
+                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8; pass "
+                "steady_state_gain=None for a plain EIV problem)")
+
+        def rng(v):
+            lo, hi = float(np.min(v)), float(np.max(v))
+            return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"
+
+        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
+               if self.theta_box is None else "user theta_box")
+        shared = ("" if problem.n_groups == problem.N else
+                  f"; input errors shared by {problem.n_groups} sample groups")
+        return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
+                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); {gain}; output error "
+                f"bound |eta_t| <= {rng(problem.deta)}; input error bound |dx_t| <= "
+                f"{rng(problem.dx)}{shared}; {box}.")
+
+    def _box_hint(self, problem) -> str:
+        """A hint for badly scaled data, whose true b_j may lie outside the default box."""
+        if self.theta_box is not None:
+            return ""
+        sx = float(np.max(np.abs(problem.x))) or 1.0
+        sy = float(np.max(np.abs(problem.y))) or 1.0
+        if 1e-3 <= sy / sx <= 1e3:
+            return ""
+        return (f"The data are badly scaled (max |x| = {sx:.3g}, max |y| = {sy:.3g}): the "
+                "b_j may lie outside the default box |b_j| <= 1e4 or be lost to the solver "
+                "tolerances. Rescale x and y to similar magnitudes (and steady_state_gain "
+                "accordingly) or pass a theta_box.")
+
+    def _check_box(self, problem, res):
+        """Decide what a bound that coincides with the a priori box means.
+
+        The default box on ``a`` (``|a_i| <= binom(na, i)``) contains every *stable* ``A``
+        (assumption A1), so a bound set by it is still guaranteed under A1; it is recorded
+        in ``res.extra["box_limited"]``. The same holds for a user-supplied ``theta_box``
+        (the user's prior). The default box on ``b`` (``|b_j| <= 1e4``) is arbitrary:
+        touching it means the data do not bound that coefficient, which is an error.
+        """
+        from ..exceptions import UnboundedSetError
+        from ..relaxations.lp import box_limited_ends
+
+        ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
+        res.extra["box_limited"] = [lab for _, lab in ends]
+        if self.theta_box is None:
+            bad = [lab for k, lab in ends if k >= problem.na]
+            if bad:
+                raise UnboundedSetError(
+                    "the data do not bound " + ", ".join(bad) + ": the bound reached the "
+                    "default box |b_j| <= 1e4. Supply more (or more exciting) data, a "
+                    "smaller noise bound if justified, or a theta_box with prior knowledge."
+                )
+
+    @staticmethod
+    def _warn_limits(res):
+        """Warn, naming the interval ends, when a search stopped at a node/time limit."""
+        import warnings
+
+        from ..exceptions import SearchLimitWarning
+
+        ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in res.infos
+                if i.status == "limit"]
+        if ends:
+            warnings.warn(
+                f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "
+                f"ends ({', '.join(ends)}): their bounds are guaranteed outer bounds (never "
+                "wider than the LP bound) but may be looser than the exact ones; raise "
+                "time_limit / total_time_limit / max_nodes for tighter ones (bound_info_ "
+                "gives each end's status and certified gap).", SearchLimitWarning, stacklevel=3)
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, X, y=None, input_bound=0.0, input_groups=None, *, output_bound=None,
+            groups=None):
+        """Bound the linear block from central input ``X`` and measured output ``y``.
+
+        Parameters
+        ----------
+        X : array of shape (N,) or (N, 1), or IOData
+            Central input ``x^c`` (e.g. the inner signal from stage 1), or an
+            :class:`~hammerbound.IOData` holding input, output and sampling time (then
+            ``y`` is None and ``dt`` flows into :meth:`to_transfer_function`).
+        y : array of shape (N,) or None
+            Measured output (None with an IOData).
+        input_bound : float or array of shape (N,), default 0.0
+            ``dx``: the true input is within ``x^c +- dx`` (22.31).
+        input_groups : int array of shape (N,), optional
+            Samples with the same label share *one* unknown input error (e.g. the two
+            levels of a PRBS inner signal under Result 1: label ``u < 0``). Default:
+            independent per-sample errors, as in the chapter.
+        output_bound : float or array of shape (N,), optional
+            Per-sample output error bound for this fit, overriding ``noise_bound``. Pass
+            sample-aligned bounds here (not as ``noise_bound``) in cross-validation:
+            scikit-learn splits fit arguments together with the samples.
+        groups : deprecated
+            Old name of ``input_groups`` (it collided with scikit-learn's CV ``groups``).
+
+        Returns
+        -------
+        self
+
+        Raises
+        ------
+        DataValidationError, ParameterValidationError
+            Malformed data or settings; a non-contiguous subset of an IOData (KFold).
+        EmptyFeasibleSetError
+            No ``theta`` explains the data within the bounds (names the first equation and
+            the active assumptions: orders, delay, gain constraint, bounds, box).
+        UnboundedSetError
+            The data do not bound some parameter inside ``theta_box`` (names the same).
+        SolverError, SolverNotAvailableError, SolverOptionError
+            Moment-method backend problems.
+        RelaxationTooLargeError
+            Moment method: the relaxation's estimated size exceeds its budget (checked
+            before any work; use ``method="lp"`` or ``"exact"``).
+
+        Warns
+        -----
+        SearchLimitWarning
+            Exact method: some interval ends stopped at ``max_nodes``, ``time_limit`` or
+            ``total_time_limit``; they are named, and their bounds are still guaranteed.
+        """
+        from ..data.iodata import unpack
+
+        if groups is not None:
+            import warnings
+
+            warnings.warn("fit(groups=...) is deprecated: use input_groups=... (scikit-learn "
+                          "reserves 'groups' for the CV splitter).", FutureWarning,
+                          stacklevel=2)
+            if input_groups is None:
+                input_groups = groups
+        groups = input_groups
+        X, y, data = unpack(X, y)
+        import time
+
+        t_fit = time.time()
+        self._check_params()
+        deadline = None if self.total_time_limit is None else t_fit + float(self.total_time_limit)
+        problem = self._build_problem(X, y, input_bound, groups, output_bound)
+        from ..relaxations.lp import lp_bounds
+
+        try:
+            if self.method == "lp":
+                res = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
+                self._check_box(problem, res)
+            elif self.method == "exact":
+                from ..relaxations.exact.bnb import exact_bounds
+
+                res = exact_bounds(problem, tol=self.tol, max_nodes=self.max_nodes,
+                                   time_limit=self.time_limit, n_jobs=self.n_jobs,
+                                   progress=self.progress, check_box=False,
+                                   deadline=deadline)
+                self._check_box(problem, res)
+                self._warn_limits(res)
+            else:
+                from ..relaxations.moment.relaxation import moment_bounds
+                from ..relaxations.moment.size import (
+                    check_moment_budget,
+                    estimate_moment_relaxation,
+                )
+                from ..solvers import get_solver
+
+                backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
+                backend.check_options(self.solver_options)
+                # memory/time guard before any work (refuses with the estimate, or warns)
+                check_moment_budget(estimate_moment_relaxation(
+                    problem, self.relaxation_order, basis=self.relaxation_basis))
+                lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
+                self._check_box(problem, lp)
+                res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
+                                    solver_options=self.solver_options, n_jobs=self.n_jobs,
+                                    theta_box=lp.bounds, on_failure=self.on_failure,
+                                    fallback=lp.bounds, max_work=float("inf"),
+                                    basis=self.relaxation_basis)
+                res.extra["lp"] = lp
+        except (EmptyFeasibleSetError, UnboundedSetError) as exc:
+            hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))
+                            if h)
+            kw = {"side": exc.side, "first_index": exc.first_index} \
+                if isinstance(exc, EmptyFeasibleSetError) else {}
+            if isinstance(exc, EmptyFeasibleSetError) and data is None:
+                hint += (" If these samples were cut by a cross-validation splitter (e.g. "
+                         "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
+                         "IOData, which refuses such cuts.")
+            raise type(exc)(f"{exc} {hint}", **kw) from exc
+        self.problem_ = problem
+        self.result_ = res
+        self.bounds_ = np.array(res.bounds, dtype=float)
+        if not np.all(np.isfinite(self.bounds_)):  # pragma: no cover - every method clips
+            from ..exceptions import SolverError
+
+            raise SolverError(f"internal error: non-finite bounds {self.bounds_.tolist()}; "
+                              "please report it.")
+        crossed = np.flatnonzero(self.bounds_[:, 0] > self.bounds_[:, 1])
+        if crossed.size:
+            # both ends are certified outer bounds (lower <= min, max <= upper over the set,
+            # relaxed outward by the tolerance policy): if they cross, no parameter vector
+            # is feasible, beyond the tolerance
+            k = int(crossed[0])
+            name = problem.param_names[k]
+            raise EmptyFeasibleSetError(
+                f"no parameters explain the data within the bounds: the certified bounds on "
+                f"{name} cross ({self.bounds_[k, 0]:.6g} > {self.bounds_[k, 1]:.6g}). "
+                f"{self._assumptions(problem)}")
+        # halves first: no overflow for bounds near the float range
+        self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
+        self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
+        self.coef_ = self.center_
+        self.param_names_ = tuple(problem.param_names)
+        self.bound_info_ = tuple(res.infos)
+        polys = tuple((d["A"], d["b"]) for d in res.extra.get("polytopes", ()))
+        self.box_limited_ = tuple(res.extra.get("box_limited", ())) or tuple(
+            res.extra["lp"].extra.get("box_limited", ()) if "lp" in res.extra else ())
+        extra = {"method": self.method}
+        if self.method == "exact":
+            extra["inner"] = res.extra.get("inner")
+        self.feasible_set_ = FeasibleSet(self.param_names_, self.bounds_.copy(), exact=False,
+                                         polytopes=polys, extra=extra)
+        self.n_features_in_ = 1
+        self.dt_ = None if data is None else data.dt
+        self.signal_names_ = ("u", "y") if data is None else (data.input_name,
+                                                             data.output_name)
+        self.n_samples_ = problem.N
+        return self
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.one_d_array = True
+        tags.target_tags.single_output = True
+        return tags

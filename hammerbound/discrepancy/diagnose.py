@@ -136,7 +136,7 @@ def diagnose(
         d_before, combo_before = before.design, tuple(zip(old, before.thetas, strict=True))
     else:
         combo_before = ()
-        d_before = design(origin, u, do_refit, (), y)
+        d_before = design(origin, u, do_refit, (), y, nb)
     disagreement, base_fit, nominal, tagged = locate_design(
         s, d_before, u, y, nb, skip, window, max_delay, coef_box
     )
@@ -238,13 +238,12 @@ def diagnose(
 
 def _candidate_fit(cf, gap_before, consistent, fraction, removed):
     e = cf.effects[-1]
-    coefs = tuple(float(v) for v in cf.fit.z[cf.design.slices[-1]])
     err = cf.error
     return CandidateFit(
         name=e.name,
         n_params=CANDIDATES[e.name],
         param_name=e.param_label(),
-        value=e.value(cf.thetas[-1], coefs),
+        value=cf.model.effects[-1][1],  # in the refined model's convention (Effect.value)
         minimax_error=err,
         lower_bound=cf.lower,
         consistent=consistent,
@@ -257,12 +256,9 @@ def _candidate_fit(cf, gap_before, consistent, fraction, removed):
 
 
 def _combination_fit(cf, n_old, consistent, removed):
-    vals = []
-    for (e, th), sl in zip(zip(cf.effects, cf.thetas, strict=True), cf.design.slices,
-                           strict=True):
-        vals.append(e.value(th, tuple(float(v) for v in cf.fit.z[sl])))
     return CombinationFit(
-        name="+".join(cf.names[n_old:]), effects=cf.names, values=tuple(vals),
+        name="+".join(cf.names[n_old:]), effects=cf.names,
+        values=tuple(v for _, v in cf.model.effects),
         minimax_error=cf.error, consistent=consistent, gap_fraction_removed=removed,
         n_evaluations=cf.n_evaluations, seconds=cf.seconds,
     )
@@ -361,11 +357,8 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
             )
         return msg
     if chosen is not None:
-        parts = []
-        for (e, th), sl in zip(zip(chosen.effects, chosen.thetas, strict=True),
-                               chosen.design.slices, strict=True):
-            coefs = tuple(float(v) for v in chosen.fit.z[sl])
-            parts.append(f"{e.name} ({e.param_label()} = {_num(e.value(th, coefs))})")
+        parts = [f"{e.name} ({e.param_label()} = {_num(v)})"
+                 for e, (_, v) in zip(chosen.effects, chosen.model.effects, strict=True)]
         what = " + ".join(parts)
         if len(added) == 1 and not old:
             msg = (f"Missing effect: {what}; with it the data are consistent with the noise "

@@ -95,7 +95,7 @@ def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
         from . import effects as _effects
 
         combo = tuple((_effects.get(n), th) for n, th, _ in s.effect_params)
-    d = design(origin, u, do_refit, combo, y)
+    d = design(origin, u, do_refit, combo, y, nb)
     dis, fit, _, tagged = locate_design(s, d, u, y, nb, skip, window, max_lag)
     return replace(dis, hints=check_hints(origin, combo, u, y, nb, do_refit, skip, max_lag,
                                           fit.error, tagged))

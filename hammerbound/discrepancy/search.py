@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize, minimize_scalar
 
-from .fitting import Design, Fit, design, fit_design, rebuild
+from .fitting import Design, Fit, design, fit_design, outside, rebuild
 from .model import RefinedModel
 
 __all__ = ["ComboFit", "Problem", "fit_combination"]
@@ -90,7 +90,7 @@ class _Objective:
         if key not in self.cache:
             pb = self.pb
             combo = tuple(zip(self.effects, self.split(key), strict=True))
-            d = design(pb.origin, pb.u, pb.refit, combo, pb.y)
+            d = design(pb.origin, pb.u, pb.refit, combo, pb.y, pb.nb)
             target = pb.nb if pb.refine_to_bound else None
             self.cache[key] = (fit_design(pb.y, d, pb.skip, pb.coef_box, target, fast=True), d)
         return self.cache[key][0].error
@@ -288,9 +288,6 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
         ranking[(i, j)] = sorted(best_by_v, key=best_by_v.get)
     thetas = obj.split(key)
     combo = tuple(zip(effects, thetas, strict=True))
-    model = rebuild(pb.origin, pb.refit, combo, d, fit)
-    pred = model.predict(pb.u)
-    err = float(np.max(np.abs((pb.y - pred)[pb.skip:])))
     exhaustive = not cont_idx and full_enum
     if exhaustive:  # certified bound over the whole class: every enumerated point, certified
         lower = fit.lower
@@ -299,5 +296,30 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
                 lower = min(lower, fit_design(pb.y, dd, pb.skip, pb.coef_box).lower)
     else:
         lower = fit.lower
+    origin, d, fit, n_pinned = _pin_leading(pb, combo, d, fit)
+    model = rebuild(origin, pb.refit, combo, d, fit)
+    pred = model.predict(pb.u)
+    err = float(np.max(np.abs((pb.y - pred)[pb.skip:])))
+    # ``lower`` bounds the whole class; the pinned fit lies in it, so it stays a bound
     return ComboFit(effects, thetas, fit, d, model, pred, err, min(lower, err), exhaustive,
-                    len(obj.cache) + 1, time.perf_counter() - t0, ranking)
+                    len(obj.cache) + 1 + n_pinned, time.perf_counter() - t0, ranking)
+
+
+def _pin_leading(pb: Problem, combo, d: Design, fit: Fit):
+    """For a combination with a delay (``Effect.pins_leading``) whose fit is consistent:
+    pin the leading refitted coefficient of the numerator to zero, one at a time, while the
+    refit stays consistent; the delay of the refined model is then the one the data need
+    (the reported total delay is the refit's). Returns ``(origin, design, fit, n_lps)``."""
+    origin, n = pb.origin, 0
+    if not (pb.refit and origin.base is None and any(e.pins_leading for e, _ in combo)):
+        return origin, d, fit, n
+    while np.isfinite(fit.error) and not np.any(outside(pb.y, fit.prediction, pb.nb, pb.skip)) \
+            and origin._j0 + 1 < origin.B.size:  # keep one free coefficient
+        pinned = replace(origin, b_free_from=origin._j0 + 1)
+        d2 = design(pinned, pb.u, pb.refit, combo, pb.y, pb.nb)
+        fit2 = fit_design(pb.y, d2, pb.skip, pb.coef_box, pb.nb)
+        n += 1
+        if np.any(outside(pb.y, fit2.prediction, pb.nb, pb.skip)):
+            break
+        origin, d, fit = pinned, d2, fit2
+    return origin, d, fit, n

@@ -69,7 +69,7 @@ def _best_lag(y, yh, max_lag):
     return best
 
 
-def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
+def locate(model, u, y=None, noise_bound=None, *, refit: str = "linear", skip: int = 0,
            window: int = 5, max_lag: int = 10) -> Disagreement:
     """Step 1: where and by how much does the model disagree with the data?
 
@@ -86,7 +86,7 @@ def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
     -------
     Disagreement
     """
-    s, u, y, nb, do_refit, skip = validate(model, u, y, noise_bound, refit, skip)
+    s, u, y, nb, do_refit, skip, _ = validate(model, u, y, noise_bound, refit, skip, "locate")
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin

@@ -136,6 +136,10 @@ class RefinedModel:
         ``origin`` it lets :func:`diagnose` refit them jointly with new ones.
     origin : RefinedModel or None
         The model before any effect was added (``None``: this model is the origin).
+    dt : float or None
+        Sampling time: the model's (a ``TransferFunction`` or ``HammersteinSystem`` with a
+        numeric ``dt``), else the data's (an :class:`~hammerbound.IOData`); None: not given
+        (:attr:`linear` then has python-control's ``dt=True``).
     """
 
     effects: tuple = ()
@@ -155,6 +159,7 @@ class RefinedModel:
     output_ops: tuple = field(default=(), repr=False)
     effect_params: tuple = field(default=(), repr=False)
     origin: RefinedModel | None = field(default=None, repr=False)
+    dt: float | None = None
 
     @property
     def _j0(self) -> int:
@@ -164,7 +169,8 @@ class RefinedModel:
 
     @property
     def linear(self):
-        """Linear block ``B/A`` as a discrete ``control.TransferFunction`` (dt=True)."""
+        """Linear block ``B/A`` as a discrete ``control.TransferFunction`` (sampling time
+        :attr:`dt`, or ``True`` when not given)."""
         if self.A is None:
             return None
         import control
@@ -172,7 +178,7 @@ class RefinedModel:
         n = max(self.A.size, self.B.size)
         num = np.concatenate([self.B, np.zeros(n - self.B.size)])
         den = np.concatenate([self.A, np.zeros(n - self.A.size)])
-        return control.tf(num, den, True)
+        return control.tf(num, den, True if self.dt is None else self.dt)
 
     def inner_signal(self, u) -> np.ndarray:
         """Signal entering the linear block (black box: entering ``base.predict``)."""
@@ -263,13 +269,14 @@ class RefinedModel:
                 "use RefinedModel.predict instead."
             )
         if self.inner is not None and not ops:
-            return HammersteinSystem(self.inner, (self.A, self.B), x0=self.inner_x0)
+            return HammersteinSystem(self.inner, (self.A, self.B), x0=self.inner_x0,
+                                     dt=self.dt)
         bl = self.inner
         single = len(ops) == 1 and ops[0][0] == "backlash"
         if (bl is not None and single and -bl.mr * bl.cr <= self.inner_x0 <= bl.ml * bl.cl):
             c = _theta(ops[0][1])[0]
             merged = Backlash(bl.ml, bl.cl + c, bl.mr, bl.cr + c)
-            return HammersteinSystem(merged, (self.A, self.B), x0=self.inner_x0)
+            return HammersteinSystem(merged, (self.A, self.B), x0=self.inner_x0, dt=self.dt)
         if self.inner is None and len(ops) == 1 and ops[0][0] in ("backlash", "asym_backlash"):
             name, theta = ops[0][0], _theta(ops[0][1])
             if name == "backlash":
@@ -278,7 +285,8 @@ class RefinedModel:
                 sl, cl, cr = theta
                 ml, mr = 1.0 + sl, 1.0 - sl
             k = self.chapter_gain(name) or 1.0
-            return HammersteinSystem(Backlash(k * ml, cl, k * mr, cr), (self.A, self.B / k))
+            return HammersteinSystem(Backlash(k * ml, cl, k * mr, cr), (self.A, self.B / k),
+                                     dt=self.dt)
         if self.inner is None and not ops:
             # a linear model: backlash of (numerically) zero width is not allowed in
             # Backlash; report instead of faking one
@@ -335,13 +343,14 @@ def as_structure(model) -> RefinedModel:
             )
         A, B = as_polynomials(model)
         _check_linear(A, B)
-        return RefinedModel(A=A, B=B)
+        return RefinedModel(A=A, B=B, dt=None if model.dt is True else float(model.dt))
     name = type(model).__name__
     system = model if isinstance(model, HammersteinSystem) else _fitted_system(model)
     if system is not None:
         A, B = np.array(system.A, dtype=float), np.array(system.B, dtype=float)
         _check_linear(A, B)
-        return RefinedModel(A=A, B=B, inner=system.backlash, inner_x0=float(system.x0))
+        return RefinedModel(A=A, B=B, inner=system.backlash, inner_x0=float(system.x0),
+                            dt=getattr(system, "dt", None))
     if callable(getattr(model, "predict", None)):
         return RefinedModel(base=model)
     if callable(getattr(model, "fit", None)):

@@ -37,6 +37,7 @@ class Problem:
     grid_size: int
     ctx: object
     refine_to_bound: bool = True  # refine errors just above the bound down to rounding
+    on_lp: object = None  # called once per minimax LP solved (progress), or None
 
 
 @dataclass(frozen=True)
@@ -93,11 +94,17 @@ class _Objective:
             d = design(pb.origin, pb.u, pb.refit, combo, pb.y, pb.nb)
             target = pb.nb if pb.refine_to_bound else None
             self.cache[key] = (fit_design(pb.y, d, pb.skip, pb.coef_box, target, fast=True), d)
+            _tick(pb)
         return self.cache[key][0].error
 
     def best(self):
         key = min(self.cache, key=lambda k: self.cache[k][0].error)
         return key, *self.cache[key]
+
+
+def _tick(pb: Problem) -> None:
+    if pb.on_lp is not None:
+        pb.on_lp()
 
 
 def _golden(g, a, b, xtol, max_iter=90, stop=None):
@@ -274,6 +281,7 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
     key, fit, d = obj.best()
     # the final point, solved certified (and to the finest tolerances near the bound)
     sure = fit_design(pb.y, d, pb.skip, pb.coef_box, target)
+    _tick(pb)
     if sure.error <= fit.error or not np.isfinite(fit.error):
         fit = sure
     else:
@@ -319,6 +327,7 @@ def _pin_leading(pb: Problem, combo, d: Design, fit: Fit):
         d2 = design(pinned, pb.u, pb.refit, combo, pb.y, pb.nb)
         fit2 = fit_design(pb.y, d2, pb.skip, pb.coef_box, pb.nb)
         n += 1
+        _tick(pb)
         if np.any(outside(pb.y, fit2.prediction, pb.nb, pb.skip)):
             break
         origin, d, fit = pinned, d2, fit2

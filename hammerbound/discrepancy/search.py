@@ -218,18 +218,32 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False)
         return
     best = np.array(min(list(f.keys), key=f))
     if target is not None and target < f(best) <= 1.01 * target:
-        for _ in range(2):  # coordinate-wise golden refinement near the bound
-            for i in range(k):
-                span = 3e-3 * (hi[i] - lo[i])
+        _pattern(f, best, lo, hi, target)
 
-                def g(v, i=i, b=best):
-                    x = b.copy()
-                    x[i] = v
-                    return f(x)
 
-                _golden(g, max(lo[i], best[i] - span), min(hi[i], best[i] + span),
-                        1e-14 * (hi[i] - lo[i]), stop=target)
-                best = np.array(min(list(f.keys), key=f))
+def _pattern(f, best, lo, hi, target, span=3e-3, xtol=1e-14):
+    """Pattern search of ``f`` from ``best`` near the bound, down to the rounding level.
+
+    The minimax error is a maximum of V-shaped terms (e.g. ``|lo - L|`` and ``|hi - H|``
+    for two sensor limits): a coordinate-wise search stalls on its plateaus, so every
+    direction of ``{-1, 0, 1}^k`` is polled (diagonals move all terms at once); the step
+    starts at ``span`` of each range and is halved when no direction improves, down to
+    ``xtol`` of the range, or until the error reaches ``target``.
+    """
+    k = best.size
+    dirs = [np.array(d, float) for d in itertools.product((-1, 0, 1), repeat=k) if any(d)]
+    dirs.sort(key=lambda d: -np.count_nonzero(d))  # diagonals first
+    width = hi - lo
+    step, fb = span, f(best)
+    while step > xtol and fb > target:
+        for d in dirs:
+            x = np.clip(best + step * width * d, lo, hi)
+            fx = f(x)
+            if fx < fb:
+                best, fb = x, fx
+                break
+        else:
+            step /= 2.0
 
 
 def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,

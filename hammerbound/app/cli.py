@@ -423,9 +423,9 @@ def diagnose_cli_main(argv=None) -> int:
 
         hammerbound diagnose DATA.csv --num "0 0.5" --den "1 -0.5" --noise-bound 0.02
                              [--candidates offset,delay] [--refit linear|none] [--skip K]
-                             [--max-delay D] [--max-effects K] [--u-column u]
+                             [--max-delay D] [--max-effects {1,2,3}] [--u-column u]
                              [--y-column y]
-                             [--plot out.png] [--json]
+                             [--plot out.png] [--json] [--progress]
 
     ``DATA.csv`` holds the input and output columns (see
     :func:`hammerbound.data.csv_reader.read_io_csv`: with a header they are found by name,
@@ -461,7 +461,7 @@ def diagnose_cli_main(argv=None) -> int:
     p.add_argument("--refit", default="linear", choices=["linear", "none"])
     p.add_argument("--skip", type=int, default=0, help="initial samples not scored")
     p.add_argument("--max-delay", type=int, default=10)
-    p.add_argument("--max-effects", type=int, default=2,
+    p.add_argument("--max-effects", type=int, default=2, choices=(1, 2, 3),
                    help="largest number of effects searched jointly (1, 2 or 3)")
     p.add_argument("--u-column", default="u", help="input column: header name or 0-based index")
     p.add_argument("--y-column", default="y",
@@ -469,6 +469,9 @@ def diagnose_cli_main(argv=None) -> int:
     p.add_argument("--delimiter", default=",")
     p.add_argument("--plot", default=None, help="save the diagnosis figure to this PNG")
     p.add_argument("--json", action="store_true", help="print a JSON report")
+    p.add_argument("--progress", action="store_true",
+                   help="show the search's progress on stderr (bars on a terminal, plain "
+                        "lines otherwise)")
     try:
         args = p.parse_args(argv)
     except SystemExit as exc:  # usage errors (already printed) and --help
@@ -486,7 +489,7 @@ def diagnose_cli_main(argv=None) -> int:
         ]
         rep = diagnose(G, u, y, args.noise_bound, candidates=cands,
                        refit=args.refit, skip=args.skip, max_delay=args.max_delay,
-                       max_effects=args.max_effects)
+                       max_effects=args.max_effects, progress=args.progress)
     except HammerboundError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -25,7 +25,8 @@ Workflow (see ``docs/discrepancy.md``)
    ``backlash``    play operator of half-width ``c`` (unit slopes) on the input  ``c``
    ``deadzone``    ``sign(u) max(|u| - w, 0)`` on the input                      ``w``
    ``saturation``  ``clip(u, -s, s)`` on the input                               ``s``
-   ``delay``       ``q^-d`` (integer ``d >= 1``) extra input delay               ``d``
+   ``delay``       ``q^-d`` (integer ``d >= 1``) extra input delay; reported:    ``d``
+                   the total input delay of the refit (leading zeros of ``B``)
    ``offset``      constant ``o`` added to the output                            ``o``
    ``extra_pole``  ``(1 - p) / (1 - p q^-1)`` in series, ``-1 < p < 1``          ``p``
    ==============  ===========================================================  =====

@@ -3,14 +3,20 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
+from ..data.iodata import IOData
 from ..data.validation import as_real, as_signal, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
 from . import effects as _effects
 from .model import as_structure
 
-__all__ = ["candidate_names", "int_param", "positive", "validate"]
+__all__ = ["candidate_names", "int_param", "max_effects_param", "positive", "validate"]
+
+#: Largest ``max_effects`` :func:`~.diagnose` searches (triples of the best singles).
+MAX_EFFECTS = 3
 
 
 def int_param(name, value, minimum):
@@ -34,13 +40,80 @@ def positive(name, value, minimum=0.0, strict=True):
     return v
 
 
-def validate(model, u, y, noise_bound, refit, skip):
-    """Checked ``(structure, u, y, noise_bound, refit_flag, skip)``."""
+def max_effects_param(value):
+    """``max_effects`` as an int in ``1..MAX_EFFECTS`` or a ParameterValidationError."""
+    v = int_param("max_effects", value, 1)
+    if v > MAX_EFFECTS:
+        raise ParameterValidationError(
+            f"max_effects must be 1, 2 or {MAX_EFFECTS} (single effects, pairs, triples of "
+            f"the four best single candidates); got {value!r}. Larger combinations are not "
+            "searched."
+        )
+    return v
+
+
+def unpack(u, y, noise_bound, func="diagnose"):
+    """``(u, y, data)`` from ``(u, y)`` arrays or from an :class:`~hammerbound.IOData`
+    passed as ``u`` (``data``; None for arrays), with a typed error for every other mix."""
+    call = f"{func}(model, data, noise_bound=...)"
+    if isinstance(y, IOData):
+        raise DataValidationError(
+            f"y is an IOData; pass it in place of u (it holds both signals): {call}."
+        )
+    if isinstance(u, IOData):
+        if y is not None:
+            what = ("a number: the noise bound goes by keyword" if np.ndim(y) == 0
+                    and noise_bound is None else "given too, but the IOData holds the output")
+            raise DataValidationError(
+                f"u is an IOData and y is {what}; call {call} without y."
+            )
+        if not u.is_contiguous():
+            k = int(np.flatnonzero(np.diff(u.sample_index) != 1)[0])
+            raise DataValidationError(
+                f"the IOData's samples are not consecutive (a jump from sample "
+                f"{u.sample_index[k]} to {u.sample_index[k + 1]}); the model is simulated "
+                "over consecutive samples: pass a contiguous record (data[a:b])."
+            )
+        return u.u, u.y, u
+    if y is None:
+        raise DataValidationError(
+            f"y (the measured output) is missing: call {func}(model, u, y, noise_bound=...) "
+            f"with arrays, or {call} with an IOData holding u and y."
+        )
+    return u, y, None
+
+
+def _with_dt(s, data):
+    """The structure ``s`` with the data's sampling time (they must agree)."""
+    dt = None if data is None else data.dt
+    if dt is None:
+        return s
+    if s.dt is None:
+        origin = None if s.origin is None else replace(s.origin, dt=dt)
+        return replace(s, dt=dt, origin=origin)
+    if abs(s.dt - dt) > 1e-9 * max(s.dt, dt):
+        raise ParameterValidationError(
+            f"the model is sampled at dt = {s.dt:g} but the data at dt = {dt:g}; "
+            "discretise or resample one of them at the other's sampling time."
+        )
+    return s
+
+
+def validate(model, u, y, noise_bound, refit, skip, func="diagnose"):
+    """Checked ``(structure, u, y, noise_bound, refit_flag, skip, data)``; ``u`` may be an
+    :class:`~hammerbound.IOData` (``data``, then ``y`` is None; its ``dt`` goes to the
+    structure)."""
+    u, y, data = unpack(u, y, noise_bound, func)
     u = as_signal("u", u)
     y = as_signal("y", y)
     if u.size != y.size:
         raise DataValidationError(
             f"u has {u.size} samples but y has {y.size}; pass aligned input/output records."
+        )
+    if noise_bound is None:
+        raise ParameterValidationError(
+            "noise_bound is required (the bound |eta_t| <= noise_bound that every verdict "
+            f"rests on; no default): e.g. {func}(model, u, y, noise_bound=0.05)."
         )
     nb = as_real("noise_bound", noise_bound,
                  want="noise_bound must be a single positive number (the bound "
@@ -65,9 +138,9 @@ def validate(model, u, y, noise_bound, refit, skip):
             "cannot be compared with data that were not excited - record data with a "
             "varying input."
         )
-    check_scale("diagnose", {"u": u, "y": y}, {"noise_bound": nb})
-    s = as_structure(model)
-    return s, u, y, nb, refit == "linear", skip
+    check_scale(func, {"u": u, "y": y}, {"noise_bound": nb})
+    s = _with_dt(as_structure(model), data)
+    return s, u, y, nb, refit == "linear", skip, data
 
 
 def candidate_names(candidates):

@@ -9,10 +9,11 @@ from dataclasses import replace
 import numpy as np
 
 from . import effects as _effects
-from .checks import candidate_names, int_param, positive, validate
+from .checks import candidate_names, int_param, max_effects_param, positive, validate
 from .effects import CANDIDATES, Context
 from .fitting import design, outside, rebuild
 from .locate import locate_design
+from .progress import SearchProgress
 from .report import CandidateFit, CombinationFit, DiagnosisReport
 from .search import Problem, fit_combination
 
@@ -22,8 +23,8 @@ __all__ = ["diagnose"]
 def diagnose(
     model,
     u,
-    y,
-    noise_bound: float,
+    y=None,
+    noise_bound: float | None = None,
     *,
     candidates=None,
     refit: str = "linear",
@@ -34,6 +35,7 @@ def diagnose(
     coef_box: float = 1e3,
     min_improvement: float = 1.1,
     max_effects: int = 2,
+    progress: bool = False,
 ) -> DiagnosisReport:
     """Locate, name and add the effect a simulation model is missing.
 
@@ -44,11 +46,16 @@ def diagnose(
         :func:`hammerbound.systems.models.as_polynomials`), a Hammerstein system, a model
         returned by a previous :func:`diagnose` (to look for a second effect), or any
         object with ``.predict(u) -> y`` (a black box).
-    u, y : array_like
+    u, y : array_like, or an IOData and None
         Measured input and output, same length; the data are assumed to start from rest
-        (zero initial state) unless the first ``skip`` samples are excluded.
+        (zero initial state) unless the first ``skip`` samples are excluded. Or an
+        :class:`~hammerbound.IOData` in place of ``u`` (and no ``y``):
+        ``diagnose(model, data, noise_bound=0.02)``; its ``dt`` becomes the refined
+        model's sampling time (it must agree with a model's own), its signal names and
+        units label the figure.
     noise_bound : float
-        Known bound ``|eta_t| <= noise_bound`` of the output error (22.5).
+        Known bound ``|eta_t| <= noise_bound`` of the output error (22.5). Required (no
+        default: every verdict rests on it).
     candidates : sequence of str, optional
         Names from :data:`CANDIDATES` to try (default: :func:`default_candidates`, the
         one-parameter effects; ``"all"``: every registered candidate, including the
@@ -75,10 +82,17 @@ def diagnose(
         When nothing is consistent, a candidate (or combination) is listed in
         ``report.closest`` only if it shrinks the gap by at least this factor
         (``gap_before / error >= min_improvement``).
-    max_effects : int
+    max_effects : {1, 2, 3}
         Largest number of effects added together (1: single candidates only; 2: pairs are
         searched jointly when no single candidate is consistent; 3: then triples of the
         four best single candidates). The fewest effects that reach consistency win.
+        Larger values are refused (ParameterValidationError).
+    progress : bool, default False
+        Show the search's progress on stderr (never stdout): on a terminal a tqdm bar
+        per stage (single candidates, pair screening, full pair search, ...) with the
+        classes fitted out of those planned, the class being fitted and the LPs solved;
+        elsewhere (pipe, file, notebook) one plain line per fitted class. See
+        :mod:`hammerbound.discrepancy.progress`.
 
     Returns
     -------
@@ -88,10 +102,12 @@ def diagnose(
     ------
     DataValidationError
         NaN/inf in ``u`` or ``y``, mismatched lengths, too few samples, a black-box model
-        returning the wrong number of samples.
+        returning the wrong number of samples; ``y`` missing, or given with an IOData; a
+        non-contiguous IOData.
     ParameterValidationError
-        Non-positive noise bound, unknown candidate, continuous-time or unstable
-        transfer function, unsupported model type.
+        Missing or non-positive noise bound, unknown candidate, ``max_effects`` outside
+        1..3, continuous-time or unstable transfer function, a model whose ``dt``
+        differs from the IOData's, unsupported model type.
 
     Examples
     --------
@@ -103,7 +119,7 @@ def diagnose(
     >>> diagnose(G, u, y, noise_bound=0.01).effect
     'offset'
     """
-    s, u, y, nb, do_refit, skip = validate(model, u, y, noise_bound, refit, skip)
+    s, u, y, nb, do_refit, skip, data = validate(model, u, y, noise_bound, refit, skip)
     names = candidate_names(candidates)
     max_delay = int_param("max_delay", max_delay, 1)
     max_delay = min(max_delay, u.size - skip - 2)
@@ -111,7 +127,18 @@ def diagnose(
     window = int_param("window", window, 1)
     coef_box = positive("coef_box", coef_box)
     min_improvement = positive("min_improvement", min_improvement, 1.0, strict=False)
-    max_effects = int_param("max_effects", max_effects, 1)
+    max_effects = max_effects_param(max_effects)
+    bar = SearchProgress(progress)
+    try:
+        return _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size,
+                         window, coef_box, min_improvement, max_effects, bar)
+    finally:
+        bar.close()
+
+
+def _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size, window,
+              coef_box, min_improvement, max_effects, bar):
+    """:func:`diagnose` on checked arguments (``bar``: a :class:`SearchProgress`)."""
     t0 = time.perf_counter()
 
     origin = s if s.origin is None else s.origin
@@ -119,24 +146,31 @@ def diagnose(
         if s.origin is not None else ()
     ctx = Context(u_max=float(np.max(np.abs(u))), y_max=float(np.max(np.abs(y))),
                   n=int(u.size), max_delay=max_delay, noise_bound=nb)
-    pb = Problem(origin, u, y, nb, do_refit, skip, coef_box, grid_size, ctx)
+    pb = Problem(origin, u, y, nb, do_refit, skip, coef_box, grid_size, ctx, on_lp=bar.lp)
     old = tuple(e for e, _ in existing)
     cost = [0, 0]  # LPs solved, combinations fitted
 
+    def ok(cf):
+        return not np.any(outside(y, cf.prediction, nb, skip))
+
     def fit(effs, **kw):
+        label = "+".join(e.name for e in effs[len(old):]) or "the model's own effects"
+        bar.start(label)
         cf = fit_combination(pb, effs, **kw)
         cost[0] += cf.n_evaluations
         cost[1] += 1
+        bar.done(label, cf.error, ok(cf))
         return cf
 
     old_thetas = tuple(th for _, th in existing)
     if existing:  # the effects already in the model are refitted (jointly)
+        bar.stage("refit of the model's effects", 1)
         before = fit(old, starts=[old_thetas])
         old_thetas = before.thetas
         d_before, combo_before = before.design, tuple(zip(old, before.thetas, strict=True))
     else:
         combo_before = ()
-        d_before = design(origin, u, do_refit, (), y)
+        d_before = design(origin, u, do_refit, (), y, nb)
     disagreement, base_fit, nominal, tagged = locate_design(
         s, d_before, u, y, nb, skip, window, max_delay, coef_box
     )
@@ -146,9 +180,6 @@ def diagnose(
 
     def frac(pred):
         return float(np.mean(outside(y, pred, nb, skip)[skip:]))
-
-    def ok(cf):
-        return not np.any(outside(y, cf.prediction, nb, skip))
 
     def removed(err):
         """Fraction of the gap excess (gap_before - noise_bound) that a fit removes."""
@@ -162,6 +193,7 @@ def diagnose(
     have = {e.name for e in old}
     if consistent_before:  # nothing to decide: no refinement of errors at the bound
         pb = replace(pb, refine_to_bound=False)
+    bar.stage("single candidates", sum(name not in have for name in names))
     for name in names:
         if name not in have:
             e = _effects.get(name)
@@ -176,9 +208,10 @@ def diagnose(
         if good:
             chosen = min(good, key=lambda c: (c.n_params, c.error))
         elif max_effects >= 2 and len(singles) >= 2:
-            chosen, combos = _joint_search(fit, old, old_thetas, singles, max_effects, ok)
+            chosen, combos = _joint_search(fit, old, old_thetas, singles, max_effects, ok,
+                                           bar)
         if chosen is not None and len(chosen.effects) > 1:
-            chosen = _prune(fit, chosen, ok)
+            chosen = _prune(fit, chosen, ok, bar)
     combo_fits = tuple(_combination_fit(cf, len(old), ok(cf), removed(cf.error))
                        for cf in combos)
 
@@ -233,18 +266,18 @@ def diagnose(
         search_seconds=time.perf_counter() - t0,
         n_fits=cost[0],
         n_combinations=cost[1],
+        data=data,
     )
 
 
 def _candidate_fit(cf, gap_before, consistent, fraction, removed):
     e = cf.effects[-1]
-    coefs = tuple(float(v) for v in cf.fit.z[cf.design.slices[-1]])
     err = cf.error
     return CandidateFit(
         name=e.name,
         n_params=CANDIDATES[e.name],
         param_name=e.param_label(),
-        value=e.value(cf.thetas[-1], coefs),
+        value=cf.model.effects[-1][1],  # in the refined model's convention (Effect.value)
         minimax_error=err,
         lower_bound=cf.lower,
         consistent=consistent,
@@ -257,12 +290,9 @@ def _candidate_fit(cf, gap_before, consistent, fraction, removed):
 
 
 def _combination_fit(cf, n_old, consistent, removed):
-    vals = []
-    for (e, th), sl in zip(zip(cf.effects, cf.thetas, strict=True), cf.design.slices,
-                           strict=True):
-        vals.append(e.value(th, tuple(float(v) for v in cf.fit.z[sl])))
     return CombinationFit(
-        name="+".join(cf.names[n_old:]), effects=cf.names, values=tuple(vals),
+        name="+".join(cf.names[n_old:]), effects=cf.names,
+        values=tuple(v for _, v in cf.model.effects),
         minimax_error=cf.error, consistent=consistent, gap_fraction_removed=removed,
         n_evaluations=cf.n_evaluations, seconds=cf.seconds,
     )
@@ -282,7 +312,7 @@ def _int_choices(effects, offset, singles):
     return out
 
 
-def _joint_search(fit, old, old_thetas, singles, max_effects, ok):
+def _joint_search(fit, old, old_thetas, singles, max_effects, ok, bar):
     """Pairs (then triples of the four best singles) fitted jointly: a coarse screening
     of the combinations, most promising first (smallest product of the single errors; it
     stops at the first consistent one), then a full search of the three best screened."""
@@ -292,6 +322,8 @@ def _joint_search(fit, old, old_thetas, singles, max_effects, ok):
         names = pool if k == 2 else pool[:4]
         order = sorted(itertools.combinations(names, k),
                        key=lambda c: float(np.prod([singles[n].error for n in c])))
+        kind = "pairs" if k == 2 else "triples"
+        bar.stage(f"{kind}, screening", len(order))
         screen = []
         for combo in order:
             effs = tuple(_effects.get(n) for n in combo)
@@ -300,10 +332,12 @@ def _joint_search(fit, old, old_thetas, singles, max_effects, ok):
             cf = fit((*old, *effs), starts=[start], int_choices=ic, coarse=True)
             screen.append((cf, start, ic))
             if ok(cf):
+                bar.end_early("a consistent one found")
                 break
         screen.sort(key=lambda t: t[0].error)
         good = [t[0] for t in screen if ok(t[0])]
         if not good:
+            bar.stage(f"{kind}, full search of the best", min(3, len(screen)))
             full = [fit(cf.effects, starts=[cf.thetas, st], int_choices=ic)
                     for cf, st, ic in screen[:3]]
             good = [cf for cf in full if ok(cf)]
@@ -318,9 +352,10 @@ def _joint_search(fit, old, old_thetas, singles, max_effects, ok):
     return None, done
 
 
-def _prune(fit, chosen, ok):
+def _prune(fit, chosen, ok, bar):
     """Drop effects that the others make redundant (the data stay consistent without)."""
     effs, thetas = list(chosen.effects), list(chosen.thetas)
+    bar.stage("dropping redundant effects", len(effs))
     i = 0
     while len(effs) > 1 and i < len(effs):
         rest = effs[:i] + effs[i + 1:]
@@ -329,6 +364,7 @@ def _prune(fit, chosen, ok):
             chosen, effs, thetas = cf, list(cf.effects), list(cf.thetas)
         else:
             i += 1
+    bar.end_early("every remaining effect is needed")
     return chosen
 
 
@@ -361,11 +397,8 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
             )
         return msg
     if chosen is not None:
-        parts = []
-        for (e, th), sl in zip(zip(chosen.effects, chosen.thetas, strict=True),
-                               chosen.design.slices, strict=True):
-            coefs = tuple(float(v) for v in chosen.fit.z[sl])
-            parts.append(f"{e.name} ({e.param_label()} = {_num(e.value(th, coefs))})")
+        parts = [f"{e.name} ({e.param_label()} = {_num(v)})"
+                 for e, (_, v) in zip(chosen.effects, chosen.model.effects, strict=True)]
         what = " + ".join(parts)
         if len(added) == 1 and not old:
             msg = (f"Missing effect: {what}; with it the data are consistent with the noise "

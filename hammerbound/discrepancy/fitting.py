@@ -16,7 +16,7 @@ from scipy.signal import lfilter
 from ..solvers.safe_lp import safe_minimize
 from ..tolerances import feasibility_tol
 from . import effects as _effects
-from .model import RefinedModel, _shift, black_box_predict
+from .model import RefinedModel, _shift, black_box_predict, inner_backlash
 
 __all__ = ["Design", "Fit", "certified_above", "design", "minimax", "outside", "rebuild"]
 
@@ -194,8 +194,11 @@ def _overrides(e, hook) -> bool:
     return getattr(type(e), hook) is not getattr(_effects.Effect, hook)
 
 
-def design(s: RefinedModel, u, refit: bool, combo=(), y=None) -> Design:
+def design(s: RefinedModel, u, refit: bool, combo=(), y=None, nb=None) -> Design:
     """The model class of origin ``s`` with the effects ``combo`` = ((Effect, theta), ...).
+
+    ``y`` and the noise bound ``nb`` decide the one-sided samples of output maps
+    (:meth:`~.effects.Effect.one_sided`).
 
     Order: ``s.input_ops``, the effects' input maps (in order), the original backlash, the
     linear block in series with every effect's filter, the output columns, the output gains
@@ -215,7 +218,8 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None) -> Design:
     cols = []
     f = np.zeros(n)
     if s.base is None:
-        x = xx if s.inner is None else s.inner.simulate(xx, x0=s.inner_x0)
+        extend = bool(s.input_ops) or any(_overrides(e, "transform_input") for e, _ in combo)
+        x = xx if s.inner is None else inner_backlash(s.inner, xx, s.inner_x0, extend)
         A = np.convolve(s.A, den)
         if refit:
             v = lfilter(num, A, x)
@@ -262,7 +266,7 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None) -> Design:
         if y is not None:
             sides = np.zeros(n, int)
             for e, th in outs:
-                sd = e.one_sided(y, th)
+                sd = e.one_sided(y, th, nb)
                 if sd is not None:
                     sides = np.where(sides == 0, np.asarray(sd, int), sides)
     return Design(f, Phi, n_model, tuple(slices), sides, post, num, den)
@@ -279,11 +283,10 @@ def rebuild(s: RefinedModel, refit: bool, combo, d: Design, fit: Fit) -> Refined
     ``fit`` (its prediction equals ``fit.prediction``)."""
     z = fit.z
     kw = {}
-    effects, params, input_ops, terms, out_ops = [], [], list(s.input_ops), [], []
+    params, input_ops, terms, out_ops = [], list(s.input_ops), [], []
     offset = s.offset
     for (e, theta), sl in zip(combo, d.slices, strict=True):
         coefs = tuple(float(v) for v in z[sl])
-        effects.append((e.name, e.value(theta, coefs)))
         params.append((e.name, tuple(theta), coefs))
         if _overrides(e, "transform_input"):
             input_ops.append((e.name, tuple(theta)))
@@ -305,8 +308,13 @@ def rebuild(s: RefinedModel, refit: bool, combo, d: Design, fit: Fit) -> Refined
             kw["post_filters"] = (*s.post_filters, (d.num, d.den))
         if refit:
             kw["gain"] = float(z[0])
-    return replace(
-        s, effects=tuple(effects), effect_params=tuple(params), input_ops=tuple(input_ops),
+    model = replace(
+        s, effect_params=tuple(params), input_ops=tuple(input_ops),
         output_terms=tuple(terms), output_ops=tuple(out_ops), offset=float(offset),
         origin=s if combo else None, **kw,
     )
+    # the reported values may depend on the refitted model (total delay, slopes scaled by
+    # the linear block's static gain): computed last
+    values = tuple((e.name, e.value(tuple(theta), coefs, model))
+                   for (e, theta), (_, _, coefs) in zip(combo, params, strict=True))
+    return replace(model, effects=values)

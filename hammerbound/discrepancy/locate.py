@@ -69,7 +69,7 @@ def _best_lag(y, yh, max_lag):
     return best
 
 
-def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
+def locate(model, u, y=None, noise_bound=None, *, refit: str = "linear", skip: int = 0,
            window: int = 5, max_lag: int = 10) -> Disagreement:
     """Step 1: where and by how much does the model disagree with the data?
 
@@ -86,7 +86,7 @@ def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
     -------
     Disagreement
     """
-    s, u, y, nb, do_refit, skip = validate(model, u, y, noise_bound, refit, skip)
+    s, u, y, nb, do_refit, skip, _ = validate(model, u, y, noise_bound, refit, skip, "locate")
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin
@@ -95,7 +95,7 @@ def locate(model, u, y, noise_bound, *, refit: str = "linear", skip: int = 0,
         from . import effects as _effects
 
         combo = tuple((_effects.get(n), th) for n, th, _ in s.effect_params)
-    d = design(origin, u, do_refit, combo, y)
+    d = design(origin, u, do_refit, combo, y, nb)
     dis, fit, _, tagged = locate_design(s, d, u, y, nb, skip, window, max_lag)
     return replace(dis, hints=check_hints(origin, combo, u, y, nb, do_refit, skip, max_lag,
                                           fit.error, tagged))

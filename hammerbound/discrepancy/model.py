@@ -59,6 +59,22 @@ def apply_effect(name: str, value, u) -> np.ndarray:
     return x
 
 
+def inner_backlash(bl: Backlash, x: np.ndarray, x0: float, extend: bool) -> np.ndarray:
+    """The model's own backlash ``bl`` on ``x`` from state ``x0``.
+
+    ``extend``: added input effects act in front of it and may drive it beyond the
+    crossing of its lines, where (22.1) is ill-posed; there the right line wins, as for
+    ``asym_backlash``, so that the search can evaluate every parameter value (such values
+    fit badly and are not chosen). Without added input effects the measured input must
+    keep (22.1) well posed (:class:`~hammerbound.exceptions.IllPosedBacklashError`).
+    """
+    if not extend:
+        return bl.simulate(x, x0=x0)
+    from .effects.asym_backlash import play
+
+    return play(x, bl.ml, bl.cl, bl.mr, bl.cr, x0)
+
+
 def _shift(v: np.ndarray, d: int) -> np.ndarray:
     if d <= 0:
         return v
@@ -120,6 +136,10 @@ class RefinedModel:
         ``origin`` it lets :func:`diagnose` refit them jointly with new ones.
     origin : RefinedModel or None
         The model before any effect was added (``None``: this model is the origin).
+    dt : float or None
+        Sampling time: the model's (a ``TransferFunction`` or ``HammersteinSystem`` with a
+        numeric ``dt``), else the data's (an :class:`~hammerbound.IOData`); None: not given
+        (:attr:`linear` then has python-control's ``dt=True``).
     """
 
     effects: tuple = ()
@@ -139,6 +159,7 @@ class RefinedModel:
     output_ops: tuple = field(default=(), repr=False)
     effect_params: tuple = field(default=(), repr=False)
     origin: RefinedModel | None = field(default=None, repr=False)
+    dt: float | None = None
 
     @property
     def _j0(self) -> int:
@@ -148,7 +169,8 @@ class RefinedModel:
 
     @property
     def linear(self):
-        """Linear block ``B/A`` as a discrete ``control.TransferFunction`` (dt=True)."""
+        """Linear block ``B/A`` as a discrete ``control.TransferFunction`` (sampling time
+        :attr:`dt`, or ``True`` when not given)."""
         if self.A is None:
             return None
         import control
@@ -156,7 +178,7 @@ class RefinedModel:
         n = max(self.A.size, self.B.size)
         num = np.concatenate([self.B, np.zeros(n - self.B.size)])
         den = np.concatenate([self.A, np.zeros(n - self.A.size)])
-        return control.tf(num, den, True)
+        return control.tf(num, den, True if self.dt is None else self.dt)
 
     def inner_signal(self, u) -> np.ndarray:
         """Signal entering the linear block (black box: entering ``base.predict``)."""
@@ -164,7 +186,7 @@ class RefinedModel:
         for name, theta in self.input_ops:
             x = _effects.get(name).transform_input(x, _theta(theta))
         if self.base is None and self.inner is not None:
-            x = self.inner.simulate(x, x0=self.inner_x0)
+            x = inner_backlash(self.inner, x, self.inner_x0, bool(self.input_ops))
         if self.base is not None:
             x = _shift(x, self.delay)
         return x
@@ -199,15 +221,41 @@ class RefinedModel:
             yh = e.transform_output(yh, theta)  # output gains first, as in the fit
         return yh
 
+    def chapter_gain(self, name: str) -> float | None:
+        """Gain that the chapter's convention moves from the linear block into the slopes
+        of the added backlash ``name`` (``backlash`` or ``asym_backlash``).
+
+        (22.8) normalises the linear block to unit static gain, the backlash slopes
+        carrying the gain. That is possible when ``name`` is the last input effect, so that
+        it acts directly on the linear block (no backlash of the original model between
+        them), and the static gain ``k = B(1)/A(1)`` of the refined linear block is
+        positive: then ``k``; otherwise None (the slopes stay normalised as searched).
+        """
+        if self.A is None or self.inner is not None or not self.input_ops \
+                or self.input_ops[-1][0] != name:
+            return None
+        k = float(np.sum(self.B) / np.sum(self.A))  # A is stable: A(1) != 0
+        return k if np.isfinite(k) and k > 0 else None
+
     def to_hammerstein(self) -> HammersteinSystem:
         """Return a :class:`~hammerbound.systems.models.HammersteinSystem` when representable.
 
         Possible when the model is linear-structure, has no offset, and its input
-        nonlinearity is a single backlash: an added one (unit slopes, state 0), the
-        original one, or both combined. An added play of half-width ``c`` in front of the
-        original ``Backlash(m_l, c_l, m_r, c_r)`` equals ``Backlash(m_l, c_l + c, m_r,
-        c_r + c)`` exactly when the original initial state is a rest state
-        (``-m_r c_r <= x0 <= m_l c_l``).
+        nonlinearity is a single backlash: an added one (``backlash`` or
+        ``asym_backlash``, state 0), the original one, or an added ``backlash`` in front of
+        the original one. An added play of half-width ``c`` in front of the original
+        ``Backlash(m_l, c_l, m_r, c_r)`` equals ``Backlash(m_l, c_l + c, m_r, c_r + c)``
+        exactly when the original initial state is a rest state
+        (``-m_r c_r <= x0 <= m_l c_l``); the original linear block is kept.
+
+        An added backlash alone is returned in the chapter's convention (22.8): the linear
+        block ``B / k`` has unit static gain and the slopes carry ``k = B(1)/A(1)``, so the
+        backlash is the reported ``(m_l, c_l, m_r, c_r)`` (``c`` and unit slopes scaled by
+        ``k`` for ``backlash``). When ``k <= 0`` (see :meth:`chapter_gain`) the slopes stay
+        normalised as searched and the linear block keeps the gain. Either way the system
+        simulates exactly as :meth:`predict` (same input range: an ``asym_backlash`` is
+        ill-posed beyond the crossing of its lines, where :meth:`predict` lets the right
+        line win and the system raises).
 
         Raises
         ------
@@ -221,16 +269,24 @@ class RefinedModel:
                 "use RefinedModel.predict instead."
             )
         if self.inner is not None and not ops:
-            return HammersteinSystem(self.inner, (self.A, self.B), x0=self.inner_x0)
+            return HammersteinSystem(self.inner, (self.A, self.B), x0=self.inner_x0,
+                                     dt=self.dt)
         bl = self.inner
         single = len(ops) == 1 and ops[0][0] == "backlash"
         if (bl is not None and single and -bl.mr * bl.cr <= self.inner_x0 <= bl.ml * bl.cl):
             c = _theta(ops[0][1])[0]
             merged = Backlash(bl.ml, bl.cl + c, bl.mr, bl.cr + c)
-            return HammersteinSystem(merged, (self.A, self.B), x0=self.inner_x0)
-        if self.inner is None and single:
-            c = _theta(ops[0][1])[0]
-            return HammersteinSystem(Backlash(1.0, c, 1.0, c), (self.A, self.B))
+            return HammersteinSystem(merged, (self.A, self.B), x0=self.inner_x0, dt=self.dt)
+        if self.inner is None and len(ops) == 1 and ops[0][0] in ("backlash", "asym_backlash"):
+            name, theta = ops[0][0], _theta(ops[0][1])
+            if name == "backlash":
+                ml, cl, mr, cr = 1.0, theta[0], 1.0, theta[0]
+            else:
+                sl, cl, cr = theta
+                ml, mr = 1.0 + sl, 1.0 - sl
+            k = self.chapter_gain(name) or 1.0
+            return HammersteinSystem(Backlash(k * ml, cl, k * mr, cr), (self.A, self.B / k),
+                                     dt=self.dt)
         if self.inner is None and not ops:
             # a linear model: backlash of (numerically) zero width is not allowed in
             # Backlash; report instead of faking one
@@ -287,13 +343,14 @@ def as_structure(model) -> RefinedModel:
             )
         A, B = as_polynomials(model)
         _check_linear(A, B)
-        return RefinedModel(A=A, B=B)
+        return RefinedModel(A=A, B=B, dt=None if model.dt is True else float(model.dt))
     name = type(model).__name__
     system = model if isinstance(model, HammersteinSystem) else _fitted_system(model)
     if system is not None:
         A, B = np.array(system.A, dtype=float), np.array(system.B, dtype=float)
         _check_linear(A, B)
-        return RefinedModel(A=A, B=B, inner=system.backlash, inner_x0=float(system.x0))
+        return RefinedModel(A=A, B=B, inner=system.backlash, inner_x0=float(system.x0),
+                            dt=getattr(system, "dt", None))
     if callable(getattr(model, "predict", None)):
         return RefinedModel(base=model)
     if callable(getattr(model, "fit", None)):

@@ -7,6 +7,14 @@ import numpy as np
 __all__ = ["plot_report"]
 
 
+def _label(data, which):
+    """``u``/``y``, or the IOData's signal name with its unit."""
+    if data is None:
+        return "u" if which == "input" else "y"
+    name, unit = getattr(data, f"{which}_name"), getattr(data, f"{which}_unit")
+    return f"{name} [{unit}]" if unit else name
+
+
 def plot_report(self, path=None, *, max_samples=None):
     """Figure of a :class:`~.report.DiagnosisReport` (see its ``plot``)."""
     import matplotlib.pyplot as plt
@@ -25,14 +33,14 @@ def plot_report(self, path=None, *, max_samples=None):
     )
     ax = axes[0]
     ax.step(t, self.u[sl], where="post", color="k", lw=0.9)
-    ax.set_ylabel("input u")
+    ax.set_ylabel(f"input {_label(self.data, 'input')}")
     ax = axes[1]
     ax.plot(t, self.y[sl], ".", ms=2.5, color="0.35", label="data y")
     ax.plot(t, self.prediction_nominal[sl], color="tab:orange", lw=1.0,
             label="model as given")
     ax.plot(t, self.prediction_after[sl], color="tab:blue", lw=1.0,
             label=f"refined ({self.effect or 'refit only'})")
-    ax.set_ylabel("output y")
+    ax.set_ylabel(f"output {_label(self.data, 'output')}")
     ax.legend(loc="upper left", fontsize=8, ncol=3, framealpha=0.9)
     ax = axes[2]
     rb = (self.y - self.prediction_before)[sl]

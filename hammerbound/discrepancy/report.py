@@ -244,6 +244,9 @@ class DiagnosisReport:
         Localisation of the disagreement (step 1).
     message : str
         One-paragraph conclusion.
+    data : IOData or None
+        The :class:`~hammerbound.IOData` passed to :func:`diagnose` (None for arrays): its
+        signal names and units label the figure; its ``dt`` is ``refined_model.dt``.
     """
 
     effect: str | None
@@ -272,6 +275,7 @@ class DiagnosisReport:
     search_seconds: float = 0.0
     n_fits: int = 0
     n_combinations: int = 0
+    data: object = field(repr=False, default=None)
 
     @property
     def effect_label(self) -> str:
@@ -374,6 +378,7 @@ class DiagnosisReport:
                 "B": None if rm.B is None else rm.B.tolist(),
                 "offset": rm.offset,
                 "gain": rm.gain,
+                "dt": rm.dt,
             },
             "message": self.message,
         })

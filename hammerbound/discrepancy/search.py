@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize, minimize_scalar
 
-from .fitting import Design, Fit, design, fit_design, rebuild
+from .fitting import Design, Fit, design, fit_design, outside, rebuild
 from .model import RefinedModel
 
 __all__ = ["ComboFit", "Problem", "fit_combination"]
@@ -37,6 +37,7 @@ class Problem:
     grid_size: int
     ctx: object
     refine_to_bound: bool = True  # refine errors just above the bound down to rounding
+    on_lp: object = None  # called once per minimax LP solved (progress), or None
 
 
 @dataclass(frozen=True)
@@ -90,14 +91,20 @@ class _Objective:
         if key not in self.cache:
             pb = self.pb
             combo = tuple(zip(self.effects, self.split(key), strict=True))
-            d = design(pb.origin, pb.u, pb.refit, combo, pb.y)
+            d = design(pb.origin, pb.u, pb.refit, combo, pb.y, pb.nb)
             target = pb.nb if pb.refine_to_bound else None
             self.cache[key] = (fit_design(pb.y, d, pb.skip, pb.coef_box, target, fast=True), d)
+            _tick(pb)
         return self.cache[key][0].error
 
     def best(self):
         key = min(self.cache, key=lambda k: self.cache[k][0].error)
         return key, *self.cache[key]
+
+
+def _tick(pb: Problem) -> None:
+    if pb.on_lp is not None:
+        pb.on_lp()
 
 
 def _golden(g, a, b, xtol, max_iter=90, stop=None):
@@ -211,18 +218,32 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False)
         return
     best = np.array(min(list(f.keys), key=f))
     if target is not None and target < f(best) <= 1.01 * target:
-        for _ in range(2):  # coordinate-wise golden refinement near the bound
-            for i in range(k):
-                span = 3e-3 * (hi[i] - lo[i])
+        _pattern(f, best, lo, hi, target)
 
-                def g(v, i=i, b=best):
-                    x = b.copy()
-                    x[i] = v
-                    return f(x)
 
-                _golden(g, max(lo[i], best[i] - span), min(hi[i], best[i] + span),
-                        1e-14 * (hi[i] - lo[i]), stop=target)
-                best = np.array(min(list(f.keys), key=f))
+def _pattern(f, best, lo, hi, target, span=3e-3, xtol=1e-14):
+    """Pattern search of ``f`` from ``best`` near the bound, down to the rounding level.
+
+    The minimax error is a maximum of V-shaped terms (e.g. ``|lo - L|`` and ``|hi - H|``
+    for two sensor limits): a coordinate-wise search stalls on its plateaus, so every
+    direction of ``{-1, 0, 1}^k`` is polled (diagonals move all terms at once); the step
+    starts at ``span`` of each range and is halved when no direction improves, down to
+    ``xtol`` of the range, or until the error reaches ``target``.
+    """
+    k = best.size
+    dirs = [np.array(d, float) for d in itertools.product((-1, 0, 1), repeat=k) if any(d)]
+    dirs.sort(key=lambda d: -np.count_nonzero(d))  # diagonals first
+    width = hi - lo
+    step, fb = span, f(best)
+    while step > xtol and fb > target:
+        for d in dirs:
+            x = np.clip(best + step * width * d, lo, hi)
+            fx = f(x)
+            if fx < fb:
+                best, fb = x, fx
+                break
+        else:
+            step /= 2.0
 
 
 def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
@@ -274,6 +295,7 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
     key, fit, d = obj.best()
     # the final point, solved certified (and to the finest tolerances near the bound)
     sure = fit_design(pb.y, d, pb.skip, pb.coef_box, target)
+    _tick(pb)
     if sure.error <= fit.error or not np.isfinite(fit.error):
         fit = sure
     else:
@@ -288,9 +310,6 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
         ranking[(i, j)] = sorted(best_by_v, key=best_by_v.get)
     thetas = obj.split(key)
     combo = tuple(zip(effects, thetas, strict=True))
-    model = rebuild(pb.origin, pb.refit, combo, d, fit)
-    pred = model.predict(pb.u)
-    err = float(np.max(np.abs((pb.y - pred)[pb.skip:])))
     exhaustive = not cont_idx and full_enum
     if exhaustive:  # certified bound over the whole class: every enumerated point, certified
         lower = fit.lower
@@ -299,5 +318,31 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
                 lower = min(lower, fit_design(pb.y, dd, pb.skip, pb.coef_box).lower)
     else:
         lower = fit.lower
+    origin, d, fit, n_pinned = _pin_leading(pb, combo, d, fit)
+    model = rebuild(origin, pb.refit, combo, d, fit)
+    pred = model.predict(pb.u)
+    err = float(np.max(np.abs((pb.y - pred)[pb.skip:])))
+    # ``lower`` bounds the whole class; the pinned fit lies in it, so it stays a bound
     return ComboFit(effects, thetas, fit, d, model, pred, err, min(lower, err), exhaustive,
-                    len(obj.cache) + 1, time.perf_counter() - t0, ranking)
+                    len(obj.cache) + 1 + n_pinned, time.perf_counter() - t0, ranking)
+
+
+def _pin_leading(pb: Problem, combo, d: Design, fit: Fit):
+    """For a combination with a delay (``Effect.pins_leading``) whose fit is consistent:
+    pin the leading refitted coefficient of the numerator to zero, one at a time, while the
+    refit stays consistent; the delay of the refined model is then the one the data need
+    (the reported total delay is the refit's). Returns ``(origin, design, fit, n_lps)``."""
+    origin, n = pb.origin, 0
+    if not (pb.refit and origin.base is None and any(e.pins_leading for e, _ in combo)):
+        return origin, d, fit, n
+    while np.isfinite(fit.error) and not np.any(outside(pb.y, fit.prediction, pb.nb, pb.skip)) \
+            and origin._j0 + 1 < origin.B.size:  # keep one free coefficient
+        pinned = replace(origin, b_free_from=origin._j0 + 1)
+        d2 = design(pinned, pb.u, pb.refit, combo, pb.y, pb.nb)
+        fit2 = fit_design(pb.y, d2, pb.skip, pb.coef_box, pb.nb)
+        n += 1
+        _tick(pb)
+        if np.any(outside(pb.y, fit2.prediction, pb.nb, pb.skip)):
+            break
+        origin, d, fit = pinned, d2, fit2
+    return origin, d, fit, n

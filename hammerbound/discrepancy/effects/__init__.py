@@ -29,14 +29,18 @@ An effect declares:
   - :meth:`Effect.output_gain` ``(n, theta) -> (n,) array``: a time-varying gain on the
     model output (a gain drift); the LP rows are scaled by it, so the fit stays exact;
   - :meth:`Effect.transform_output` ``(yhat, theta) -> yhat`` with
-    :meth:`Effect.one_sided` ``(y, theta) -> array of {-1, 0, +1} or None``: a nonlinear
+    :meth:`Effect.one_sided` ``(y, theta, noise_bound) -> array of {-1, 0, +1} or None``: a nonlinear
     output (sensor) map; the LP is told which samples are only bounded on one side;
 * ``default = False`` to leave it out of ``diagnose(candidates=None)`` (tried only when
   named, or with ``candidates="all"``): the library's several-parameter candidates
   (``polynomial``, ``asym_backlash``, ``relay``, ``output_saturation``, ``drift``) cost
   1-3 s each per call (product-grid searches), the one-parameter ones ~0.2 s;
-* optionally :meth:`Effect.value` ``(theta, coefs)`` - what ``CandidateFit.value`` shows
-  (default: the single parameter, or a tuple).
+* optionally :meth:`Effect.value` ``(theta, coefs, model)`` - what ``CandidateFit.value``
+  shows (default: the single parameter, or a tuple); ``model`` is the refitted
+  :class:`~hammerbound.discrepancy.RefinedModel`, for values in its convention;
+* optionally ``pins_leading = True`` (``delay``): after the fit, the leading refitted
+  coefficients of the numerator are pinned to zero one by one while the data stay
+  consistent, so that the model's delay is the one the data need.
 
 ``theta`` is always a tuple of floats in ``param_names`` order. Every hook must be a pure
 function of its arguments (the search calls it many times). Whatever the hooks do, the

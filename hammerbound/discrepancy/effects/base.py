@@ -93,6 +93,9 @@ class Effect:
     acts_on_input: bool = False
     #: Tried when ``diagnose(candidates=None)``; False: only when named (or ``"all"``).
     default: bool = True
+    #: True for a delay: after the fit the leading refitted coefficients of the numerator
+    #: are pinned to zero one by one while the data stay consistent (the delay the data need).
+    pins_leading: bool = False
 
     @property
     def n_params(self) -> int:
@@ -139,17 +142,23 @@ class Effect:
         """Output after the effect (nonlinear sensor effects)."""
         return yhat
 
-    def one_sided(self, y: np.ndarray, theta: tuple) -> np.ndarray | None:
+    def one_sided(self, y: np.ndarray, theta: tuple, noise_bound: float) -> np.ndarray | None:
         """For output effects that clip: ``+1`` where only ``yhat_t >= y_t - e`` is required
         before :meth:`transform_output` (the clipped sample may be exceeded), ``-1`` where
-        only ``yhat_t <= y_t + e``, ``0`` elsewhere; None: two-sided everywhere. The
-        achieved error is always recomputed from the full model, so a wrong choice here
-        can only make the fit worse, never the reported error wrong."""
+        only ``yhat_t <= y_t + e``, ``0`` elsewhere; None: two-sided everywhere.
+        ``noise_bound`` is the bound ``Delta`` of the diagnosis (a clipped reading lies
+        within it of the limit). The achieved error is always recomputed from the full
+        model, so a wrong choice here can only make the fit worse, never the reported
+        error wrong."""
         return None
 
     # ------------------------------------------------------------------ reporting
-    def value(self, theta: tuple, coefs: tuple):
-        """Value reported as ``CandidateFit.value`` (one number for one-parameter effects)."""
+    def value(self, theta: tuple, coefs: tuple, model=None):
+        """Value reported as ``CandidateFit.value`` (one number for one-parameter effects).
+
+        ``model`` is the refined model (:class:`~hammerbound.discrepancy.RefinedModel`) the
+        effect is part of, for values in the model's convention (the total delay, slopes
+        scaled by the linear block's static gain); None when not known."""
         vals = tuple(theta) + tuple(coefs)
         return float(vals[0]) if len(vals) == 1 else vals
 

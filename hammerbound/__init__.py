@@ -11,6 +11,7 @@ from .eiv import LinearEIVSetEstimator
 from .exceptions import (
     DataScaleError,
     DataValidationError,
+    DataWarning,
     EmptyFeasibleSetError,
     HammerboundError,
     IllPosedBacklashError,
@@ -44,6 +45,7 @@ __all__ = [
     "BacklashSetEstimator",
     "DataScaleError",
     "DataValidationError",
+    "DataWarning",
     "EIVProblem",
     "EmptyFeasibleSetError",
     "FeasibleSet",

@@ -317,8 +317,7 @@ class UncertaintyWeight:
     central : control.TransferFunction
         The central model ``G0`` the uncertainty is measured around.
     omega, deviation : ndarray
-        Fit grid (rad/s, or rad/sample when the sampling time is not known) and the
-        exact deviation bound there.
+        Fit grid (in :attr:`frequency_unit`) and the exact deviation bound there.
     certificate : WeightCertificate
         The proof over all frequencies (``certificate.holds`` is always True for a
         returned weight).
@@ -326,6 +325,9 @@ class UncertaintyWeight:
         The selection criterion: mean over-bound ``mean 20 log10(|W| / deviation)`` on
         ``omega`` in dB (deviation floored at ``1e-6`` of its maximum); the smallest of
         all certified candidates.
+    frequency_unit : str
+        Unit of ``omega`` and ``certificate.omega``: ``"rad/s"`` (rad per unit of the
+        sampling time) or ``"rad/sample"`` when no sampling time is known.
     """
 
     W: object
@@ -335,6 +337,7 @@ class UncertaintyWeight:
     deviation: np.ndarray
     certificate: WeightCertificate
     excess_db: float = float("nan")
+    frequency_unit: str = "rad/s"
 
     @property
     def order(self) -> int:
@@ -418,7 +421,7 @@ def _starts(n, prev, central_tf, rng, rmax):
 
 def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", order=2,
                omega=None, margin=0.05, n_grid=8192, random_state=0,
-               rmax=0.98) -> UncertaintyWeight:
+               rmax=0.98, *, tf_dt=None, frequency_unit="rad/s") -> UncertaintyWeight:
     """The best certified weight of order at most ``order`` above the deviation bound.
 
     For each order ``0 .. order`` the shape (poles and zeros inside ``|z| <= rmax``)
@@ -428,7 +431,8 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
     :func:`certify_weight` proves on all of ``[0, pi/dt]``. The certified candidate with
     the smallest :attr:`UncertaintyWeight.excess_db` is returned (the lower order on a
     tie). The constant weight (order 0) always certifies, so a finite deviation always
-    gives a weight.
+    gives a weight. ``tf_dt``: the sampling time given to ``W`` (default ``dt``; ``True``
+    when it is not known and ``omega`` is in rad/sample, as ``frequency_unit`` says).
     """
     _check_fit_args(order, margin, n_grid)
     nyq = np.pi / dt
@@ -465,4 +469,8 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
                 best = (e, W, cert)
         prev = shapes[0] if best_n is None else best_n[1]
     e, W, cert = best
-    return UncertaintyWeight(W, kind, central_tf, w, dev, cert, e)
+    if tf_dt is not None and tf_dt is not W.dt:
+        import control
+
+        W = control.tf(W.num[0][0], W.den[0][0], tf_dt)
+    return UncertaintyWeight(W, kind, central_tf, w, dev, cert, e, frequency_unit)

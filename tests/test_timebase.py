@@ -64,6 +64,7 @@ def test_usual_time_column_names_are_recognised(tmp_path, name, unit):
         warnings.simplefilter("error")  # recognised: no warning
         d = hb.IOData.from_csv(write(tmp_path / "r.csv", [name, "u", "y"], [t, u, y]))
     assert d.dt == 0.05 and d.t0 == 5.0 and d.time_unit == unit
+    assert d[3:9].time_unit == unit and d[3:9].t0 == pytest.approx(5.15)
     assert time_unit_of(name) == unit
     assert ("dt=0.05 " + unit).strip() in repr(d)
 

@@ -6,6 +6,7 @@
     python -m benchmarks methods  [--quick] [--part same|delta2|scaling|order] ...
     python -m benchmarks coverage [--quick] [--dask] ...
     python -m benchmarks moment2  [--N 10 20 50 100] [--full-N 10]
+    python -m benchmarks weights                # certified uncertainty weights by order
     python -m benchmarks report                 # regenerate docs/benchmarks.md from results/
     python -m benchmarks all --quick            # every benchmark, then the report
 
@@ -23,6 +24,7 @@ COMMANDS = {
     "methods": "methods",
     "moment2": "moment_order2",
     "coverage": "coverage",
+    "weights": "weights",
     "report": "report",
 }
 

@@ -567,6 +567,27 @@ def section_modelset():
     return "\n".join(out) + "\n"
 
 
+def section_weights():
+    """Certified uncertainty weights by order (benchmarks/weights.py)."""
+    j = _json("weights.json")
+    if not j:
+        return ""
+    rows = j["rows"]
+    out = [env_line(j) + "\n",
+           "`python -m benchmarks.weights`: the certified weight returned for `order = 0..4` "
+           "(the best certified one of order <= `order`, by the mean over-bound `excess_db`); "
+           "`min |W| / dev` on 100 001 frequencies up to Nyquist (>= 1: the weight covers "
+           "the orthotope's exact deviation there).\n"]
+    body = []
+    for r in rows:
+        body.append([r["record"], r["kind"], r["order_asked"], r["order"],
+                     f(r["excess_db"], 2), f(r["W_dc"] / r["deviation_dc"], 3),
+                     f(r["min_W_over_deviation"], 4), r["proof_points"], fs(r["seconds"])])
+    out.append(table(["record", "kind", "order asked", "order", "excess (dB)",
+                      "W(1) / dev(0) (abs.)", "min of abs. W / dev", "proof points", "time (s)"], body))
+    return "\n".join(out) + "\n"
+
+
 def replot():
     """Redraw the method figures from the JSON results (also for partial runs)."""
     try:
@@ -647,6 +668,8 @@ def main(argv=None):
            notes_section("coverage-findings"),
            "## 5. Guaranteed model set (robust control)\n", section_modelset(),
            notes_section("modelset-findings"),
+           "### Uncertainty weights by order\n", notes_section("weights-intro"),
+           section_weights(), notes_section("weights-findings"),
            notes_section("limitations")]
     OUT.write_text("\n".join(d for d in doc if d) + "\n")
     C.log(f"wrote {OUT}")

@@ -11,6 +11,7 @@ from .data.iodata import IOData
 from .exceptions import (
     DataScaleError,
     DataValidationError,
+    DataWarning,
     EmptyFeasibleSetError,
     HammerboundError,
     IllPosedBacklashError,
@@ -56,6 +57,7 @@ __all__ = [
     "BacklashSetEstimator",
     "DataScaleError",
     "DataValidationError",
+    "DataWarning",
     "EIVProblem",
     "EmptyFeasibleSetError",
     "FeasibleSet",

@@ -99,3 +99,9 @@ class RelaxationTooLargeError(HammerboundError, ValueError):
 class SearchLimitWarning(UserWarning):
     """A bound search stopped at a node/time limit; the reported bound is still guaranteed
     (an outer bound, never wider than the LP bound) but may be looser than the exact one."""
+
+
+class DataWarning(UserWarning):
+    """The data were read, but something in them may not be used as you meant (e.g. a
+    column that looks like a time base was not recognised); the message says how to be
+    explicit."""

@@ -16,7 +16,7 @@ PKG = Path(__file__).resolve().parents[1] / "hammerbound"
 
 # bottom to top; a module may import its own layer and the layers below it
 LAYERS = [
-    {"exceptions", "tolerances", "_compat", "data", "timebase"},
+    {"exceptions", "tolerances", "_compat", "data"},
     {"systems", "solvers", "tables", "plotting", "timeseries"},
     {"relaxations"},
     {"modelset"},

@@ -229,8 +229,9 @@ def _add_eiv_parser(sub):
                    help="sampling time (default: from the t column, else not given)")
     p.add_argument("--u-col", default="u", help="input column name (default u)")
     p.add_argument("--y-col", default="y", help="output column name (default y)")
-    p.add_argument("--t-col", default="t",
-                   help="time column name, used when present (default t; '' to ignore)")
+    p.add_argument("--t-col", default="auto",
+                   help="time column name (default auto: a column named t, time, 't [s]'..."
+                        " if there is one; '' to ignore)")
     p.add_argument("--method", default="moment", choices=["lp", "moment", "exact"],
                    help="bounding method (default moment; exact gives the tight intervals)")
     p.add_argument("--order", type=int, default=1, help="moment relaxation order (default 1)")

@@ -16,10 +16,19 @@ import numbers
 
 import numpy as np
 
-from ..exceptions import DataValidationError, ParameterValidationError
+from ..exceptions import DataValidationError, DataWarning, ParameterValidationError
+from .timebase import find_time_column, time_unit_of, uniform_step
 from .validation import as_signal
 
-__all__ = ["IOData"]
+__all__ = ["IOData", "signal_label", "uniform_step"]
+
+
+def signal_label(names, units) -> str:
+    """``"force [N] -> position [mm]"``, or ``""`` for the defaults ``u -> y`` without units."""
+    if tuple(names) == ("u", "y") and not any(units):
+        return ""
+    return " -> ".join(n + (f" [{un}]" if un else "") for n, un in zip(names, units,
+                                                                        strict=True))
 
 
 def _check_dt(dt):
@@ -32,26 +41,6 @@ def _check_dt(dt):
     return float(dt)
 
 
-def uniform_step(t, name="t") -> float:
-    """The constant step of the time vector ``t``, or a DataValidationError naming the
-    first irregular sample."""
-    t = as_signal(name, t)
-    if t.size < 2:
-        raise DataValidationError(f"the time column {name!r} needs at least two samples.")
-    d = np.diff(t)
-    step = float(np.median(d))
-    if step <= 0:
-        raise DataValidationError(f"the time column {name!r} must increase.")
-    bad = np.flatnonzero(np.abs(d - step) > 1e-6 * step)
-    if bad.size:
-        k = int(bad[0])
-        raise DataValidationError(
-            f"the time column {name!r} is not uniformly sampled: {name}[{k + 1}] - "
-            f"{name}[{k}] = {d[k]:g}, expected {step:g}. Resample the record (set-membership "
-            "identification of a difference equation needs a constant sampling time).")
-    return step
-
-
 class IOData:
     """One SISO input/output record with sampling time, names and units.
 
@@ -60,12 +49,15 @@ class IOData:
     u, y : array-like of shape (N,)
         Input and measured output, one value per sample.
     dt : float or None, default None
-        Sampling time (in the time unit of your choice, e.g. seconds). ``None``: not given
-        (python-control's ``dt=True``).
+        Sampling time, in ``time_unit`` (seconds when that is empty). ``None``: not given
+        (python-control's ``dt=True``; frequencies are then in rad/sample).
     input_name, output_name : str, default "u", "y"
     input_unit, output_unit : str, default ""
     t0 : float, default 0.0
         Time of the first sample.
+    time_unit : str, default ""
+        Unit of ``dt`` and ``t0`` (e.g. ``"ms"``; read from a time column named like
+        ``"t [ms]"``); empty: seconds, python-control's convention (frequencies in rad/s).
 
     Attributes
     ----------
@@ -87,7 +79,7 @@ class IOData:
     """
 
     def __init__(self, u, y, dt=None, *, input_name="u", output_name="y", input_unit="",
-                 output_unit="", t0=0.0, sample_index=None):
+                 output_unit="", t0=0.0, sample_index=None, time_unit=""):
         self.u = as_signal("u", u)
         self.y = as_signal("y", y)
         if self.u.shape != self.y.shape:
@@ -96,11 +88,13 @@ class IOData:
                 f"{self.y.size}.")
         self.dt = _check_dt(dt)
         for k, v in (("input_name", input_name), ("output_name", output_name),
-                     ("input_unit", input_unit), ("output_unit", output_unit)):
+                     ("input_unit", input_unit), ("output_unit", output_unit),
+                     ("time_unit", time_unit)):
             if not isinstance(v, str):
                 raise ParameterValidationError(f"{k} must be a string; got {v!r}.")
         self.input_name, self.output_name = input_name, output_name
         self.input_unit, self.output_unit = input_unit, output_unit
+        self.time_unit = time_unit
         if not (isinstance(t0, numbers.Real) and np.isfinite(t0)):
             raise ParameterValidationError(f"t0 must be a finite number; got {t0!r}.")
         self.t0 = float(t0)
@@ -111,60 +105,84 @@ class IOData:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_csv(cls, path, *, u="u", y="y", t="t", dt=None, **names) -> IOData:
+    def from_csv(cls, path, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
         """Read the columns ``u`` and ``y`` (header names) of a CSV file.
 
-        A column named ``t`` (if present) is the time base: it must be uniformly sampled,
-        and gives ``dt`` and ``t0``. If ``dt`` is also given, the two must agree, except
-        for a ``t`` column that counts samples (0, 1, 2, ...: steps of exactly 1), which
-        is then read as sample numbers in units of ``dt``. Other keywords: the names and
-        units of :class:`IOData` (names default to the column names).
+        ``t`` names the time column; ``"auto"`` (default) takes the one column with a usual
+        time name (``t``, ``time``, ``Time``, ``timestamp``..., also with a unit such as
+        ``t [s]`` or ``time (ms)``, which sets ``time_unit``); ``None`` uses none. The time
+        column must be uniformly sampled and gives ``dt`` (to the precision the column
+        supports: ``0, 0.01, 0.02, ...`` gives 0.01) and ``t0``. If ``dt`` is also given,
+        the two must agree, except for a column that counts samples (0, 1, 2, ...: steps of
+        exactly 1), which is then read as sample numbers in units of ``dt``. With
+        ``t="auto"``, no time column found, no ``dt`` and columns left unused, a
+        :class:`~hammerbound.exceptions.DataWarning` names them. Other keywords: the names
+        and units of :class:`IOData` (names default to the column names).
         """
         from .csv_reader import csv_header, read_columns
 
         header = csv_header(path)
-        cols = [u, y] + ([t] if t and t in header else [])
-        data = read_columns(path, cols)
+        t = cls._time_column(header, t, (u, y), str(path), dt)
+        data = read_columns(path, [u, y] + ([t] if t else []))
+        return cls._build(data[u], data[y], data.get(t), t, dt, str(path), u, y, names)
+
+    @classmethod
+    def from_frame(cls, frame, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
+        """Build from a pandas DataFrame (or any mapping of columns): columns ``u``, ``y``
+        and a time column ``t`` (same rules as :meth:`from_csv`)."""
+        cols = [str(c) for c in frame]
+        t = cls._time_column(cols, t, (str(u), str(y)), "the frame", dt)
+        try:
+            uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
+            tt = None if t is None else np.asarray(frame[t], dtype=float)
+        except KeyError as exc:
+            raise DataValidationError(
+                f"column {exc} not found; the frame has {list(frame)}.") from None
+        return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names)
+
+    @staticmethod
+    def _time_column(columns, t, used, where, dt):
+        """The time column's name (or None) for ``t`` = a name, None or "auto"."""
+        if t is None or t == "":
+            return None
+        if t != "auto":
+            if str(t) not in columns:
+                raise DataValidationError(
+                    f"{where}: no time column {t!r}; the columns are {list(columns)}. Pass "
+                    "t='<name>', t='auto' (recognise t, time, 't [s]'...) or t=None (none).")
+            return t
+        found = find_time_column(columns, exclude=used, where=where)
+        unused = [c for c in columns if c not in used]
+        if found is None and dt is None and unused:
+            import warnings
+
+            warnings.warn(
+                f"{where}: no time column recognised (looked for t, time, timestamp, also "
+                f"with a unit as in 't [s]'), so the sampling time is not known and "
+                f"frequencies will be in rad/sample; the columns {unused} are not used. Pass "
+                "t='<name>' if one of them is the time, or dt=<sampling time>, or t=None to "
+                "read without a time base.", DataWarning, stacklevel=3)
+        return found
+
+    @classmethod
+    def _build(cls, u, y, tt, t, dt, where, uname, yname, names):
         dt = _check_dt(dt)
         t0 = 0.0
-        if len(cols) == 3:
-            tt = data[t]
+        if tt is not None:
             step = uniform_step(tt, t)
-            if dt is None:
-                dt, t0 = step, float(tt[0])
-            elif abs(step - dt) <= 1e-6 * dt:
-                t0 = float(tt[0])
+            if dt is None or abs(step - dt) <= 1e-6 * dt:
+                dt, t0 = step if dt is None else dt, float(tt[0])
+                if time_unit_of(t):  # e.g. "t [ms]"
+                    names.setdefault("time_unit", time_unit_of(t))
             elif step == 1.0 and np.all(tt == np.round(tt)):
                 t0 = float(tt[0]) * dt           # a sample counter
             else:
                 raise DataValidationError(
-                    f"{path}: the time column {t!r} has step {step:g} but dt={dt:g} was "
+                    f"{where}: the time column {t!r} has step {step:g} but dt={dt:g} was "
                     f"given; drop one of them (or pass t=None to ignore the column).")
-        names.setdefault("input_name", u)
-        names.setdefault("output_name", y)
-        return cls(data[u], data[y], dt, t0=t0, **names)
-
-    @classmethod
-    def from_frame(cls, frame, *, u="u", y="y", t=None, dt=None, **names) -> IOData:
-        """Build from a pandas DataFrame (or any mapping of columns): columns ``u``, ``y``
-        and optionally a time column ``t`` (same rules as :meth:`from_csv`)."""
-        try:
-            uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
-        except KeyError as exc:
-            raise DataValidationError(
-                f"column {exc} not found; the frame has {list(frame)}.") from None
-        dt = _check_dt(dt)
-        t0 = 0.0
-        if t is not None:
-            tt = np.asarray(frame[t], dtype=float)
-            step = uniform_step(tt, t)
-            if dt is not None and abs(step - dt) > 1e-6 * dt:
-                raise DataValidationError(
-                    f"the time column {t!r} has step {step:g} but dt={dt:g} was given.")
-            dt, t0 = step, float(tt[0])
-        names.setdefault("input_name", str(u))
-        names.setdefault("output_name", str(y))
-        return cls(uu, yy, dt, t0=t0, **names)
+        names.setdefault("input_name", uname)
+        names.setdefault("output_name", yname)
+        return cls(u, y, dt, t0=t0, **names)
 
     # ------------------------------------------------------------------ views
     @property
@@ -211,7 +229,7 @@ class IOData:
                       output_name=self.output_name, input_unit=self.input_unit,
                       output_unit=self.output_unit,
                       t0=float(self.time[idx[0]]) if idx.size else self.t0,
-                      sample_index=self.sample_index[idx])
+                      sample_index=self.sample_index[idx], time_unit=self.time_unit)
 
     def is_contiguous(self) -> bool:
         """Whether the samples are consecutive in the original record."""
@@ -228,7 +246,8 @@ class IOData:
         def sig(name, unit):
             return repr(name) + (f" [{unit}]" if unit else "")
 
-        dt = "None (not given)" if self.dt is None else f"{self.dt:g}"
+        dt = "None (not given)" if self.dt is None else f"{self.dt:g}" + (
+            f" {self.time_unit}" if self.time_unit else "")
         return (f"IOData(N={self.N}, dt={dt}, input={sig(self.input_name, self.input_unit)}, "
                 f"output={sig(self.output_name, self.output_unit)})")
 

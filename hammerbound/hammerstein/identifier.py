@@ -351,14 +351,24 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             random_state, np.random.Generator) else random_state
         return self.backlash_.sample(n, random_state=rng), self.linear_.sample(n, random_state=rng)
 
-    def frequency_response_bounds(self, omega=None, dt=1.0, *, on_gain_plane=False):
-        """Envelope of the linear block (see :meth:`LinearEIVSetEstimator.frequency_response_bounds`)."""
+    def _fitted_dt(self):
+        """Sampling time of the fitted data, or None when it was not given."""
+        return getattr(self, "dt_", None)
+
+    def frequency_response_bounds(self, omega=None, dt=None, *, on_gain_plane=False):
+        """Envelope of the linear block (see :meth:`LinearEIVSetEstimator.frequency_response_bounds`).
+
+        ``dt`` defaults to the sampling time of the fitted data (:attr:`dt_`); when none is
+        known, frequencies are in rad/sample."""
         check_is_fitted(self, "bounds_")
+        dt = self._fitted_dt() if dt is None else dt
         return self.linear_.frequency_response_bounds(omega, dt=dt, on_gain_plane=on_gain_plane)
 
-    def uncertainty_weight(self, kind="multiplicative", order=2, dt=1.0, **kwargs):
-        """Weight of the linear block (see :meth:`LinearEIVSetEstimator.uncertainty_weight`)."""
+    def uncertainty_weight(self, kind="multiplicative", order=2, dt=None, **kwargs):
+        """Weight of the linear block (see :meth:`LinearEIVSetEstimator.uncertainty_weight`);
+        ``dt`` as in :meth:`frequency_response_bounds`."""
         check_is_fitted(self, "bounds_")
+        dt = self._fitted_dt() if dt is None else dt
         return self.linear_.uncertainty_weight(kind, order, dt, **kwargs)
 
     def inverse(self, v_range=None, x0=0.0):

@@ -11,6 +11,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from ..exceptions import ParameterValidationError
+from .frequency import check_omega
 
 __all__ = ["ModelSetMixin"]
 
@@ -21,11 +22,27 @@ class ModelSetMixin:
     def _b_lags(self):
         return [int(j) for j in self._lags()]
 
-    def _period(self, dt):
-        """A numeric sampling time: ``dt``, else that of the fitted data, else 1.0."""
-        if dt is None:
-            dt = getattr(self, "dt_", None)
-        return 1.0 if dt is None else dt
+    def _fitted_dt(self):
+        """Sampling time of the fitted data, or None when it was not given."""
+        return getattr(self, "dt_", None)
+
+    def _frequency_axis(self, dt):
+        """``(period, unit)``: ``z = e^{j omega period}`` and the unit of ``omega``.
+
+        ``dt`` if given, else that of the fitted data; when neither is known (``None`` or
+        python-control's ``True``) the period is one *sample* and ``omega`` is in
+        rad/sample -- said so by the unit, never passed off as seconds."""
+        if dt is None or dt is True:
+            dt = self._fitted_dt()
+        if dt is None or dt is True:
+            return 1.0, "rad/sample"
+        check_omega(None, dt)  # a finite number > 0
+        return float(dt), f"rad/{getattr(self, 'time_unit_', '') or 's'}"
+
+    def _labels(self, unit):
+        return {"frequency_unit": unit,
+                "signal_names": tuple(getattr(self, "signal_names_", ("u", "y"))),
+                "signal_units": tuple(getattr(self, "signal_units_", ("", "")))}
 
     def sample(self, n, random_state=None, *, thin=1, seeds=None):
         """``n`` parameter vectors of the feasible set (22.34), each *certified* feasible.
@@ -79,11 +96,15 @@ class ModelSetMixin:
 
         Parameters
         ----------
-        omega : array of rad/s, optional
-            Strictly increasing, >= 0. Default: 512 log-spaced points up to ``pi/dt``.
+        omega : array, optional
+            Frequencies in rad/s (rad per unit of ``dt``), or in rad/sample when no
+            sampling time is known. Strictly increasing, >= 0. Default: 512 log-spaced
+            points up to the Nyquist frequency ``pi/dt``.
         dt : float or None, default None
             Sampling time of the data (``z = e^{j omega dt}``); default: that of the fitted
-            :class:`~hammerbound.IOData`, else 1.0 (``omega`` in rad/sample).
+            :class:`~hammerbound.IOData` (:attr:`dt_`). When neither is known, ``omega``
+            is in rad/sample (Nyquist ``pi``) and the envelope says so in
+            ``frequency_unit`` and its plot.
         on_gain_plane : bool, default False
             Tighten the magnitude bounds to the orthotope *intersected with the gain
             equality* (22.8) (every feasible model satisfies it; the box alone cannot
@@ -96,9 +117,11 @@ class ModelSetMixin:
         FrequencyEnvelope
         """
         check_is_fitted(self, "bounds_")
-        from .frequency import check_omega, frequency_envelope
+        from dataclasses import replace
 
-        dt = self._period(dt)
+        from .frequency import frequency_envelope
+
+        dt, unit = self._frequency_axis(dt)
         w = check_omega(omega, dt)
         if on_gain_plane and self.steady_state_gain is None:
             raise ParameterValidationError(
@@ -106,8 +129,8 @@ class ModelSetMixin:
                 "(or use the plain envelope, on_gain_plane=False)."
             )
         gain = float(self.steady_state_gain) if on_gain_plane else None
-        return frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=float(dt),
-                                  gain=gain)
+        env = frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=dt, gain=gain)
+        return replace(env, **self._labels(unit))
 
     def uncertainty_weight(self, kind="multiplicative", order=2, dt=None, *, margin=0.05,
                            omega=None, n_grid=8192):
@@ -116,8 +139,13 @@ class ModelSetMixin:
         ``kind="multiplicative"``: ``|G/G0 - 1| <= |W|``; ``"additive"``: ``|G - G0| <= |W|``,
         for every ``theta`` in :attr:`bounds_` and *every* frequency (proved on a grid of
         ``n_grid`` points over ``[0, pi/dt]`` with Lipschitz bounds in between; the proof is
-        returned in ``.certificate``). ``dt`` defaults to the sampling time of the fitted
-        :class:`~hammerbound.IOData`, else 1.0. See :mod:`hammerbound.modelset.uncertainty`.
+        returned in ``.certificate``). ``order`` is the largest order tried: the certified
+        weight of order ``0 .. order`` with the smallest mean over-bound (``.excess_db``)
+        is returned. ``dt`` defaults to the sampling time of the fitted
+        :class:`~hammerbound.IOData` (:attr:`dt_`); when neither is known the weight and
+        ``.central`` get python-control's ``dt=True`` (sampling time not given) and
+        ``.omega`` is in rad/sample (``.frequency_unit``). See
+        :mod:`hammerbound.modelset.uncertainty`.
 
         Returns
         -------
@@ -130,14 +158,14 @@ class ModelSetMixin:
             Some ``A`` in the box vanishes on the unit circle: no finite weight exists.
         """
         check_is_fitted(self, "bounds_")
-        from .frequency import check_omega
         from .uncertainty import KINDS, fit_weight
 
         if kind not in KINDS:
             raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
-        dt = self._period(dt)
-        check_omega(None, dt)
+        dt, unit = self._frequency_axis(dt)
+        tf_dt = True if unit == "rad/sample" else dt
         w = None if omega is None else check_omega(omega, dt)
-        return fit_weight(self.bounds_, self.na, self._b_lags(), self.to_transfer_function(dt),
-                          dt=float(dt), kind=kind, order=order, omega=w, margin=margin,
-                          n_grid=n_grid)
+        return fit_weight(self.bounds_, self.na, self._b_lags(),
+                          self.to_transfer_function(tf_dt), dt=dt, kind=kind, order=order,
+                          omega=w, margin=margin, n_grid=n_grid, tf_dt=tf_dt,
+                          frequency_unit=unit)

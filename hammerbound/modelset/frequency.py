@@ -37,7 +37,7 @@ bounds ``|G|``.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -48,7 +48,8 @@ __all__ = ["FrequencyEnvelope", "frequency_envelope", "default_omega", "denomina
 
 
 def default_omega(dt: float, n: int = 512) -> np.ndarray:
-    """``n`` log-spaced frequencies from ``1e-3`` of Nyquist to Nyquist ``pi/dt`` (rad/s)."""
+    """``n`` log-spaced frequencies from ``1e-3`` of Nyquist to Nyquist ``pi/dt`` (in rad per
+    unit of ``dt``)."""
     nyq = np.pi / dt
     return np.logspace(np.log10(1e-3 * nyq), np.log10(nyq), n)
 
@@ -103,6 +104,11 @@ class FrequencyEnvelope:
         Bounds on ``|G|`` valid on the *whole* interval ``[omega_k, omega_k+1]``.
     phase_lower_between, phase_upper_between : ndarray (n - 1,)
         Same for the phase (NaN where not bounded).
+    frequency_unit : str
+        Unit of ``omega``: ``"rad/s"`` (rad per unit of ``dt``, e.g. ``"rad/ms"``) or
+        ``"rad/sample"`` when no sampling time is known (then ``dt`` is 1 sample).
+    signal_names, signal_units : tuple of str
+        ``(input, output)`` names and units of the data (labels of :meth:`plot`).
     """
 
     omega: np.ndarray
@@ -120,6 +126,9 @@ class FrequencyEnvelope:
     phase_lower_between: np.ndarray
     phase_upper_between: np.ndarray
     _spec: dict = field(default=None, repr=False)
+    frequency_unit: str = "rad/s"
+    signal_names: tuple = ("u", "y")
+    signal_units: tuple = ("", "")
 
     @property
     def phase_central(self) -> np.ndarray:
@@ -162,9 +171,11 @@ class FrequencyEnvelope:
                 break
             mids = 0.5 * (env.omega[:-1] + env.omega[1:])[bad]
             mids = mids[: max_points - env.omega.size]
-            env = frequency_envelope(spec["bounds"], spec["na"], spec["b_lags"],
-                                     np.union1d(env.omega, mids), dt=env.dt,
-                                     gain=spec.get("gain"))
+            env = replace(frequency_envelope(spec["bounds"], spec["na"], spec["b_lags"],
+                                             np.union1d(env.omega, mids), dt=env.dt,
+                                             gain=spec.get("gain")),
+                          frequency_unit=self.frequency_unit, signal_names=self.signal_names,
+                          signal_units=self.signal_units)
         return env
 
     def plot(self, ax=None, **kwargs):

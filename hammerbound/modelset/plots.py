@@ -21,22 +21,54 @@ def _axes(ax, n):
     return ax[0].figure, ax
 
 
-def plot_bode_envelope(env, ax=None, *, samples=None, max_samples=200, db=True):
+def _db(x):
+    with np.errstate(divide="ignore"):
+        return 20 * np.log10(np.asarray(x, dtype=float))
+
+
+def _magnitude_limits(env, db, mag_range_db):
+    """``(bottom, top)`` of the magnitude axis: every finite bound and the central model,
+    but not more than ``mag_range_db`` below the largest finite upper bound (dB only)."""
+    conv = _db if db else np.asarray
+    up = conv(env.mag_upper[np.isfinite(env.mag_upper)])
+    cen = conv(env.mag_central[np.isfinite(env.mag_central)])
+    lo = conv(env.mag_lower)
+    vals = np.concatenate([up, cen, lo])
+    vals = vals[np.isfinite(vals)]
+    top = float(np.max(vals)) if vals.size else 1.0
+    bottom = float(np.min(vals)) if vals.size else 0.0
+    if db:
+        bottom = max(bottom, top - float(mag_range_db))
+    pad = 0.05 * (top - bottom) if top > bottom else 1.0
+    return bottom, top + pad
+
+
+def plot_bode_envelope(env, ax=None, *, samples=None, max_samples=200, db=True,
+                       mag_range_db=120.0):
     """Magnitude and phase envelope, the central model and (optionally) sampled responses.
 
     ``samples``: complex responses of shape (k, n) at ``env.omega`` (e.g. from certified
-    samples), drawn thin and grey. Returns the figure.
+    samples), drawn thin and grey. The magnitude axis spans at most ``mag_range_db`` (dB)
+    below the largest finite upper bound: where a lower bound is smaller (e.g. 0, a zero
+    of ``B`` in the box) the band is drawn on to the bottom edge -- it continues below the
+    axis, never stops at a bound that is not one -- and the legend says so; likewise the
+    band runs to the top edge where there is no upper bound. Returns the figure.
     """
+    from ..data.iodata import signal_label
+
     fig, (am, ap) = _axes(ax, 2)
     w = env.omega
-
-    def mag(x):
-        with np.errstate(divide="ignore"):
-            return 20 * np.log10(x) if db else x
-
-    up = np.where(np.isfinite(env.mag_upper), env.mag_upper, np.nan)
-    am.fill_between(w, mag(np.maximum(env.mag_lower, 1e-300)), mag(up), color="C0", alpha=0.25,
-                    lw=0, label="guaranteed envelope")
+    conv = _db if db else np.asarray
+    bottom, top = _magnitude_limits(env, db, mag_range_db)
+    span = top - bottom
+    lo, up = conv(env.mag_lower), conv(env.mag_upper)
+    below = ~(lo >= bottom)  # includes 0 (-inf dB)
+    unbounded = ~np.isfinite(env.mag_upper)
+    # beyond the axis limits (clipped by matplotlib): the band visibly runs off the axes
+    lo_shown = np.where(below, bottom - span, lo)
+    up_shown = np.where(unbounded, top + span, up)
+    am.fill_between(w, lo_shown, up_shown, color="C0", alpha=0.25, lw=0,
+                    label="guaranteed envelope")
     ph0 = env.phase_central
     ap.fill_between(w, np.degrees(env.phase_lower), np.degrees(env.phase_upper), color="C0",
                     alpha=0.25, lw=0)
@@ -44,17 +76,33 @@ def plot_bode_envelope(env, ax=None, *, samples=None, max_samples=200, db=True):
         s = np.asarray(samples)[:max_samples]
         rel = np.angle(s / env.central)
         for k, r in enumerate(s):
-            am.plot(w, mag(np.abs(r)), color="0.4", lw=0.3, alpha=0.5,
+            am.plot(w, conv(np.abs(r)), color="0.4", lw=0.3, alpha=0.5,
                     label="certified samples" if k == 0 else None)
             ap.plot(w, np.degrees(ph0 + rel[k]), color="0.4", lw=0.3, alpha=0.5)
-    am.plot(w, mag(env.mag_central), color="C3", lw=1.2, label="central model")
+    am.plot(w, conv(env.mag_central), color="C3", lw=1.2, label="central model")
     ap.plot(w, np.degrees(ph0), color="C3", lw=1.2)
+    unit = "dB" if db else ""
+    if below.any():
+        what = "0" if np.any(env.mag_lower <= 0) else f"< {bottom:.3g} {unit}".rstrip()
+        am.plot([], [], " ", label=f"lower bound {what} where the band meets the bottom "
+                                   "edge (axis cut)")
+    if unbounded.any():
+        am.plot([], [], " ", label="no upper bound where the band meets the top edge")
+    am.set_ylim(bottom, top)
     for a in (am, ap):
         a.set_xscale("log")
         a.grid(True, which="both", alpha=0.3)
-    am.set_ylabel("magnitude [dB]" if db else "magnitude")
+    names, units = env.signal_names, env.signal_units
+    def par(x):
+        return f"({x})" if "/" in x or " " in x else x
+
+    ratio = f" re 1 {par(units[1])}/{par(units[0])}" if db and all(units) else ""
+    am.set_ylabel(f"magnitude [dB{ratio}]" if db else "magnitude")
     ap.set_ylabel("phase [deg]")
-    ap.set_xlabel("frequency [rad/s]")
+    ap.set_xlabel(f"frequency [{env.frequency_unit}]")
+    title = signal_label(names, units)
+    if title:
+        am.set_title(title, fontsize=9)
     am.legend(loc="best", fontsize=8)
     return fig
 

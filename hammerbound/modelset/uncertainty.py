@@ -19,14 +19,32 @@ supremum is the largest value over the vertices of ``Z_B``, the edges of ``Z_A``
 end points and those roots, in closed form (:func:`deviation_bound`). It is widened by a
 relative ``1e-9`` for rounding.
 
-**Between frequencies.** On ``[w_k, w_k+1]`` every ``|G/G0 - 1|`` (and ``|G - G0|``) is
-``K``-Lipschitz with ``K`` built from ``max |Z_B|``, ``min |Z_A|``, ``|A0|``, ``|B0|`` over the
-interval and the Lipschitz constants ``L_A``, ``L_B`` of :mod:`.frequency`; so is their
-supremum ``delta``. Hence ``delta <= (delta_k + delta_k+1)/2 + K h / 2`` on the interval,
-and likewise ``|W| >= (|W_k| + |W_k+1|)/2 - L_W h / 2``. :func:`certify_weight` checks the
-second above the first on *every* interval of a uniform grid of ``[0, pi/dt]`` (which
-covers all frequencies: the coefficients are real, so ``|.|`` is even and
-``2 pi / dt``-periodic in ``w``).
+**Between frequencies.** On ``[w_k, w_k+1]`` (width ``h``) every ``|G/G0 - 1|`` (and
+``|G - G0|``) is ``K``-Lipschitz with ``K`` built from ``max |Z_B|``, ``min |Z_A|``,
+``|A0|``, ``|B0|`` over the interval and the Lipschitz constants ``L_A``, ``L_B`` of
+:mod:`.frequency` -- or, whichever is smaller, from writing both deviations as
+``M / (A B0)`` and ``M / (A A0)`` with ``M = (B - B0) A0 - (A - A0) B0``, whose modulus and
+derivative are bounded by the box's radii (so ``K`` shrinks with the box); so is their
+supremum ``delta``. Hence
+``delta <= (delta_k + delta_k+1)/2 + K h / 2`` on the interval. For ``W = N / D`` the
+moduli ``|N|`` and ``|D|`` are ``L_N``- and ``L_D``-Lipschitz (``L_P = dt sum_k k |p_k|``),
+so on the interval ``|W| >= ((|N_k| + |N_k+1|)/2 - L_N h/2) / ((|D_k| + |D_k+1|)/2 +
+L_D h/2)`` (an absolute rounding margin of ``1e-12 sum |p_k|`` is taken off ``|N|`` and
+added to ``|D|``). This bound never divides by ``min |D|``, which is small when ``W`` has
+poles near the unit circle (as it must when the deviation rises steeply, e.g. near a
+zero of ``G0`` close to ``z = -1`` after a zero-order hold). :func:`certify_weight`
+checks the second bound above the first on *every* interval of a grid of ``[0, pi/dt]``
+(which covers all frequencies: the coefficients are real, so ``|.|`` is even and
+``2 pi / dt``-periodic in ``w``): a uniform grid of ``n_grid`` points, with the
+intervals where the Lipschitz slack (not the weight) decides bisected locally.
+
+**Which weight.** :func:`fit_weight` fits shapes of every order ``0 .. order`` (each
+order started, among others, from the best weight of the order below, which it contains
+exactly: see :mod:`.weight_shape`), certifies each one (raising its gain until the proof
+holds) and returns the *best certified* weight: the one with the smallest mean
+over-bound ``mean_w 20 log10(|W(w)| / delta(w))`` in dB over the fit grid (the gap a
+designer pays on a logarithmic frequency axis; ``delta`` floored at ``1e-6 max delta``).
+A lower order wins ties, so the returned order can be lower than the one asked for.
 """
 
 from __future__ import annotations
@@ -34,17 +52,23 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import expit
 
 from ..exceptions import ParameterValidationError, UnboundedSetError
 from .frequency import _lipschitz
-from .zonotope import value_sets
+from .weight_shape import embed, fit_shape, magnitude, polynomial, start_from_roots
+from .zonotope import ROUND_RTOL, value_sets
 
 __all__ = ["KINDS", "UncertaintyWeight", "WeightCertificate", "certify_weight",
            "deviation_bound", "fit_weight"]
 
 KINDS = ("multiplicative", "additive")
 _RTOL = 1e-9
+#: the proof grid grows to at most this many times ``n_grid`` points by local bisection
+_REFINE_FACTOR = 8
+#: bisect an interval when its Lipschitz slack costs more than this (relative) ...
+_REFINE_GAIN = 0.01
+#: ... for at most this many rounds
+_REFINE_ROUNDS = 12
 
 
 def _split(bounds, na):
@@ -65,6 +89,11 @@ def deviation_bound(bounds, na, b_lags, omega, dt=1.0, kind="multiplicative"):
     wd = np.asarray(omega, dtype=float) * dt
     ZA = value_sets(a_lo, a_hi, np.arange(na + 1), wd)
     ZB = value_sets(b_lo, b_hi, np.asarray(b_lags), wd)
+    return _deviation(ZA, ZB, kind)
+
+
+def _deviation(ZA, ZB, kind):
+    """:func:`deviation_bound` from the value sets of ``A`` and ``B``."""
     with np.errstate(divide="ignore", invalid="ignore"):
         G0 = ZB.centre / ZA.centre
     amin = ZA.min_abs()
@@ -102,43 +131,103 @@ def deviation_bound(bounds, na, b_lags, omega, dt=1.0, kind="multiplicative"):
     return np.where(amin > 0, dev, np.inf)
 
 
-def _between(bounds, na, b_lags, omega, dt, kind, dev):
-    """Upper bound of the deviation on each interval [omega_k, omega_k+1] (Lipschitz)."""
-    a_lo, a_hi, b_lo, b_hi = _split(bounds, na)
-    w = np.asarray(omega, dtype=float)
-    wd = w * dt
-    a_lags, b_lags = np.arange(na + 1), np.asarray(b_lags)
-    ZA = value_sets(a_lo, a_hi, a_lags, wd)
-    ZB = value_sets(b_lo, b_hi, b_lags, wd)
-    LA, LB = _lipschitz(a_lo, a_hi, a_lags, dt), _lipschitz(b_lo, b_hi, b_lags, dt)
-    h = np.diff(w)
+class _ProofGrid:
+    """Frequencies of the proof with the exact deviation and the moduli its Lipschitz
+    bound between neighbours needs (:meth:`between`); :meth:`refine` bisects intervals."""
 
-    def up(x, L):
-        return 0.5 * (x[:-1] + x[1:]) + 0.5 * L * h
+    _FIELDS = ("w", "dev", "amin", "amax", "bmax", "a0", "b0")
 
-    def down(x, L):
-        return np.maximum(0.5 * (x[:-1] + x[1:]) - 0.5 * L * h, 0.0)
+    def __init__(self, bounds, na, b_lags, dt, kind, w):
+        self.bounds, self.na, self.b_lags = np.asarray(bounds, float), na, np.asarray(b_lags)
+        self.dt, self.kind = float(dt), kind
+        a_lo, a_hi, b_lo, b_hi = _split(self.bounds, na)
+        self.LA = _lipschitz(a_lo, a_hi, np.arange(na + 1), self.dt)
+        self.LB = _lipschitz(b_lo, b_hi, self.b_lags, self.dt)
+        # radii of the box: |A - A0| <= rA, |d/dw (A - A0)| <= LrA (likewise for B)
+        ra, rb = 0.5 * (a_hi - a_lo), 0.5 * (b_hi - b_lo)
+        self.rA, self.rB = float(np.sum(ra)), float(np.sum(rb))
+        self.LrA = self.dt * float(np.sum(np.arange(na + 1) * ra))
+        self.LrB = self.dt * float(np.sum(self.b_lags * rb))
+        self.data = self._points(np.asarray(w, dtype=float))
 
-    amin, amax, bmax = down(ZA.min_abs(), LA), up(ZA.max_abs(), LA), up(ZB.max_abs(), LB)
-    a0, b0 = np.abs(ZA.centre), np.abs(ZB.centre)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        if kind == "multiplicative":
-            a0max, b0max, b0min = up(a0, LA), up(b0, LB), down(b0, LB)
-            den = amin * b0min
-            K = (LB * a0max + bmax * LA) / den + bmax * a0max * (LA * b0max + amax * LB) / den**2
-        else:
-            K = 2 * (LB / amin + bmax * LA / amin**2)
-        K = np.where(np.isfinite(K), K, np.inf)
-        return 0.5 * (dev[:-1] + dev[1:]) + 0.5 * K * h
+    @classmethod
+    def uniform(cls, bounds, na, b_lags, dt, kind, n_grid):
+        return cls(bounds, na, b_lags, dt, kind, np.linspace(0.0, np.pi / dt, int(n_grid)))
+
+    def _points(self, w):
+        a_lo, a_hi, b_lo, b_hi = _split(self.bounds, self.na)
+        ZA = value_sets(a_lo, a_hi, np.arange(self.na + 1), w * self.dt)
+        ZB = value_sets(b_lo, b_hi, self.b_lags, w * self.dt)
+        return {"w": w, "dev": _deviation(ZA, ZB, self.kind), "amin": ZA.min_abs(),
+                "amax": ZA.max_abs(), "bmax": ZB.max_abs(), "a0": np.abs(ZA.centre),
+                "b0": np.abs(ZB.centre)}
+
+    @property
+    def omega(self):
+        return self.data["w"]
+
+    @property
+    def dev(self):
+        return self.data["dev"]
+
+    @property
+    def size(self):
+        return self.omega.size
+
+    def finite(self) -> bool:
+        return bool(np.all(np.isfinite(self.dev)) and np.all(np.isfinite(self.between())))
+
+    def refine(self, mask):
+        """The grid with the midpoints of the intervals ``mask`` added."""
+        w = self.omega
+        new = self._points(0.5 * (w[:-1] + w[1:])[mask])
+        order = np.argsort(np.concatenate([w, new["w"]]), kind="stable")
+        out = object.__new__(_ProofGrid)
+        out.__dict__.update(self.__dict__)
+        out.data = {k: np.concatenate([self.data[k], new[k]])[order] for k in self._FIELDS}
+        return out
+
+    def between(self):
+        """Upper bound of the deviation on each interval ``[w_k, w_k+1]`` (Lipschitz)."""
+        d, LA, LB = self.data, self.LA, self.LB
+        h = np.diff(d["w"])
+
+        def up(x, L):
+            return 0.5 * (x[:-1] + x[1:]) + 0.5 * L * h
+
+        def down(x, L):
+            return np.maximum(0.5 * (x[:-1] + x[1:]) - 0.5 * L * h, 0.0)
+
+        amin, amax, bmax = down(d["amin"], LA), up(d["amax"], LA), up(d["bmax"], LB)
+        a0max, b0max, b0min = up(d["a0"], LA), up(d["b0"], LB), down(d["b0"], LB)
+        # G/G0 - 1 = M/(A B0) and G - G0 = M/(A A0) with M = B A0 - A B0
+        # = (B - B0) A0 - (A - A0) B0: small and slowly varying for a small box
+        m_max = self.rB * a0max + self.rA * b0max
+        dm_max = self.LrB * a0max + self.rB * LA + self.LrA * b0max + self.rA * LB
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            if self.kind == "multiplicative":
+                den = amin * b0min
+                K = (LB * a0max + bmax * LA) / den \
+                    + bmax * a0max * (LA * b0max + amax * LB) / den**2
+                dden = LA * b0max + amax * LB
+            else:
+                K = 2 * (LB / amin + bmax * LA / amin**2)
+                den = amin * np.maximum(amin, down(d["a0"], LA))
+                dden = LA * a0max + amax * LA
+            K = np.minimum(K, dm_max / den + m_max * dden / den**2)
+            K = np.where(np.isfinite(K), K, np.inf)
+            return 0.5 * (d["dev"][:-1] + d["dev"][1:]) + 0.5 * K * h
 
 
 @dataclass(frozen=True)
 class WeightCertificate:
     """Proof that ``|W| >= deviation`` on every interval of a grid covering ``[0, pi/dt]``.
 
-    ``deviation_between[k]`` bounds the deviation on ``[omega_k, omega_k+1]`` and
-    ``weight_lower[k]`` bounds ``|W|`` from below there; ``holds`` is
-    ``all(weight_lower >= deviation_between)`` and ``min_ratio`` the smallest ratio.
+    ``omega`` is the proof grid (uniform, with some intervals bisected), ``deviation``
+    the exact bound at its points, ``deviation_between[k]`` bounds the deviation on
+    ``[omega_k, omega_k+1]`` and ``weight_lower[k]`` bounds ``|W|`` from below there;
+    ``holds`` is ``all(weight_lower >= deviation_between)`` and ``min_ratio`` the smallest
+    ratio.
     """
 
     omega: np.ndarray
@@ -149,28 +238,26 @@ class WeightCertificate:
     min_ratio: float
 
 
-def _poly_abs_bounds(coefs, omega, dt):
-    """|P(e^{jw dt})| at omega for P(z) = sum coefs[k] z^(n-k) and its Lipschitz constant."""
+def _poly_abs(coefs, omega, dt):
+    """``|P(e^{jw dt})|`` for ``P(z) = sum coefs[k] z^(n-k)``, its Lipschitz constant in
+    ``w`` and an absolute rounding margin of the evaluation."""
     c = np.asarray(coefs, dtype=float)
     n = c.size - 1
-    z = np.exp(1j * np.asarray(omega) * dt)
-    val = np.abs(np.polyval(c, z))
-    L = dt * float(np.sum(np.arange(n, -1, -1) * np.abs(c)))
-    return val, L, float(np.sum(np.abs(c)))
+    val = np.abs(np.polyval(c, np.exp(1j * np.asarray(omega) * dt)))
+    scale = float(np.sum(np.abs(c)))
+    return val, dt * float(np.sum(np.arange(n, -1, -1) * np.abs(c))), ROUND_RTOL * scale
 
 
 def _weight_lower(W, omega, dt):
+    """Lower bound of ``|W|`` on each interval of ``omega`` (see the module doc)."""
     num = np.ravel(np.asarray(W.num[0][0], dtype=float))
     den = np.ravel(np.asarray(W.den[0][0], dtype=float))
-    nv, LN, nmax = _poly_abs_bounds(num, omega, dt)
-    dv, LD, dmax = _poly_abs_bounds(den, omega, dt)
+    nv, LN, en = _poly_abs(num, omega, dt)
+    dv, LD, ed = _poly_abs(den, omega, dt)
     h = np.diff(omega)
-    dmin_i = np.maximum(np.minimum(dv[:-1], dv[1:]) - 0.5 * LD * h, 0.0)
-    with np.errstate(divide="ignore"):
-        LW = np.where(dmin_i > 0, (LN * dmax + nmax * LD) / np.where(dmin_i > 0, dmin_i, 1.0) ** 2,
-                      np.inf)
-        wv = nv / dv
-    return np.maximum(0.5 * (wv[:-1] + wv[1:]) - 0.5 * LW * h, 0.0) * (1 - 1e-12)
+    n_lo = np.maximum(0.5 * (nv[:-1] + nv[1:]) - 0.5 * LN * h - en, 0.0)
+    d_up = 0.5 * (dv[:-1] + dv[1:]) + 0.5 * LD * h + ed
+    return n_lo / d_up * (1 - 1e-12)
 
 
 def _check_grid(n_grid):
@@ -181,21 +268,41 @@ def _check_grid(n_grid):
         )
 
 
-def _cert_grid(bounds, na, b_lags, dt, kind, n_grid):
-    w = np.linspace(0.0, np.pi / dt, int(n_grid))
-    dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
-    return w, dev, _between(bounds, na, b_lags, w, dt, kind, dev)
+def _certify(W, grid, max_points):
+    """Certificate of ``W`` on ``grid``, bisecting the intervals where the Lipschitz slack
+    (not the weight) makes the proof fail; returns it with the (refined) grid."""
+    dt = grid.dt
+    for rnd in range(_REFINE_ROUNDS + 1):
+        w, dev_b = grid.omega, grid.between()
+        wl = _weight_lower(W, w, dt)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(dev_b > 0, wl / dev_b, np.inf)
+            pv = np.abs(W(np.exp(1j * w * dt))) / grid.dev
+        ends = np.minimum(pv[:-1], pv[1:])  # what the interval could reach when bisected
+        slack = (ratio < 1) & (ratio * (1 + _REFINE_GAIN) < ends)
+        room = max_points - grid.size
+        if not slack.any() or room <= 0 or rnd == _REFINE_ROUNDS:
+            break
+        if slack.sum() > room:  # the worst intervals first
+            keep = np.argsort(np.where(slack, ratio / ends, np.inf))[:room]
+            slack = np.zeros_like(slack)
+            slack[keep] = True
+        grid = grid.refine(slack)
+    cert = WeightCertificate(w, grid.dev, dev_b, wl, bool(np.all(wl >= dev_b)),
+                             float(np.min(ratio)))
+    return cert, grid
 
 
 def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
                    n_grid: int = 8192, _grid=None) -> WeightCertificate:
-    """Check ``|W(e^{jw dt})| >= sup_theta deviation`` for *all* ``w`` (see module doc)."""
+    """Check ``|W(e^{jw dt})| >= sup_theta deviation`` for *all* ``w`` (see module doc):
+    on a uniform grid of ``n_grid`` points over ``[0, pi/dt]``, with intervals bisected
+    where the Lipschitz slack decides (up to ``8 n_grid`` points in all)."""
     _check_grid(n_grid)
-    w, dev, dev_b = _cert_grid(bounds, na, b_lags, dt, kind, n_grid) if _grid is None else _grid
-    wl = _weight_lower(W, w, dt)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(dev_b > 0, wl / dev_b, np.inf)
-    return WeightCertificate(w, dev, dev_b, wl, bool(np.all(wl >= dev_b)), float(np.min(ratio)))
+    if kind not in KINDS:
+        raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
+    grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid) if _grid is None else _grid
+    return _certify(W, grid, _REFINE_FACTOR * int(n_grid))[0]
 
 
 @dataclass(frozen=True)
@@ -210,10 +317,17 @@ class UncertaintyWeight:
     central : control.TransferFunction
         The central model ``G0`` the uncertainty is measured around.
     omega, deviation : ndarray
-        Fit grid (rad/s) and the exact deviation bound there.
+        Fit grid (in :attr:`frequency_unit`) and the exact deviation bound there.
     certificate : WeightCertificate
         The proof over all frequencies (``certificate.holds`` is always True for a
         returned weight).
+    excess_db : float
+        The selection criterion: mean over-bound ``mean 20 log10(|W| / deviation)`` on
+        ``omega`` in dB (deviation floored at ``1e-6`` of its maximum); the smallest of
+        all certified candidates.
+    frequency_unit : str
+        Unit of ``omega`` and ``certificate.omega``: ``"rad/s"`` (rad per unit of the
+        sampling time) or ``"rad/sample"`` when no sampling time is known.
     """
 
     W: object
@@ -222,6 +336,13 @@ class UncertaintyWeight:
     omega: np.ndarray
     deviation: np.ndarray
     certificate: WeightCertificate
+    excess_db: float = float("nan")
+    frequency_unit: str = "rad/s"
+
+    @property
+    def order(self) -> int:
+        """Order of ``W`` (degree of its denominator)."""
+        return int(np.ravel(np.asarray(self.W.den[0][0])).size - 1)
 
     @property
     def poles(self):
@@ -230,44 +351,6 @@ class UncertaintyWeight:
     @property
     def zeros(self):
         return np.asarray(self.W.zeros())
-
-
-def _roots_from(x, n, rmax):
-    """Map unconstrained x (length n) to n roots (conjugate pairs + one real) inside |z|<rmax."""
-    roots = []
-    k = 0
-    for _ in range(n // 2):
-        r = rmax * expit(x[k])
-        ph = np.pi * expit(x[k + 1])
-        roots += [r * np.exp(1j * ph), r * np.exp(-1j * ph)]
-        k += 2
-    if n % 2:
-        roots.append(rmax * np.tanh(x[k]))
-    return np.array(roots, dtype=complex)
-
-
-def _params_from(roots, n, rmax):
-    """Inverse of :func:`_roots_from` for a start point (roots clipped inside rmax)."""
-    roots = sorted(np.asarray(roots, dtype=complex), key=lambda r: -abs(r.imag))
-    roots = [r for r in roots if r.imag >= 0]  # one of each conjugate pair (and reals)
-    x = []
-    for k in range(n // 2):
-        r = roots[k] if k < len(roots) else 0j
-        rad = min(max(abs(r), 1e-3 * rmax), 0.95 * rmax)
-        ph = min(max(abs(np.angle(r)), 1e-3), np.pi - 1e-3)
-        x += [np.log(rad / (rmax - rad)), np.log(ph / (np.pi - ph))]
-    if n % 2:
-        r = roots[n // 2].real if n // 2 < len(roots) else 0.0
-        x.append(np.arctanh(np.clip(r / rmax, -0.95, 0.95)))
-    return np.array(x, dtype=float)
-
-
-def _shape(x, n, z, rmax):
-    zr = _roots_from(x[:n], n, rmax)
-    pr = _roots_from(x[n:], n, rmax)
-    num = np.prod(z[:, None] - zr[None, :], axis=1) if n else np.ones_like(z)
-    den = np.prod(z[:, None] - pr[None, :], axis=1) if n else np.ones_like(z)
-    return np.abs(num / den), zr, pr
 
 
 def _unbounded_message(kind):
@@ -280,75 +363,114 @@ def _unbounded_message(kind):
             f"Narrow the set (more data, method='exact'){fix}.")
 
 
-def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", order=2,
-               omega=None, margin=0.05, n_grid=8192, random_state=0,
-               rmax=0.98) -> UncertaintyWeight:
-    """Fit and certify a weight of the given ``order`` above the deviation bound.
-
-    The shape (poles and zeros inside ``|z| <= rmax``) minimises the mean log-ratio
-    ``log(|W| / deviation)`` on ``omega`` (log-spaced by default), with the gain set so that
-    ``|W| >= (1 + margin) deviation`` there; then :func:`certify_weight` proves the bound on
-    every interval of ``n_grid`` points over ``[0, pi/dt]`` and the gain is raised if needed.
-    """
-    import control
-    from scipy.optimize import minimize
-
-    if not (isinstance(order, (int, np.integer)) and 0 <= order <= 8):
+def _check_fit_args(order, margin, n_grid):
+    if not (isinstance(order, (int, np.integer)) and not isinstance(order, bool)
+            and 0 <= order <= 8):
         raise ParameterValidationError(f"order must be an integer in [0, 8]; got {order!r}.")
     _check_grid(n_grid)
     if not (isinstance(margin, (int, float, np.floating, np.integer)) and np.isfinite(margin)
             and margin >= 0):
         raise ParameterValidationError(f"margin must be >= 0; got {margin!r}.")
+
+
+def _certified(x, n, fit, grid, max_points, rmax):
+    """The weight of shape ``x`` (order ``n``) with the smallest gain that the fit grid's
+    target and the proof accept, its certificate and the grid; ``None`` if no gain can
+    be certified (a lower bound of 0 where the deviation is positive)."""
+    import control
+
+    z_fit = np.exp(1j * fit["w"] * grid.dt)
+    z_grid = np.exp(1j * grid.omega * grid.dt)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        mag = magnitude(x[:n], n, z_fit, rmax) / magnitude(x[n:], n, z_fit, rmax)
+        mag_g = magnitude(x[:n], n, z_grid, rmax) / magnitude(x[n:], n, z_grid, rmax)
+        k = max(float(np.max(fit["target"] / mag)), float(np.max(grid.dev / mag_g)))
+    if not (np.isfinite(k) and k > 0):
+        return None
+    W = control.tf(k * polynomial(x[:n], n, rmax), polynomial(x[n:], n, rmax), grid.dt)
+    for _ in range(4):
+        cert, grid = _certify(W, grid, max_points)
+        if cert.holds:
+            return W, cert, grid
+        if not (np.isfinite(cert.min_ratio) and cert.min_ratio > 0):
+            return None
+        W = W * (1.0 / cert.min_ratio * (1 + 1e-6))
+    return None  # pragma: no cover - one gain step suffices up to rounding
+
+
+def _excess_db(W, fit, dt):
+    mag = np.abs(W(np.exp(1j * fit["w"] * dt)))
+    return float(np.mean(20 * np.log10(mag / fit["floored"])))
+
+
+def _starts(n, prev, central_tf, rng, rmax):
+    """Starting shapes of order ``n``: the best of order ``n - 1`` (exactly embedded), a
+    flat weight, a random one, and the central model's poles (and zeros)."""
+    flat = np.zeros(n)
+    pc = np.asarray(central_tf.poles(), dtype=complex)
+    zc = np.asarray(central_tf.zeros(), dtype=complex)
+    zc = zc[np.abs(zc) < 1]
+    starts = [np.zeros(2 * n), rng.normal(0, 2, 2 * n),
+              np.concatenate([flat, start_from_roots(pc, n, rmax)]),
+              np.concatenate([start_from_roots(zc, n, rmax), start_from_roots(pc, n, rmax)])]
+    if prev is not None:
+        m = n - 1
+        starts.insert(0, np.concatenate([embed(prev[:m], m), embed(prev[m:], m)]))
+    return starts
+
+
+def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", order=2,
+               omega=None, margin=0.05, n_grid=8192, random_state=0,
+               rmax=0.98, *, tf_dt=None, frequency_unit="rad/s") -> UncertaintyWeight:
+    """The best certified weight of order at most ``order`` above the deviation bound.
+
+    For each order ``0 .. order`` the shape (poles and zeros inside ``|z| <= rmax``)
+    minimises the mean log-ratio ``log(|W| / deviation)`` on ``omega`` (default: 256
+    linear and 256 log-spaced points up to ``pi/dt``) from several starts; each result
+    gets the smallest gain with ``|W| >= (1 + margin) deviation`` on ``omega`` that
+    :func:`certify_weight` proves on all of ``[0, pi/dt]``. The certified candidate with
+    the smallest :attr:`UncertaintyWeight.excess_db` is returned (the lower order on a
+    tie). The constant weight (order 0) always certifies, so a finite deviation always
+    gives a weight. ``tf_dt``: the sampling time given to ``W`` (default ``dt``; ``True``
+    when it is not known and ``omega`` is in rad/sample, as ``frequency_unit`` says).
+    """
+    _check_fit_args(order, margin, n_grid)
     nyq = np.pi / dt
     w = np.linspace(0.0, nyq, 256) if omega is None else np.asarray(omega, float)
     w = np.union1d(w, np.logspace(np.log10(1e-4 * nyq), np.log10(nyq), 256))
     dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
-    if not np.all(np.isfinite(dev)):
+    grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid)
+    if not (np.all(np.isfinite(dev)) and grid.finite()):
         raise UnboundedSetError(_unbounded_message(kind))
-    target = dev * (1 + margin)
-    floor = 1e-6 * max(float(np.max(target)), 1e-300)
-    tgt = np.maximum(target, floor)
+    floor = 1e-6 * max(float(np.max(dev)), 1e-300)
+    fit = {"w": w, "target": np.maximum(dev * (1 + margin), floor),
+           "floored": np.maximum(dev, floor)}
     z = np.exp(1j * w * dt)
-    logw = np.log(tgt)
-
-    def obj(x):
-        mag, _, _ = _shape(x, order, z, rmax)
-        lr = np.log(np.maximum(mag, 1e-300)) - logw
-        return float(np.mean(lr - np.min(lr)))
-
+    max_points = _REFINE_FACTOR * int(n_grid)
     rng = np.random.default_rng(random_state)
-    best_x = np.zeros(2 * order)
-    if order:
-        # starts: flat weight, poles at the central model's poles, random shapes
-        starts = [np.zeros(2 * order), rng.normal(0, 2, 2 * order)]
-        pc = np.asarray(central_tf.poles(), dtype=complex)
-        zc = np.asarray(central_tf.zeros(), dtype=complex)
-        zc = zc[np.abs(zc) < 1]
-        starts.append(np.concatenate([_params_from([], order, rmax),
-                                      _params_from(pc, order, rmax)]))
-        starts.append(np.concatenate([_params_from(zc, order, rmax),
-                                      _params_from(pc, order, rmax)]))
-        best = np.inf
-        for s in starts:
-            res = minimize(obj, s, method="Nelder-Mead",
-                           options={"maxiter": 300 * order, "xatol": 1e-6, "fatol": 1e-9})
-            if res.fun < best:
-                best, best_x = res.fun, res.x
-    mag, zr, pr = _shape(best_x, order, z, rmax)
-    grid = _cert_grid(bounds, na, b_lags, dt, kind, n_grid)
-    if not (np.all(np.isfinite(grid[1])) and np.all(np.isfinite(grid[2]))):
-        raise UnboundedSetError(_unbounded_message(kind))
-    mag_c, _, _ = _shape(best_x, order, np.exp(1j * grid[0] * dt), rmax)
-    k = max(float(np.max(tgt / mag)), float(np.max(grid[1] / mag_c)))
-    num = k * np.real(np.poly(zr)) if order else np.array([k])
-    den = np.real(np.poly(pr)) if order else np.array([1.0])
-    W = control.tf(num, den, dt)
-    cert = certify_weight(W, bounds, na, b_lags, dt, kind, n_grid, _grid=grid)
-    for _ in range(5):
-        if cert.holds:
-            break
-        W = W * (1.0 / cert.min_ratio * (1 + 1e-6))
-        cert = certify_weight(W, bounds, na, b_lags, dt, kind, n_grid, _grid=grid)
-    if not cert.holds:  # pragma: no cover - the gain scaling above always succeeds
-        raise UnboundedSetError("could not certify the weight on the frequency grid.")
-    return UncertaintyWeight(W, kind, central_tf, w, dev, cert)
+    best, prev = None, None  # best: (excess, W, cert); prev: best shape of the last order
+    for n in range(int(order) + 1):
+        if n == 0:
+            shapes = [np.zeros(0)]
+        else:
+            res = fit_shape(np.log(fit["target"]), z, n, _starts(n, prev, central_tf, rng, rmax),
+                            rmax, 300 * n)
+            shapes = [x for _, x in sorted(res, key=lambda r: r[0])]
+        best_n = None
+        for x in shapes:
+            out = _certified(x, n, fit, grid, max_points, rmax)
+            if out is None:
+                continue
+            W, cert, grid = out
+            e = _excess_db(W, fit, dt)
+            if best_n is None or e < best_n[0]:
+                best_n = (e, x)
+            if best is None or e < best[0] - 1e-9:
+                best = (e, W, cert)
+        prev = shapes[0] if best_n is None else best_n[1]
+    e, W, cert = best
+    if tf_dt is not None and tf_dt is not W.dt:
+        import control
+
+        W = control.tf(W.num[0][0], W.den[0][0], tf_dt)
+    return UncertaintyWeight(W, kind, central_tf, w, dev, cert, e, frequency_unit)

@@ -144,6 +144,16 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         when only stability, A1, bounds ``a_2``). They are still guaranteed under A1.
     n_features_in_ : int
         Always 1.
+    dt_ : float or None
+        Sampling time of the fitted :class:`~hammerbound.IOData` (None: not given, e.g.
+        arrays); the default of :meth:`to_transfer_function`, :meth:`frequency_response_bounds`
+        and :meth:`uncertainty_weight`.
+    signal_names_, signal_units_ : tuple of str
+        ``(input, output)`` names and units of the fitted IOData (``("u", "y")``,
+        ``("", "")`` for arrays); the names label the transfer function's signals, names
+        and units the frequency plots.
+    time_unit_ : str
+        Unit of ``dt_`` (empty: seconds).
 
     Examples
     --------
@@ -523,6 +533,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         self.dt_ = None if data is None else data.dt
         self.signal_names_ = ("u", "y") if data is None else (data.input_name,
                                                              data.output_name)
+        self.signal_units_ = ("", "") if data is None else (data.input_unit, data.output_unit)
+        self.time_unit_ = "" if data is None else data.time_unit
         self.n_samples_ = problem.N
         return self
 

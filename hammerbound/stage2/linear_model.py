@@ -15,6 +15,7 @@ import numpy as np
 from scipy.signal import lfilter
 from sklearn.utils.validation import check_is_fitted
 
+from ..data.iodata import signal_label
 from ..data.validation import as_bound, as_signal, as_theta
 from ..exceptions import DataValidationError, ParameterValidationError
 
@@ -60,9 +61,16 @@ class LinearModelMixin:
 
         pr = self.problem_
         g = self.steady_state_gain
+        dt = getattr(self, "dt_", None)
+        dt = "not given" if dt is None else f"{dt:g}" + (
+            f" {self.time_unit_}" if getattr(self, "time_unit_", "") else "")
         head = (f"LinearEIVSetEstimator: method {self.method}, na={pr.na} nb={pr.nb} "
-                f"nk={pr.nk}, N = {pr.N}, dt = {'not given' if self.dt_ is None else f'{self.dt_:g}'}, "
+                f"nk={pr.nk}, N = {pr.N}, dt = {dt}, "
                 + ("no gain constraint" if g is None else f"gain B(1)/A(1) = {g:g}"))
+        sig = signal_label(getattr(self, "signal_names_", ("u", "y")),
+                           getattr(self, "signal_units_", ("", "")))
+        if sig:
+            head += f"\nsignals: {sig}"
         return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     # ------------------------------------------------------------------ model

@@ -1,0 +1,81 @@
+"""The time base of a record: which column is time, and its sampling time.
+
+* :func:`find_time_column` recognises the usual names of a time column (``t``, ``time``,
+  ``Time``, ``timestamp``, with or without a unit: ``t [s]``, ``time (ms)``, ``t_s``) and
+  reads the unit from the name;
+* :func:`uniform_step` checks that the column is uniformly sampled and returns its step
+  to the precision the column supports: the mean step over the record, rounded to the
+  shortest decimal within the rounding uncertainty of the time values (a column
+  ``0, 0.01, 0.02, ...`` gives ``0.01``, not ``0.010000000000000009``).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ..exceptions import DataValidationError
+from .validation import as_signal
+
+__all__ = ["TIME_NAMES", "find_time_column", "time_unit_of", "uniform_step"]
+
+#: base names recognised as a time column (case-insensitive)
+TIME_NAMES = ("t", "time", "times", "timestamp", "zeit", "tiempo", "temps")
+_UNIT = r"(?:\s*[\[(]\s*(?P<u1>[^\])]*?)\s*[\])]|[ _/](?P<u2>s|sec|secs|seconds|ms|us|min|h))?"
+_TIME_RE = re.compile(r"^\s*(?P<base>" + "|".join(TIME_NAMES) + r")" + _UNIT + r"\s*$",
+                      re.IGNORECASE)
+
+
+def time_unit_of(name) -> str | None:
+    """The unit in a time column's name (``"t [s]"`` -> ``"s"``, ``"t"`` -> ``""``), or
+    None if the name is not a usual time-column name."""
+    m = _TIME_RE.match(str(name))
+    if m is None:
+        return None
+    return (m.group("u1") or m.group("u2") or "").strip()
+
+
+def find_time_column(columns, exclude=(), where="the data") -> str | None:
+    """The one column of ``columns`` whose name is a usual time-column name (not one of
+    ``exclude``), or None. Several candidates: a DataValidationError asking to choose."""
+    found = [c for c in columns if c not in exclude and time_unit_of(c) is not None]
+    if len(found) > 1:
+        raise DataValidationError(
+            f"{where}: several columns look like a time base: {found}; pass t='<name>' for "
+            "the one to use (or t=None to use none).")
+    return found[0] if found else None
+
+
+def _shortest_decimal(step, unc):
+    """The decimal with the fewest digits within ``unc`` of ``step`` (else ``step``)."""
+    for k in range(-int(np.floor(np.log10(step))) - 1, 18):
+        cand = round(step, k) if k >= 0 else float(round(step, k))
+        if cand > 0 and abs(cand - step) <= unc:
+            return float(cand)
+    return float(step)
+
+
+def uniform_step(t, name="t") -> float:
+    """The constant step of the time vector ``t`` (to the precision it supports), or a
+    DataValidationError naming the first irregular sample."""
+    t = as_signal(name, t)
+    if t.size < 2:
+        raise DataValidationError(f"the time column {name!r} needs at least two samples.")
+    d = np.diff(t)
+    step = float((t[-1] - t[0]) / (t.size - 1))
+    if not step > 0 or np.any(d <= 0):
+        raise DataValidationError(f"the time column {name!r} must increase.")
+    eps = np.finfo(float).eps
+    big = max(abs(float(t[0])), abs(float(t[-1])))  # the values' rounding (time stamps)
+    bad = np.flatnonzero(np.abs(d - step) > 1e-6 * step + 4 * eps * big)
+    if bad.size:
+        k = int(bad[0])
+        raise DataValidationError(
+            f"the time column {name!r} is not uniformly sampled: {name}[{k + 1}] - "
+            f"{name}[{k}] = {d[k]:g}, expected {step:g}. Resample the record (set-membership "
+            "identification of a difference equation needs a constant sampling time).")
+    # rounding of the two end values (and of the division), spread over the record; a
+    # value read from text with few digits is exact to well within this
+    unc = 4 * eps * big / (t.size - 1) + 4 * eps * step
+    return _shortest_decimal(step, unc)

@@ -1,0 +1,117 @@
+"""Issue 29 item 7 (data part): the time column of a record -- recognised under its usual
+names, its step to the precision the column supports, and a clear word when a column
+that might be time is not used."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+import hammerbound as hb
+from hammerbound.app.cli import main
+from hammerbound.exceptions import DataValidationError, DataWarning
+from hammerbound.data.timebase import time_unit_of, uniform_step
+
+
+def write(path, header, cols, fmt="%.10g"):
+    np.savetxt(path, np.column_stack(cols), delimiter=",", fmt=fmt, header=",".join(header),
+               comments="")
+    return path
+
+
+def record(N=60, seed=0):
+    """Own simulation of a first-order plant, output errors exactly at +-0.01."""
+    rng = np.random.default_rng(seed)
+    u = np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    y = lfilter([0, 0.5], [1, -0.6], u) + 0.01 * rng.choice([-1.0, 1.0], N)
+    return u, y
+
+
+@pytest.mark.parametrize("step", [0.01, 0.1, 0.001, 0.02, 2.5e-4, 5.0])
+def test_step_of_a_decimal_column_is_that_decimal(tmp_path, step):
+    """np.arange(N) * 0.01 written with %.10g used to give dt = 0.010000000000000009."""
+    u, y = record()
+    t = np.arange(u.size) * step
+    d = hb.IOData.from_csv(write(tmp_path / "r.csv", ["t", "u", "y"], [t, u, y]))
+    assert d.dt == step
+    est = hb.LinearEIVSetEstimator(1, 1, noise_bound=0.01, method="lp").fit(d)
+    assert est.dt_ == step and est.to_transfer_function().dt == step
+    assert hb.IOData.from_frame({"t": t, "u": u, "y": y}).dt == step
+
+
+def test_step_keeps_the_precision_the_column_has():
+    t = np.arange(50) / 3.0  # not a short decimal: kept to float precision
+    assert uniform_step(t) == pytest.approx(1 / 3, rel=1e-15)
+    t = 0.0123456789 * np.arange(50)
+    assert uniform_step(t) == pytest.approx(0.0123456789, rel=1e-15)
+    # Unix time stamps: 1e-7 s rounding on every value, the step is still 0.01
+    assert uniform_step(1.7e9 + 0.01 * np.arange(1000)) == 0.01
+    # a step that really is 0.0100001 is not rounded to 0.01
+    assert uniform_step(0.0100001 * np.arange(100)) == pytest.approx(0.0100001, rel=1e-12)
+
+
+@pytest.mark.parametrize("name,unit", [("t", ""), ("time", ""), ("Time", ""), ("TIME", ""),
+                                       ("t [s]", "s"), ("time (ms)", "ms"), ("t_s", "s"),
+                                       ("Time [s]", "s"), ("timestamp", "")])
+def test_usual_time_column_names_are_recognised(tmp_path, name, unit):
+    u, y = record()
+    t = 5.0 + 0.05 * np.arange(u.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # recognised: no warning
+        d = hb.IOData.from_csv(write(tmp_path / "r.csv", [name, "u", "y"], [t, u, y]))
+    assert d.dt == 0.05 and d.t0 == 5.0 and d.time_unit == unit
+    assert d[3:9].time_unit == unit and d[3:9].t0 == pytest.approx(5.15)
+    assert time_unit_of(name) == unit
+    assert ("dt=0.05 " + unit).strip() in repr(d)
+
+
+def test_unknown_time_column_is_named_in_a_warning(tmp_path):
+    u, y = record()
+    p = write(tmp_path / "r.csv", ["clock", "u", "y"], [0.1 * np.arange(u.size), u, y])
+    with pytest.warns(DataWarning, match=r"\['clock'\].*t='<name>'"):
+        d = hb.IOData.from_csv(p)
+    assert d.dt is None
+    assert hb.IOData.from_csv(p, t="clock").dt == 0.1  # the fix the message gives
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert hb.IOData.from_csv(p, t=None).dt is None
+        assert hb.IOData.from_csv(p, dt=0.1).dt == 0.1
+        only = write(tmp_path / "uy.csv", ["u", "y"], [u, y])
+        assert hb.IOData.from_csv(only).dt is None  # nothing unused: nothing to say
+
+
+def test_ambiguous_or_missing_time_columns_are_errors(tmp_path):
+    u, y = record()
+    t = 0.1 * np.arange(u.size)
+    p = write(tmp_path / "r.csv", ["t", "time", "u", "y"], [t, t, u, y])
+    with pytest.raises(DataValidationError, match=r"several columns.*t='<name>'"):
+        hb.IOData.from_csv(p)
+    assert hb.IOData.from_csv(p, t="time").dt == 0.1
+    with pytest.raises(DataValidationError, match="no time column 'secs'"):
+        hb.IOData.from_csv(p, t="secs")
+    with pytest.raises(DataValidationError, match="several columns"):
+        hb.IOData.from_frame({"t": t, "Time": t, "u": u, "y": y})
+
+
+def test_time_column_that_counts_samples_with_dt(tmp_path):
+    u, y = record()
+    p = write(tmp_path / "r.csv", ["time", "u", "y"], [np.arange(u.size), u, y])
+    d = hb.IOData.from_csv(p, dt=0.1)
+    assert d.dt == 0.1 and d.time_unit == ""
+    p2 = write(tmp_path / "r2.csv", ["t [ms]", "u", "y"], [2.0 * np.arange(u.size), u, y])
+    with pytest.raises(DataValidationError, match="step 2 but dt=0.1"):
+        hb.IOData.from_csv(p2, dt=0.1)
+
+
+def test_cli_eiv_reads_a_time_column_named_time(tmp_path, capsys):
+    u, y = record()
+    p = write(tmp_path / "r.csv", ["time", "u", "y"], [0.01 * np.arange(u.size), u, y])
+    rc = main(["eiv", str(p), "--na", "1", "--nb", "1", "--input-noise", "0",
+               "--output-noise", "0.01", "--method", "lp", "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["data"]["dt"] == 0.01 and out["transfer_function"]["dt"] == 0.01

@@ -35,6 +35,9 @@ MOVED = {
 class _MovedModule(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     """Finds ``hammerbound.<old>`` and hands out the module at its new path."""
 
+    def __init__(self):
+        self._specs = {}
+
     def find_spec(self, fullname, path=None, target=None):
         prefix = "hammerbound."
         if not fullname.startswith(prefix) or fullname[len(prefix):] not in MOVED:
@@ -46,10 +49,15 @@ class _MovedModule(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         warnings.warn(f"{spec.name} is deprecated and will be removed in {REMOVAL}; import "
                       f"{new} (or the top-level hammerbound names) instead.",
                       DeprecationWarning, stacklevel=2)
-        return importlib.import_module(new)
+        module = importlib.import_module(new)
+        self._specs[spec.name] = module.__spec__
+        return module
 
-    def exec_module(self, module):  # the module at the new path is already executed
-        return None
+    def exec_module(self, module):
+        # the module at the new path is already executed; the import system has just set
+        # its __spec__ to the old path's: give it back its own (relative imports inside
+        # functions read it)
+        module.__spec__ = self._specs.pop(module.__spec__.name, module.__spec__)
 
 
 def install() -> None:

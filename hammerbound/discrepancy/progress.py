@@ -74,6 +74,7 @@ class SearchProgress:
         if self.bar is not None:
             self.bar.update(1)
             self._postfix()
+            self.bar.refresh()  # every finished class is drawn, however fast it was
         else:
             self._line(f"{self.stage_name} {self.count}/{self.total}: {name}: error "
                        f"{error:.4g} ({verdict})")

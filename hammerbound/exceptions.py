@@ -105,3 +105,9 @@ class DataWarning(UserWarning):
     """The data were read, but something in them may not be used as you meant (e.g. a
     column that looks like a time base was not recognised); the message says how to be
     explicit."""
+
+
+class NotIdentifiedWarning(UserWarning):
+    """The record does not bound a parameter (e.g. an input that never reverses by more
+    than the backlash's dead band): the warning names the parameters and the cause; their
+    interval ends are reported as infinite (or, with a box you gave, as its limits)."""

@@ -1,17 +1,23 @@
-"""The two-stage procedure of the chapter: backlash first, then the linear block.
+"""The identifier of a backlash-Hammerstein system: two stages, or one record.
 
-:class:`HammersteinBacklashIdentifier` composes a :class:`~hammerbound.BacklashSetEstimator`
-(stage 1, steady-state square-wave data) and a :class:`~hammerbound.LinearEIVSetEstimator`
-(stage 2, PRBS data):
+:class:`HammersteinBacklashIdentifier` bounds ``gamma = (m_l, c_l, m_r, c_r)`` and the
+unit-gain linear block ``theta`` in one of two ways (``procedure``):
 
-1. stage 1 bounds ``gamma = (m_l, c_l, m_r, c_r)`` exactly;
-2. the PRBS level ``u*`` is read from the input and checked against Result 1 for *every*
-   feasible backlash (outside the dead zone, before the crossing of the two lines);
-3. the inner signal ``x_t`` is bounded by ``x^c_t +- dx_t`` (22.25)-(22.33);
-4. stage 2 bounds ``theta`` from ``(x^c, dx, y)``, either with independent per-sample input
-   errors as in the chapter (``inner_signal="independent"``) or - what Result 1 actually
-   implies - with *one* unknown value per PRBS level (``inner_signal="two-level"``), which
-   gives much tighter intervals.
+* **two-stage** (the chapter; with steady-state square-wave data and a PRBS ``+-u*``):
+
+  1. stage 1 (a :class:`~hammerbound.BacklashSetEstimator`) bounds ``gamma`` exactly;
+  2. the PRBS level ``u*`` is read from the input and checked against Result 1 for
+     *every* feasible backlash;
+  3. the inner signal is bounded by ``x^c_t +- dx_t`` (22.25)-(22.33), handed to stage 2
+     as a :class:`~hammerbound.stage1.Stage2Record`;
+  4. stage 2 (a :class:`~hammerbound.LinearEIVSetEstimator`) bounds ``theta`` from it, with
+     independent per-sample input errors (``inner_signal="independent"``, the chapter) or
+     one unknown value per PRBS level (``"two-level"``, what Result 1 implies);
+
+* **one-record** (any ordinary record: steps, sines, closed-loop logs, and records that
+  hold steady-state holds and PRBS segments; :mod:`hammerbound.joint`): both blocks and
+  the unknown initial backlash state are bounded jointly from all samples, with the stage-2
+  estimator's orders, output bound, method (``"exact"`` or ``"lp"``) and limits.
 """
 
 from __future__ import annotations
@@ -23,38 +29,12 @@ from sklearn.utils.validation import check_is_fitted
 from ..data.validation import as_signal, as_theta, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..stage1.estimator import BacklashSetEstimator
-from ..stage1.inner_signal import INNER_SIGNALS, read_prbs_level
+from ..stage1.inner_signal import INNER_SIGNALS
 from ..stage2.estimator import LinearEIVSetEstimator
 from ..systems.models import Backlash, HammersteinSystem
 
 __all__ = ["HammersteinBacklashIdentifier"]
 
-
-
-def _steady_pair(steady_state):
-    """Accept SteadyStateData, a dict with 'u'/'y', or a pair (u, y)."""
-    if steady_state is None:
-        raise DataValidationError(
-            "fit needs the steady-state square-wave data for stage 1: pass "
-            "steady_state=(u_ss, y_ss) (or a dict {'u': ..., 'y': ...} / SteadyStateData)."
-        )
-    if hasattr(steady_state, "u") and hasattr(steady_state, "y"):
-        return steady_state.u, steady_state.y
-    if isinstance(steady_state, dict):
-        try:
-            return steady_state["u"], steady_state["y"]
-        except KeyError as exc:
-            raise DataValidationError(
-                "steady_state dict must have keys 'u' and 'y'."
-            ) from exc
-    try:
-        u, y = steady_state
-    except (TypeError, ValueError) as exc:
-        raise DataValidationError(
-            "steady_state must be a pair (u_ss, y_ss), a dict with 'u' and 'y', or "
-            "SteadyStateData."
-        ) from exc
-    return u, y
 
 
 def _central_system(backlash, A, B, dt=None):
@@ -74,81 +54,160 @@ def _central_system(backlash, A, B, dt=None):
         return HammersteinSystem._unchecked(backlash, (A, B), dt=dt)
 
 
+PROCEDURES = ("auto", "two-stage", "one-record")
+
+
+def _is_prbs(u, prbs_level) -> bool:
+    """A two-level input ``+-u*`` (the chapter's stage-2 experiment)?"""
+    if prbs_level is not None:
+        return True
+    levels = np.unique(u)
+    return levels.size == 2 and bool(np.isclose(levels[0], -levels[1], rtol=1e-9, atol=0))
+
+
 class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
-    """Guaranteed bounds on a backlash-Hammerstein system (stages 1 and 2 of the chapter).
+    """Guaranteed bounds on a backlash-Hammerstein system, from two experiments or one record.
 
     Parameters
     ----------
     backlash : BacklashSetEstimator or None
-        Stage-1 estimator (default ``BacklashSetEstimator(noise_bound=0.05)``); its
-        ``noise_bound`` is the bound on the steady-state output errors.
+        Stage-1 estimator (two-stage path; default ``BacklashSetEstimator()``); its output
+        bound is the bound on the steady-state output errors (also used for steady-state
+        points given to the one-record path).
     linear : LinearEIVSetEstimator or None
-        Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``,
-        order-1 moment relaxation); its ``noise_bound`` bounds the PRBS output errors.
-        Stage 2 always imposes the unit steady-state gain (22.8) that makes the
-        backlash/linear split identifiable (stage 1 measures ``G(1) m``, read as ``m``):
-        a ``linear`` estimator with ``steady_state_gain=None`` (its default) is cloned
-        with ``steady_state_gain=1``; any other gain raises ``ParameterValidationError``.
-        To bound the time of stage 2, give it a total budget:
-        ``linear=LinearEIVSetEstimator(method="exact", total_time_limit=60)`` or
-        ``set_params(linear__total_time_limit=60)`` (seconds, shared by all interval ends;
-        ends stopped by it report guaranteed bounds, never wider than the LP ones).
+        Stage-2 estimator (default ``LinearEIVSetEstimator()``); its orders, delay, output
+        bound, method and limits serve both paths. The linear block always has unit
+        steady-state gain (22.8), which makes the backlash/linear split identifiable: a
+        ``linear`` estimator with ``steady_state_gain=None`` (its default) is cloned with
+        ``steady_state_gain=1``; any other gain raises ``ParameterValidationError``. To
+        bound the time, give it a total budget, e.g.
+        ``LinearEIVSetEstimator(method="exact", total_time_limit=60)`` (seconds, shared by
+        all interval ends; ends stopped by it report guaranteed outer bounds).
     inner_signal : {"independent", "two-level"}, default "independent"
-        How stage 2 treats the inner-signal uncertainty. ``"independent"`` follows the
-        chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
+        Two-stage path: how stage 2 treats the inner-signal uncertainty. ``"independent"``
+        follows the chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
         ``"two-level"`` uses that under Result 1 the inner signal takes exactly two
         (unknown) values: one shared error per PRBS level. Both are guaranteed.
     prbs_level : float or None
-        ``u*``. Default: read from the PRBS input (which must take the two values
-        ``+-u*``).
+        Two-stage path: ``u*``. Default: read from the PRBS input (two values ``+-u*``).
+    procedure : {"auto", "two-stage", "one-record"}, default "auto"
+        ``"auto"``: two-stage when steady-state data are given and the record is a PRBS
+        ``+-u*``; one-record otherwise (no steady-state data, or an ordinary record: the
+        steady-state points, if given, then join the record's equations). ``"one-record"``
+        uses all data jointly also for the chapter's experiments.
+    gamma_box : array of shape (4, 2) or None
+        One-record path: a priori box of ``(m_l, c_l, m_r, c_r)`` (rows ``[lower, upper]``).
+        Default: ``0 <= m <= 1e3 * range(y) / range(u)`` and ``0 <= c <= range(u)``, printed
+        as an assumption; ends that only such an assumed limit holds are reported as
+        infinite with a :class:`~hammerbound.exceptions.NotIdentifiedWarning`.
 
     Attributes
     ----------
-    backlash_, linear_ : fitted estimators
+    procedure_ : str
+        ``"two-stage"`` or ``"one-record"``.
+    backlash_, linear_ : fitted estimators (two-stage) or read-only views of the joint
+        intervals with the same interface (one-record; :mod:`.views`)
     gamma_bounds_ : ndarray (4, 2)
         Bounds on ``(m_l, c_l, m_r, c_r)``.
     theta_bounds_ : ndarray (p, 2)
         Bounds on ``(a_1.., b_1..)``.
     bounds_ : ndarray (4 + p, 2)
         Both, stacked; names in :attr:`param_names_`.
-    u_star_ : float
-    inner_bounds_ : InnerSignalBounds
-    xc_, dx_ : ndarray (N,)
-        Central inner signal and its radius used in stage 2.
+    bound_info_ : tuple of BoundInfo
+        Per interval end: status, certified bound, verified witness (one-record: of the
+        backlash's ends too; two-stage: of the linear block's ends).
+    assumptions_ : tuple of str
+        What the bounds rest on.
+    u_star_, inner_bounds_, xc_, dx_ : two-stage path only
+        PRBS level, inner-signal bounds, central inner signal and its radius.
     system_ : HammersteinSystem
-        The central model (centres of all intervals).
+        The central model (centres of all intervals; None when some end is infinite).
 
     Notes
     -----
-    ``fit(X, y, steady_state=...)``: ``X`` is the PRBS input ``u`` (shape (N,) or (N, 1)),
-    ``y`` the PRBS output; ``steady_state`` the square-wave steady-state data. Inside
-    ``GridSearchCV`` pass ``steady_state`` as a dict or SteadyStateData so that it is not
-    split with the PRBS samples.
+    ``fit(X, y, steady_state=...)``: ``X`` is the input ``u`` (shape (N,) or (N, 1)) or an
+    IOData, ``y`` the output. Inside ``GridSearchCV`` pass ``steady_state`` as a dict or
+    SteadyStateData so that it is not split with the record's samples.
     """
 
     def __init__(self, backlash=None, linear=None, *, inner_signal="independent",
-                 prbs_level=None):
+                 prbs_level=None, procedure="auto", gamma_box=None):
         self.backlash = backlash
         self.linear = linear
         self.inner_signal = inner_signal
         self.prbs_level = prbs_level
+        self.procedure = procedure
+        self.gamma_box = gamma_box
+
+    def _estimators(self):
+        """Clones of the two estimators, checked, the linear one at unit gain (22.8)."""
+        if self.inner_signal not in INNER_SIGNALS:
+            raise ParameterValidationError(
+                f"inner_signal must be one of {INNER_SIGNALS}; got {self.inner_signal!r}.")
+        if self.procedure not in PROCEDURES:
+            raise ParameterValidationError(
+                f"procedure must be one of {PROCEDURES}; got {self.procedure!r}.")
+        for name, cls in (("backlash", BacklashSetEstimator), ("linear", LinearEIVSetEstimator)):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, cls):
+                what = "the class itself" if v is cls else f"{type(v).__name__} {v!r}"
+                raise ParameterValidationError(
+                    f"{name} must be a {cls.__name__} instance (or None); got {what}. "
+                    f"Pass e.g. {name}={cls.__name__}(...).")
+        bl = BacklashSetEstimator() if self.backlash is None else clone(self.backlash)
+        lin = LinearEIVSetEstimator() if self.linear is None else clone(self.linear)
+        g = lin.steady_state_gain
+        if g is None:
+            lin.set_params(steady_state_gain=1.0)  # (22.8), explicitly on the clone
+        elif not (isinstance(g, (int, float, np.number)) and float(g) == 1.0):
+            raise ParameterValidationError(
+                f"the identifier normalises the linear block to unit steady-state gain (22.8) "
+                f"and lets the backlash slopes carry the gain; got linear steady_state_gain="
+                f"{g!r}. Use steady_state_gain=None (or 1.0) on the stage-2 estimator.")
+        return bl, lin
+
+    def _record(self, X, y):
+        from ..data.iodata import IOData, unpack
+
+        X, y, data = unpack(X, y)
+        u = as_signal("X (input)", X)
+        yy = as_signal("y (output)", y)
+        if u.shape != yy.shape:
+            raise DataValidationError(
+                f"X and y must have the same number of samples; got {u.size} and {yy.size}.")
+        check_scale("HammersteinBacklashIdentifier.fit", {"X (input)": u, "y (output)": yy},
+                    hint=" (the slopes m_l, m_r and theta are unchanged; multiply the bounds "
+                         "on c_l, c_r by s)")
+        return IOData(u, yy) if data is None else data
+
+    def _choose(self, u, steady_state) -> str:
+        if self.procedure == "two-stage":
+            if steady_state is None:
+                raise DataValidationError(
+                    "procedure='two-stage' needs the steady-state square-wave data: pass "
+                    "steady_state=(u_ss, y_ss) (or a dict {'u': ..., 'y': ...} / "
+                    "SteadyStateData), or use procedure='one-record' for one ordinary record.")
+            return "two-stage"
+        if self.procedure == "one-record" or steady_state is None:
+            return "one-record"
+        return "two-stage" if _is_prbs(u, self.prbs_level) else "one-record"
 
     def fit(self, X, y=None, steady_state=None, *, output_bound=None):
-        """Run stage 1 on ``steady_state``, check Result 1, run stage 2 on ``(X, y)``.
+        """Bound both blocks from the record ``(X, y)`` (and steady-state data if given).
 
         Parameters
         ----------
         X : array-like of shape (N,) or (N, 1), or IOData
-            PRBS input, taking the two values ``+-u*``; or an :class:`~hammerbound.IOData`
-            with the PRBS input and output (its ``dt`` flows into :attr:`system_`).
+            The input (a PRBS ``+-u*`` for the two-stage path; any record for the one-record
+            path), or an :class:`~hammerbound.IOData` with input, output and ``dt``.
         y : array-like of shape (N,) or None
-            Measured PRBS output (None with an IOData).
-        steady_state : SteadyStateData, dict with keys "u" and "y", or pair (u_ss, y_ss)
-            Steady-state square-wave data for stage 1 (input amplitudes of both signs and
-            the measured steady outputs).
+            Measured output (None with an IOData).
+        steady_state : SteadyStateData, dict with keys "u" and "y", pair (u_ss, y_ss), or None
+            Steady-state square-wave data (input amplitudes of both signs and the measured
+            steady outputs).
         output_bound : float or array of shape (N,), optional
-            Per-sample bound on the PRBS output errors for this fit, overriding the stage-2
-            ``noise_bound``; sample-aligned, so scikit-learn's CV splits it with the data.
+            Per-sample bound on the record's output errors for this fit, overriding the
+            stage-2 estimator's; sample-aligned, so scikit-learn's CV splits it with the data.
 
         Returns
         -------
@@ -157,73 +216,92 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         Raises
         ------
         ResultOneViolationError
-            ``u*`` is inside the dead zone or past the crossing of the two backlash lines
-            for some feasible backlash; the message gives the admissible range.
+            Two-stage: ``u*`` is inside the dead zone or past the crossing of the two
+            backlash lines for some feasible backlash; the message gives the admissible range.
         DataValidationError
-            ``X`` is not a two-level PRBS, lengths differ, missing steady-state data.
+            Malformed data; two-stage without a two-level PRBS or steady-state data.
         EmptyFeasibleSetError, UnboundedSetError, SolverError
-            From either stage.
-        """
-        if self.inner_signal not in INNER_SIGNALS:
-            raise ParameterValidationError(
-                f"inner_signal must be one of {INNER_SIGNALS}; got {self.inner_signal!r}."
-            )
-        bl = BacklashSetEstimator() if self.backlash is None else clone(self.backlash)
-        lin = LinearEIVSetEstimator() if self.linear is None else clone(self.linear)
-        if not isinstance(bl, BacklashSetEstimator) or not isinstance(lin, LinearEIVSetEstimator):
-            raise ParameterValidationError(
-                "backlash must be a BacklashSetEstimator and linear a LinearEIVSetEstimator."
-            )
-        g = lin.steady_state_gain
-        if g is None:
-            lin.set_params(steady_state_gain=1.0)  # (22.8), explicitly on the clone
-        elif not (isinstance(g, (int, float, np.number)) and float(g) == 1.0):
-            raise ParameterValidationError(
-                f"the identifier normalises the linear block to unit steady-state gain (22.8) "
-                f"and lets the backlash slopes carry the gain; got linear steady_state_gain="
-                f"{g!r}. Use steady_state_gain=None (or 1.0) on the stage-2 estimator."
-            )
-        from ..data.iodata import IOData, unpack
+            From either path.
 
-        X, y, data = unpack(X, y)
-        u = as_signal("X (PRBS input)", X)
-        yy = as_signal("y (PRBS output)", y)
-        if u.shape != yy.shape:
-            raise DataValidationError(
-                f"X and y must have the same number of samples; got {u.size} and {yy.size}."
-            )
-        check_scale("HammersteinBacklashIdentifier.fit", {"X (PRBS input)": u,
-                                                          "y (PRBS output)": yy},
-                    hint=" (the slopes m_l, m_r and theta are unchanged; multiply the bounds "
-                         "on c_l, c_r by s)")
-        if data is None:
-            data = IOData(u, yy)
-        u_ss, y_ss = _steady_pair(steady_state)
-        bl.fit(u_ss, y_ss)
-        u_star = read_prbs_level(u, self.prbs_level)
-        inner = bl.inner_signal_bounds(u_star)  # checks Result 1
-        record = inner.stage2_record(data, self.inner_signal)
-        lin.fit(record.data, input_bound=record.input_bound, input_groups=record.input_groups,
-                output_bound=output_bound)
-        dt = lin.dt_
-        xc, dx = record.data.u, record.input_bound
-        self.backlash_ = bl
-        self.linear_ = lin
-        self.u_star_ = u_star
-        self.inner_bounds_ = inner
-        self.xc_, self.dx_ = xc, dx
-        self.gamma_bounds_ = bl.gamma_bounds_
-        self.theta_bounds_ = lin.bounds_
-        self.bounds_ = np.vstack([bl.gamma_bounds_, lin.bounds_])
-        self.param_names_ = ("ml", "cl", "mr", "cr") + tuple(lin.param_names_)
-        ml, cl, mr, cr = bl.gamma_center_
-        self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, dt)
-        self.dt_ = dt
+        Warns
+        -----
+        NotIdentifiedWarning
+            One-record: the record does not bound some backlash parameter (named, with the
+            cause); those ends are infinite.
+        """
+        bl, lin = self._estimators()
+        data = self._record(X, y)
+        self.procedure_ = self._choose(data.u, steady_state)
+        if self.procedure_ == "two-stage":
+            self._fit_two_stage(bl, lin, data, steady_state, output_bound)
+        else:
+            self._fit_one_record(bl, lin, data, steady_state, output_bound)
+        self.bounds_ = np.vstack([self.gamma_bounds_, self.theta_bounds_])
+        self.param_names_ = ("ml", "cl", "mr", "cr") + tuple(self.linear_.param_names_)
+        self.dt_ = data.dt
         self.output_bound_ = output_bound
         self.n_features_in_ = 1
         return self
 
+    def _fit_two_stage(self, bl, lin, data, steady_state, output_bound):
+        from .two_stage import fit_two_stage
+
+        f = fit_two_stage(bl, lin, data, steady_state, prbs_level=self.prbs_level,
+                          inner_signal=self.inner_signal, output_bound=output_bound)
+        self.backlash_, self.linear_ = f.backlash, f.linear
+        self.u_star_, self.inner_bounds_ = f.u_star, f.inner
+        self.xc_, self.dx_ = f.record.data.u, f.record.input_bound
+        self.gamma_bounds_ = bl.gamma_bounds_
+        self.theta_bounds_ = lin.bounds_
+        self.bound_info_ = tuple(lin.bound_info_)
+        self.assumptions_ = (
+            f"steady-state output errors |eta| <= {bl.noise_bound}",
+            "u > 0 steady states on the right line, u < 0 on the left (square waves)",
+            "PRBS output errors |eta_t| <= "
+            + (f"{lin.noise_bound}" if output_bound is None else "the per-fit output_bound"),
+            "linear block of unit steady-state gain (22.8)",
+        )
+        ml, cl, mr, cr = bl.gamma_center_
+        self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, data.dt)
+
+    def _fit_one_record(self, bl, lin, data, steady_state, output_bound):
+        from .one_record import fit_one_record
+        from .two_stage import steady_pair
+        from .views import BacklashBoxView, LinearBlockView, joint_samples
+
+        steady = None if steady_state is None else steady_pair(steady_state)
+        f = fit_one_record(lin, data, gamma_box=self.gamma_box, steady=steady,
+                           steady_bound=None if steady is None else bl.noise_bound,
+                           output_bound=output_bound)
+        self.one_record_ = f
+        pool = [i.extra.get("witness") for i in f.result.infos]
+
+        def sampler(n, random_state):
+            return joint_samples(f.problem, f.result.extra["box"], pool, n, random_state)
+
+        self.linear_ = LinearBlockView(
+            f.problem, f.theta_bounds, f.result.infos[: 2 * f.problem.p], method=lin.method,
+            dt=data.dt, names=(data.input_name, data.output_name),
+            units=(data.input_unit, data.output_unit),
+            time_unit=getattr(data, "time_unit", ""), sampler=sampler)
+        self.backlash_ = BacklashBoxView(f.gamma_bounds, (data.u.min(), data.u.max()),
+                                         sampler)
+        self.gamma_bounds_, self.theta_bounds_ = f.gamma_bounds, f.theta_bounds
+        self.bound_info_ = tuple(f.result.infos)
+        self.assumptions_ = f.assumptions
+        self.system_ = None
+        if np.all(np.isfinite(f.gamma_bounds)):
+            ml, cl, mr, cr = f.gamma_bounds.mean(axis=1)
+            self.system_ = _central_system(Backlash(ml, cl, mr, cr), self.linear_.A_,
+                                           self.linear_.B_, data.dt)
+
     def _status(self):
+        if self.procedure_ == "one-record":
+            from ..tables import bound_status
+
+            st = bound_status(self.param_names_, self.bound_info_)
+            return [("not identified" if not np.all(np.isfinite(b)) else s)
+                    for s, b in zip(st, self.bounds_, strict=True)]
         return ["optimal"] * 4 + list(self.linear_._status())
 
     def to_frame(self):
@@ -236,16 +314,22 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         return interval_frame(self.param_names_, self.bounds_, self._status())
 
     def summary(self) -> str:
-        """Text summary: PRBS level, stage-2 settings and the interval table."""
+        """Text summary: the procedure and its settings, the interval table (and, for one
+        record, the assumptions the bounds rest on)."""
         check_is_fitted(self, "bounds_")
         from ..tables import interval_text
 
         lin = self.linear_
         pr = lin.problem_
+        dt = "not given" if self.dt_ is None else f"{self.dt_:g}"
+        if self.procedure_ == "one-record":
+            head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
+                    f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")
+            table = interval_text(self.param_names_, self.bounds_, self._status(), title=head)
+            return table + "\nassumptions:\n" + "\n".join(f"  - {a}" for a in self.assumptions_)
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
-                f"{self.inner_signal}, N = {pr.N}, dt = "
-                f"{'not given' if self.dt_ is None else f'{self.dt_:g}'}")
+                f"{self.inner_signal}, N = {pr.N}, dt = {dt}")
         return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     @property
@@ -287,6 +371,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         from ..data.iodata import IOData
         from ..timeseries import simulate_from_measured
 
+        self._check_central()
         if isinstance(X, IOData):
             x = self.system_.inner(X.u)
             return simulate_from_measured(self.system_.A, self.system_.B, x, X.y,
@@ -307,6 +392,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         from ..data.iodata import unpack
         from ..timeseries import segment_r2, simulate_from_measured
 
+        self._check_central()
         X, y, _ = unpack(X, y)
         u, yy = as_signal("X", X), as_signal("y", y)
         if u.shape != yy.shape:
@@ -319,16 +405,33 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                                    n0)
         return segment_r2(yy, w, n0, sample_weight)
 
-    def output_envelope(self, X, y, output_bound=None):
-        """Guaranteed one-step-ahead band of the noise-free PRBS output.
+    def _check_central(self):
+        if self.system_ is None:
+            from ..exceptions import UnboundedSetError
 
-        Uses the inner-signal bounds of stage 1 for ``X`` and the parameter intervals of
-        stage 2 (see :meth:`LinearEIVSetEstimator.one_step_envelope`). ``output_bound``:
-        per-sample output error bound of ``(X, y)``; default that of the fit.
+            raise UnboundedSetError(
+                "no central model: the record does not bound every backlash parameter "
+                "(see the NotIdentifiedWarning of fit); identify from a record that reverses "
+                "by more than the dead band.")
+
+    def output_envelope(self, X, y, output_bound=None):
+        """Guaranteed one-step-ahead band of the noise-free output.
+
+        Uses the inner-signal bounds for ``X`` (two-stage: of stage 1 for a PRBS; one
+        record: the play operator's envelope over the backlash intervals from an unknown
+        initial state) and the linear block's intervals (see
+        :meth:`LinearEIVSetEstimator.one_step_envelope`). ``output_bound``: per-sample
+        output error bound of ``(X, y)``; default that of the fit.
         """
         check_is_fitted(self, "bounds_")
         u = as_signal("X", X)
-        xc, dx = self.inner_bounds_.transform(u)
+        if self.procedure_ == "one-record":
+            from ..joint.modes import inner_envelope
+
+            lo, hi = inner_envelope(u, self.gamma_bounds_)
+            xc, dx = 0.5 * (lo + hi), 0.5 * (hi - lo) * (1 + 1e-12) + 1e-300
+        else:
+            xc, dx = self.inner_bounds_.transform(u)
         return self.linear_.one_step_envelope(xc, y, input_bound=dx,
                                               output_bound=self.output_bound_
                                               if output_bound is None else output_bound)
@@ -342,13 +445,19 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     def sample(self, n, random_state=None):
         """Certified samples of both blocks: ``(backlash_samples, linear_samples)``.
 
-        The stage-2 set does not depend on which feasible backlash is true (it accounts
-        for all of them through the inner-signal bounds), so the joint set is the product
-        and any pairing of the two sample sets is feasible.
+        Two-stage: the stage-2 set does not depend on which feasible backlash is true (it
+        accounts for all of them through the inner-signal bounds), so the joint set is the
+        product and any pairing of the two sample sets is feasible. One record: the
+        linear block's set depends on the backlash, so the points are drawn jointly and
+        both items are the same :class:`~hammerbound.hammerstein.views.JointSamples`
+        (row ``i`` of ``gamma`` goes with row ``i`` of ``theta``).
         """
         check_is_fitted(self, "bounds_")
         rng = np.random.default_rng(random_state) if not isinstance(
             random_state, np.random.Generator) else random_state
+        if self.procedure_ == "one-record":
+            smp = self.linear_.sample(n, random_state=rng)
+            return smp, smp
         return self.backlash_.sample(n, random_state=rng), self.linear_.sample(n, random_state=rng)
 
     def _fitted_dt(self):

@@ -164,19 +164,29 @@ def _u_range(gamma, v_lo, v_hi, x0):
 
 
 def build_inverse(estimator, v_range=None, x0=0.0) -> BacklashInverse:
-    """The compensator of a fitted :class:`~hammerbound.BacklashSetEstimator`.
+    """The compensator of a fitted :class:`~hammerbound.BacklashSetEstimator` (see
+    :func:`build_inverse_from`)."""
+    return build_inverse_from(estimator.gamma_center_, estimator.left_.vertices_mb,
+                              estimator.right_.vertices_mb, estimator.input_range_,
+                              v_range=v_range, x0=x0)
+
+
+def build_inverse_from(gamma_center, left_vertices_mb, right_vertices_mb, input_range,
+                       v_range=None, x0=0.0) -> BacklashInverse:
+    """The compensator of a backlash set given by the vertices of (a convex superset of)
+    each side's set in ``(m, beta = m c)`` and a central backlash.
 
     The guarantee needs *every* feasible backlash well posed (``R(u) <= L(u)``) at every
     input the compensator emits; the condition is convex in ``u``, so it is checked at
-    the two ends of the input range, on the polygon vertices. ``v_range`` defaults to
-    the central inner-signal range of the steady-state experiment
-    (``[m^_l (-U_L + c^_l), m^_r (U_R - c^_r)]``), shrunk by a common factor until that
+    the two ends of the input range, on the vertices. ``v_range`` defaults to the central
+    inner-signal range of the data's input range ``input_range``
+    (``[m^_l (u_min + c^_l), m^_r (u_max - c^_r)]``), shrunk by a common factor until that
     check passes; an explicit ``v_range`` that fails it raises.
     """
-    gamma = np.asarray(estimator.gamma_center_, dtype=float)
+    gamma = np.asarray(gamma_center, dtype=float)
     ml, cl, mr, cr = gamma
-    u_lo_data, u_hi_data = estimator.input_range_
-    L, R = estimator.left_.vertices_mb, estimator.right_.vertices_mb
+    u_lo_data, u_hi_data = input_range
+    L, R = left_vertices_mb, right_vertices_mb
     try:
         x0 = float(x0)
     except (TypeError, ValueError) as exc:

@@ -1,0 +1,134 @@
+"""The identifier's one-record path: both blocks from one ordinary record (:mod:`~hammerbound.joint`).
+
+:func:`fit_one_record` takes the settings of the identifier's stage-2 estimator (orders,
+delay, output bound, method, limits, jobs), the record, an optional a priori backlash box
+and optional steady-state points, and returns a :class:`OneRecordFit`: the certified
+intervals, the statuses, the assumptions they rest on and what the record does not
+identify (reported as infinite ends with a :class:`~hammerbound.exceptions.NotIdentifiedWarning`,
+never as a finite bound that only an assumption holds up, unless the user gave that
+assumption).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import NotIdentifiedWarning, ParameterValidationError
+from ..joint import (
+    GAMMA_NAMES,
+    GammaPrior,
+    RecordProblem,
+    default_gamma_box,
+    record_bounds,
+    record_box,
+    unidentified,
+)
+from ..relaxations.problem import b_lags_of
+
+__all__ = ["OneRecordFit", "fit_one_record"]
+
+
+@dataclass(frozen=True)
+class OneRecordFit:
+    """What the one-record path found (see the module docstring)."""
+
+    problem: RecordProblem
+    result: object
+    prior: GammaPrior
+    theta_bounds: np.ndarray
+    gamma_bounds: np.ndarray
+    statuses: tuple
+    assumptions: tuple
+    unidentified: tuple
+    seconds: float
+
+
+def _output_bound(lin):
+    v = getattr(lin, "output_bound", None)
+    return lin.noise_bound if v is None else v
+
+
+def _gamma_prior(gamma_box, u, y, deta) -> GammaPrior:
+    if gamma_box is None:
+        return GammaPrior(default_gamma_box(u, y, deta), user_given=False)
+    g = np.asarray(gamma_box, dtype=float)
+    if g.shape != (4, 2) or not np.all(np.isfinite(g)) or np.any(g[:, 0] > g[:, 1]) \
+            or np.any(g[:, 0] < 0):
+        raise ParameterValidationError(
+            "gamma_box must be a finite (4, 2) array of [lower, upper] rows for m_l, c_l, "
+            "m_r, c_r with 0 <= lower <= upper, e.g. [[0, 1], [0, 0.5], [0, 1], [0, 0.5]].")
+    return GammaPrior(g, user_given=True)
+
+
+def _problem(lin, data, prior, steady, steady_bound, output_bound):
+    nk = lin._nk()
+    na, nb = int(lin.na), int(lin.nb)
+    deta = np.broadcast_to(np.asarray(output_bound, dtype=float), data.y.shape)
+    theta_box = None if lin.theta_box is None else np.asarray(lin.theta_box, dtype=float)
+    box = record_box(na, b_lags_of(nb, nk).size, data.u, prior.box, theta_box)
+    st = None
+    if steady is not None:
+        us, ys = (np.asarray(v, dtype=float).ravel() for v in steady)
+        st = (us, ys, np.broadcast_to(np.asarray(steady_bound, float), us.shape).copy())
+    return RecordProblem(data.u, data.y, deta, na, nb, nk, box, st)
+
+
+def _assumptions(problem, prior, lin, steady) -> tuple:
+    out = [f"output errors |eta_t| <= {float(np.max(problem.deta)):g} on every sample",
+           "the input is known exactly",
+           "linear block of unit steady-state gain (22.8), stable A (|a_i| <= binom(na, i))",
+           prior.describe()]
+    if lin.theta_box is None:
+        out.append("|b_j| <= 1e4 (default theta box; pass theta_box to change)")
+    if steady is not None:
+        out.append("steady-state points: u > 0 on the right line, u < 0 on the left (the "
+                   "last move before each hold went the same way)")
+    return tuple(out)
+
+
+def _report_unidentified(problem, bounds, prior):
+    """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
+    p = problem.p
+    gb = bounds[p: p + 4].copy()
+    found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed())
+    if not found:
+        return gb, ()
+    for name, _cause in found:
+        i = GAMMA_NAMES.index(name)
+        if not prior.user_given:
+            gb[i, 1] = np.inf
+    names = ", ".join(sorted({n for n, _ in found}))
+    causes = "; ".join(sorted({c for _, c in found}))
+    what = ("reported as infinite (not identified)" if not prior.user_given
+            else "limited only by the gamma_box you gave")
+    warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
+                  "Use a record whose input reverses by more than the dead band.",
+                  NotIdentifiedWarning, stacklevel=4)
+    return gb, tuple(found)
+
+
+def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
+                   output_bound=None) -> OneRecordFit:
+    """Certified intervals of both blocks from the record ``data`` (an IOData)."""
+    t0 = time.perf_counter()
+    if lin.method not in ("exact", "lp"):
+        raise ParameterValidationError(
+            f"the one-record identification supports method='exact' (tight intervals) or "
+            f"'lp' (the relaxation's bounds); got method={lin.method!r} on the stage-2 "
+            "estimator.")
+    ob = _output_bound(lin) if output_bound is None else output_bound
+    prior = _gamma_prior(gamma_box, data.u, data.y, ob)
+    problem = _problem(lin, data, prior, steady, steady_bound, ob)
+    deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
+    res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
+                        max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
+                        deadline=deadline, n_jobs=lin.n_jobs)
+    gb, found = _report_unidentified(problem, res.bounds, prior)
+    statuses = tuple(i.status for i in res.infos)
+    return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,
+                        _assumptions(problem, prior, lin, steady), found,
+                        time.perf_counter() - t0)

@@ -1,0 +1,57 @@
+"""The identifier's two-stage path (the chapter): stage 1 on steady-state data, the
+hand-off of Result 1, stage 2 on the PRBS record."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..exceptions import DataValidationError
+from ..stage1.inner_signal import read_prbs_level
+
+__all__ = ["TwoStageFit", "fit_two_stage", "steady_pair"]
+
+
+def steady_pair(steady_state):
+    """Accept SteadyStateData, a dict with 'u'/'y', or a pair (u, y)."""
+    if hasattr(steady_state, "u") and hasattr(steady_state, "y"):
+        return steady_state.u, steady_state.y
+    if isinstance(steady_state, dict):
+        try:
+            return steady_state["u"], steady_state["y"]
+        except KeyError as exc:
+            raise DataValidationError(
+                "steady_state dict must have keys 'u' and 'y'."
+            ) from exc
+    try:
+        u, y = steady_state
+    except (TypeError, ValueError) as exc:
+        raise DataValidationError(
+            "steady_state must be a pair (u_ss, y_ss), a dict with 'u' and 'y', or "
+            "SteadyStateData."
+        ) from exc
+    return u, y
+
+
+@dataclass(frozen=True)
+class TwoStageFit:
+    """The fitted stages and the hand-off between them."""
+
+    backlash: object
+    linear: object
+    u_star: float
+    inner: object
+    record: object
+
+
+def fit_two_stage(bl, lin, data, steady_state, *, prbs_level, inner_signal,
+                  output_bound) -> TwoStageFit:
+    """Stage 1 on ``steady_state``, Result 1 for ``u*``, stage 2 on the PRBS record
+    ``data`` (an IOData); ``bl``/``lin`` are fitted in place (clones of the user's)."""
+    u_ss, y_ss = steady_pair(steady_state)
+    bl.fit(u_ss, y_ss)
+    u_star = read_prbs_level(data.u, prbs_level)
+    inner = bl.inner_signal_bounds(u_star)  # checks Result 1
+    record = inner.stage2_record(data, inner_signal)
+    lin.fit(record.data, input_bound=record.input_bound, input_groups=record.input_groups,
+            output_bound=output_bound)
+    return TwoStageFit(bl, lin, u_star, inner, record)

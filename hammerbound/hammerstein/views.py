@@ -1,0 +1,146 @@
+"""Fitted views of the two blocks when they were bounded jointly (one-record path).
+
+The identifier's two-stage path holds a fitted :class:`~hammerbound.BacklashSetEstimator`
+(``backlash_``) and :class:`~hammerbound.LinearEIVSetEstimator` (``linear_``). The
+one-record path bounds both blocks in one problem; these views give it the same
+``backlash_`` / ``linear_`` interface -- intervals, central model, transfer function,
+frequency envelope, uncertainty weight, one-step band, backlash inverse -- so the model set,
+the compensator and the report work on it unchanged. Samples are drawn *jointly*
+(:func:`joint_samples`): the linear block's feasible set depends on the backlash here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data.validation import as_bound
+from ..modelset.estimator import ModelSetMixin
+from ..stage2.linear_model import LinearModelMixin
+
+__all__ = ["BacklashBoxView", "JointSamples", "LinearBlockView", "joint_samples"]
+
+
+class LinearBlockView(LinearModelMixin, ModelSetMixin):
+    """The linear block's certified intervals from the one-record path (read-only)."""
+
+    method = "one-record"
+
+    def __init__(self, problem, bounds, infos, *, method, dt, names, units, time_unit,
+                 sampler):
+        self.na, self.nb, self.nk = problem.na, problem.nb, problem.nk
+        self.steady_state_gain = float(problem.gain)
+        self.method = method
+        self.problem_ = problem
+        self.bounds_ = np.asarray(bounds, dtype=float)
+        self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
+        self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
+        self.param_names_ = tuple(problem.theta_names)
+        self.bound_info_ = tuple(infos)
+        self.box_limited_ = ()
+        self.dt_ = dt
+        self.signal_names_ = names
+        self.signal_units_ = units
+        self.time_unit_ = time_unit
+        self._sampler = sampler
+
+    def fit(self, *args, **kwargs):
+        """A view is not refitted: fit the identifier that holds it."""
+        raise TypeError("this is a read-only view of an identifier's one-record fit; "
+                        "fit the HammersteinBacklashIdentifier instead.")
+
+    def _nk(self) -> int:
+        return int(self.nk)
+
+    def _lags(self) -> np.ndarray:
+        return np.asarray(self.problem_.b_lags)
+
+    def _output_bound(self, n, output_bound=None):
+        if output_bound is not None:
+            return as_bound("output_bound", output_bound, n)
+        return as_bound("output_bound", float(np.max(self.problem_.deta)), n)
+
+    def sample(self, n, random_state=None, **_):
+        """``n`` certified points of the joint set (:class:`JointSamples`: ``theta`` rows,
+        each with the backlash ``gamma`` that makes it feasible)."""
+        return self._sampler(n, random_state)
+
+
+class BacklashBoxView:
+    """The backlash's certified intervals from the one-record path (read-only)."""
+
+    def __init__(self, bounds, input_range, sampler):
+        self.gamma_bounds_ = np.asarray(bounds, dtype=float)
+        self.gamma_center_ = self.gamma_bounds_.mean(axis=1)
+        self.input_range_ = tuple(float(v) for v in input_range)
+        self._sampler = sampler
+
+    def _vertices_mb(self, m, c):
+        """Corners of the box's image in ``(m, beta = m c)``: the convex hull of the set of
+        every ``(m, m c)`` of the box (its extremes of anything linear in ``(m, beta)``)."""
+        return np.array([[mm, mm * cc] for mm in m for cc in c])
+
+    def inverse(self, v_range=None, x0=0.0):
+        """Backlash-inverse compensator with a guaranteed error over the whole box (see
+        :meth:`hammerbound.BacklashSetEstimator.inverse`)."""
+        from ..modelset.compensation import build_inverse_from
+
+        g = self.gamma_bounds_
+        if not np.all(np.isfinite(g)):
+            from ..exceptions import UnboundedSetError
+
+            raise UnboundedSetError(
+                "the record does not bound every backlash parameter, so no compensator "
+                "error can be guaranteed; identify from a record that reverses by more "
+                "than the dead band.")
+        return build_inverse_from(self.gamma_center_, self._vertices_mb(g[0], g[1]),
+                                  self._vertices_mb(g[2], g[3]), self.input_range_,
+                                  v_range=v_range, x0=x0)
+
+    def sample(self, n, random_state=None):
+        """``n`` certified points of the joint set (:class:`JointSamples`: ``gamma`` rows,
+        each with the linear block ``theta`` that makes it feasible)."""
+        return self._sampler(n, random_state)
+
+
+class JointSamples:
+    """Certified points of the one-record set: rows of ``theta``, ``gamma``, ``z0``."""
+
+    def __init__(self, witnesses):
+        self.theta = np.array([w.theta for w in witnesses])
+        self.gamma = np.array([w.gamma for w in witnesses])
+        self.z0 = np.array([w.z0 for w in witnesses])
+        self.max_rel_violation = np.array([w.max_rel_violation for w in witnesses])
+
+    def __len__(self):
+        return self.theta.shape[0]
+
+
+def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None):
+    """``n`` verified points of the one-record set inside ``box``.
+
+    Random points of the box (and the seeds, the interval ends' witnesses) are taken to the
+    set by the local search (:func:`hammerbound.joint.local.restore`); only points that
+    :func:`hammerbound.joint.verify_point` accepts are kept. Spread over the set, neither
+    uniform nor independent.
+
+    Raises
+    ------
+    SolverError
+        Fewer than ``n`` points were verified within ``max_tries`` attempts.
+    """
+    from ..exceptions import SolverError
+    from ..joint.local import restore
+
+    rng = np.random.default_rng(random_state)
+    out = [w for w in seeds if w is not None][:n]
+    tries, max_tries = 0, (max_tries or 20 * n)
+    while len(out) < n and tries < max_tries:
+        tries += 1
+        v = box[:, 0] + (box[:, 1] - box[:, 0]) * rng.random(box.shape[0])
+        w = restore(problem, v, box, max_iter=12)
+        if w is not None:
+            out.append(w)
+    if len(out) < n:
+        raise SolverError(f"only {len(out)} of {n} points of the one-record set were "
+                          f"verified in {tries} attempts; ask for fewer samples.")
+    return JointSamples(out)

@@ -1,0 +1,124 @@
+"""The a priori box of the one-record problem and what the record cannot identify.
+
+Every bound of the one-record method lies inside an a priori box of
+``[theta, m_l, c_l, m_r, c_r, z0]``. Its parts are either the chapter's model (``m > 0``,
+``c >= 0``, a stable ``A``: ``|a_i| <= binom(na, i)``), or assumptions that are printed
+with every result and can be replaced by the user:
+
+* ``|b_j| <= b_bound`` (default ``1e4``, as stage 2);
+* ``m_l, m_r <= m_max`` (default ``1e3`` times the slope ``range(y) / range(u)`` the record
+  shows; with the unit gain (22.8) the backlash slopes carry the gain of the system);
+* ``c_l, c_r <= c_max`` (default the input's range: a dead band wider than every input
+  move is never crossed, and nothing in the record can say how wide it is).
+
+``z0``, the first inner value, needs no assumption: it lies in the band ``[R_0, L_0]``.
+
+An interval end that the data do not move away from an *assumed* limit is not
+identified by the record: :func:`unidentified` names the cause (an input that never
+reverses, or reverses by less than the dead band) so the caller can report it.
+"""
+
+from __future__ import annotations
+
+from math import comb
+
+import numpy as np
+
+from ..exceptions import ParameterValidationError
+from .modes import line_range
+
+__all__ = ["GammaPrior", "default_gamma_box", "record_box", "reversal_summary", "unidentified"]
+
+DEFAULT_B_BOUND = 1.0e4
+M_FACTOR = 1.0e3
+
+
+def default_gamma_box(u, y, deta) -> np.ndarray:
+    """The default a priori box of ``(m_l, c_l, m_r, c_r)`` (rows; see the module)."""
+    du = float(np.ptp(u))
+    dy = float(np.ptp(y)) + 2.0 * float(np.max(deta))
+    if du <= 0:
+        raise ParameterValidationError(
+            "the input is constant: a record must move the input to identify anything.")
+    m_max = M_FACTOR * dy / du
+    return np.array([[0.0, m_max], [0.0, du], [0.0, m_max], [0.0, du]])
+
+
+def record_box(na, b_count, u, gamma_box, theta_box=None, b_bound=DEFAULT_B_BOUND):
+    """The full a priori box ``[theta, m_l, c_l, m_r, c_r, z0]``."""
+    if theta_box is None:
+        rows = [(-comb(na, i), comb(na, i)) for i in range(1, na + 1)]
+        rows += [(-b_bound, b_bound)] * b_count
+        theta_box = np.asarray(rows, dtype=float).reshape(-1, 2)
+    g = np.asarray(gamma_box, dtype=float)
+    u0 = float(u[0])
+    z_lo = line_range(u0, g[2], g[3], -1.0)[0]
+    z_hi = line_range(u0, g[0], g[1], 1.0)[1]
+    return np.vstack([theta_box, g, [[z_lo, z_hi]]])
+
+
+def reversal_summary(u) -> dict:
+    """How far the input moves back after rising, and forward after falling.
+
+    ``down``: the largest fall from a running maximum (what can cross the dead band from
+    the right line to the left one); ``up``: the largest rise from a running minimum.
+    """
+    u = np.asarray(u, dtype=float)
+    down = up = 0.0
+    hi = lo = float(u[0])
+    for v in u.tolist():
+        hi, lo = max(hi, v), min(lo, v)
+        down = max(down, hi - v)
+        up = max(up, v - lo)
+    return {"down": down, "up": up, "monotone": down == 0.0 or up == 0.0}
+
+
+def unidentified(u, names, bounds, prior, assumed) -> list[tuple[str, str]]:
+    """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
+
+    ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)
+    array marking the prior limits that are assumptions (not the chapter's model).
+    """
+    rev = reversal_summary(u)
+    out = []
+    for i, name in enumerate(names):
+        for j in (0, 1):
+            if not assumed[i, j]:
+                continue
+            lim = prior[i, j]
+            if abs(bounds[i, j] - lim) > 1e-6 * max(1.0, abs(lim)):
+                continue
+            if rev["monotone"]:
+                cause = ("the input never reverses, so only one line of the backlash is "
+                         "ever active")
+            elif name.startswith("c") or name.startswith("m"):
+                cause = (f"the input never moves back by more than the dead band (largest "
+                         f"reversals: {rev['down']:.4g} down, {rev['up']:.4g} up)")
+            else:
+                cause = "the record does not excite this parameter"
+            out.append((name, cause))
+    return out
+
+
+class GammaPrior:
+    """The a priori box of the backlash, with which limits are assumptions."""
+
+    def __init__(self, box, user_given):
+        self.box = np.asarray(box, dtype=float)
+        self.user_given = bool(user_given)
+
+    def assumed(self):
+        """Limits that are assumptions (upper limits; all of them when the user gave
+        the box)."""
+        a = np.zeros((4, 2), dtype=bool)
+        a[:, 1] = True
+        if self.user_given:
+            a[:, 0] = self.box[:, 0] > 0
+        return a
+
+    def describe(self) -> str:
+        g = self.box
+        who = "given" if self.user_given else "assumed (default; pass gamma_box to change)"
+        return (f"backlash box {who}: m_l in [{g[0, 0]:.4g}, {g[0, 1]:.4g}], c_l in "
+                f"[{g[1, 0]:.4g}, {g[1, 1]:.4g}], m_r in [{g[2, 0]:.4g}, {g[2, 1]:.4g}], "
+                f"c_r in [{g[3, 0]:.4g}, {g[3, 1]:.4g}]")

@@ -1,0 +1,325 @@
+"""LP relaxation of the one-record set over a box of ``[theta, m_l, c_l, m_r, c_r, z0]``.
+
+Over a box, :func:`~.modes.inner_structure` writes every inner value as a linear form in the
+*inner variables* ``beta = (m_l, d_l, m_r, d_r, z0, v_1 .. v_K)`` (``d = m c``; ``v_k`` the
+ambiguous samples). Each equation of :mod:`.problem` becomes linear in ``theta``, ``eta``
+and the products ``b_j beta_k``, ``a_i eta_t``; those (and ``d = m c``) are replaced by
+variables held by their McCormick envelopes over the box. Two families of valid rows make
+the relaxation strong from wide boxes:
+
+* **RLT rows** -- the gain equality (22.8) ``sum_j b_j = g (1 + sum_i a_i)`` multiplied by
+  every inner variable: ``sum_j (b_j beta_k) = g beta_k + g sum_i (a_i beta_k)``. They tie
+  the products to their factors (the scale split between the backlash slopes and ``B``
+  that the gain fixes), which plain McCormick envelopes of a wide ``b`` box do not;
+* **branch rows** -- every inner value lies in its band ``R_t <= x_t <= L_t``; an ambiguous
+  sample that cannot move up is below its previous state, one that cannot move down is
+  above it; the backlash is well-posed (``L >= R``) over the record's input range.
+
+Every row holds at every point of the set, so the LP bounds are outer bounds; equation
+rows are widened by the tolerance policy (:mod:`hammerbound.tolerances`), McCormick
+right-hand sides are rounded outward, and the bound of each LP is certified from its duals
+(:class:`~hammerbound.solvers.highs.HighsLP`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..solvers.highs import HighsLP
+from ..solvers.highs import round_down as _round_down
+from ..solvers.highs import round_up as _round_up
+from ..tolerances import FEASIBILITY_RTOL
+from .modes import AMBIG, INIT, LEFT, RIGHT, InnerStructure, inner_structure, line_range
+from .problem import RecordProblem
+
+__all__ = ["JointRelaxation", "build_relaxation"]
+
+def round_down(v):
+    """Outward (downward) rounding of computed data; exact zeros stay zero (rounding 0
+    would put denormal coefficients into the LP, which HiGHS refuses to run)."""
+    v = np.asarray(v, dtype=float)
+    return np.where(v == 0.0, 0.0, _round_down(v))
+
+
+def round_up(v):
+    """Outward (upward) rounding; exact zeros stay zero (see :func:`round_down`)."""
+    v = np.asarray(v, dtype=float)
+    return np.where(v == 0.0, 0.0, _round_up(v))
+
+
+# positions of the inner variables in beta
+B_ML, B_DL, B_MR, B_DR, B_Z0 = range(5)
+
+
+class _Rows:
+    """COO triplets and row bounds of an LP under construction."""
+
+    def __init__(self):
+        self.r, self.c, self.v, self.lo, self.hi = [], [], [], [], []
+        self.m = 0
+
+    def add(self, rows, cols, vals, lo, hi):
+        """Add rows given as (k,) arrays of bounds and flat triplets (row offsets 0..k-1)."""
+        lo = np.atleast_1d(np.asarray(lo, dtype=float))
+        self.r.append(np.asarray(rows, dtype=np.int64) + self.m)
+        self.c.append(np.asarray(cols, dtype=np.int64))
+        self.v.append(np.asarray(vals, dtype=float))
+        self.lo.append(lo)
+        self.hi.append(np.atleast_1d(np.asarray(hi, dtype=float)))
+        start = self.m
+        self.m += lo.size
+        return np.arange(start, self.m)
+
+    def mccormick(self, w, x, e, xl, xu, el, eu):
+        """Envelope rows of the products ``w = x e`` (arrays of columns and bounds)."""
+        w, x, e = (np.atleast_1d(np.asarray(a, dtype=np.int64)) for a in (w, x, e))
+        xl, xu, el, eu = (np.broadcast_to(np.asarray(a, dtype=float), w.shape) for a in
+                          (xl, xu, el, eu))
+        k = w.size
+        rows = np.repeat(np.arange(4 * k).reshape(k, 4), 3, axis=1).ravel()
+        cols = np.column_stack([w, e, x] * 4).ravel()
+        one = np.ones(k)
+        vals = np.column_stack([one, -xl, -el, one, -xu, -eu, one, -xu, -el, one, -xl, -eu])
+        lo = np.column_stack([round_down(-xl * el), round_down(-xu * eu),
+                              -np.inf * one, -np.inf * one]).ravel()
+        hi = np.column_stack([np.inf * one, np.inf * one,
+                              round_up(-xu * el), round_up(-xl * eu)]).ravel()
+        return self.add(rows, cols, vals.ravel(), lo, hi)
+
+    def matrix(self, n):
+        r = np.concatenate(self.r) if self.r else np.zeros(0, dtype=np.int64)
+        c = np.concatenate(self.c) if self.c else np.zeros(0, dtype=np.int64)
+        v = np.concatenate(self.v) if self.v else np.zeros(0)
+        A = sp.csc_matrix((v, (r, c)), shape=(self.m, n))
+        A.sum_duplicates()
+        return A, np.concatenate(self.lo), np.concatenate(self.hi)
+
+
+def _prod_range(xl, xu, el, eu):
+    c = np.stack([xl * el, xl * eu, xu * el, xu * eu])
+    return round_down(c.min(axis=0)), round_up(c.max(axis=0))
+
+
+@dataclass
+class JointRelaxation:
+    """A built relaxation: the LP, the columns of the box variables and of the inner
+    variables, and the structure it was built on.
+
+    ``box_cols`` are the LP columns of ``[theta, m_l, c_l, m_r, c_r, z0]`` (the rows of
+    the box); ``beta_cols`` those of ``(m_l, d_l, m_r, d_r, z0, v_1..v_K)``.
+    """
+
+    lp: HighsLP
+    box_cols: np.ndarray
+    beta_cols: np.ndarray
+    structure: InnerStructure
+    products: dict
+
+
+def _inner_ranges(problem, box, st):
+    """Bounds of the inner variables ``beta`` over the box."""
+    p = problem.p
+    ml, cl, mr, cr, z0 = (box[p + i] for i in range(5))
+    dl = _prod_range(ml[0], ml[1], cl[0], cl[1])
+    dr = _prod_range(mr[0], mr[1], cr[0], cr[1])
+    lo = [ml[0], dl[0], mr[0], dr[0], z0[0]] + [a.lo for a in st.ambiguous]
+    hi = [ml[1], dl[1], mr[1], dr[1], z0[1]] + [a.hi for a in st.ambiguous]
+    return np.array(lo, dtype=float), np.array(hi, dtype=float)
+
+
+def _form_terms(st, u, s):
+    """Linear form of the inner value at sample(s) ``s``: (beta index, coefficient) lists
+    of equal length per sample, as arrays (n, 2) of index and (n, 2) of coefficient."""
+    s = np.asarray(s)
+    kind, src = st.kind[s], st.src[s]
+    idx = np.zeros((s.size, 2), dtype=np.int64)
+    val = np.zeros((s.size, 2))
+    r = kind == RIGHT
+    idx[r] = [B_MR, B_DR]
+    val[r, 0], val[r, 1] = u[src[r]], -1.0
+    left = kind == LEFT
+    idx[left] = [B_ML, B_DL]
+    val[left, 0], val[left, 1] = u[src[left]], 1.0
+    ini = kind == INIT
+    idx[ini] = [B_Z0, B_Z0]
+    val[ini] = [1.0, 0.0]
+    amb = kind == AMBIG
+    idx[amb, 0] = 5 + src[amb]
+    idx[amb, 1] = 5 + src[amb]
+    val[amb] = [1.0, 0.0]
+    return idx, val
+
+
+def _state_form(st, u, kind, src):
+    """Linear form ((beta index, coefficient) pairs) of a state ``(kind, src)``."""
+    if kind == RIGHT:
+        return [(B_MR, u[src]), (B_DR, -1.0)]
+    if kind == LEFT:
+        return [(B_ML, u[src]), (B_DL, 1.0)]
+    if kind == INIT:
+        return [(B_Z0, 1.0)]
+    return [(5 + src, 1.0)]
+
+
+def _scale(problem, box):
+    """Magnitude of the terms of every equation over the box (tolerance policy)."""
+    p, na = problem.p, problem.na
+    y, deta, t = problem.y, problem.deta, np.arange(problem.n0, problem.N)
+    amax = np.max(np.abs(box[:na]), axis=1) if na else np.zeros(0)
+    bmax = np.max(np.abs(box[na:p]), axis=1)
+    xmax = max(abs(line_range(float(uu), box[p], box[p + 1], 1.0)[i])
+               for uu in (problem.u.min(), problem.u.max()) for i in (0, 1))
+    xmax = max(xmax, *(abs(line_range(float(uu), box[p + 2], box[p + 3], -1.0)[i])
+                       for uu in (problem.u.min(), problem.u.max()) for i in (0, 1)),
+               float(np.max(np.abs(box[p + 4]))))
+    s = np.abs(y[t]) + deta[t]
+    for i in range(1, na + 1):
+        s = s + amax[i - 1] * (np.abs(y[t - i]) + deta[t - i])
+    return s + float(np.sum(bmax)) * xmax
+
+
+def build_relaxation(problem: RecordProblem, box, *, structure=None,
+                     options=None) -> JointRelaxation:
+    """The LP relaxation over ``box`` (rows as :attr:`RecordProblem.box`)."""
+    box = np.asarray(box, dtype=float)
+    p, na, N = problem.p, problem.na, problem.N
+    nbc = p - na
+    u, y = problem.u, problem.y
+    p_ = p
+    st = inner_structure(u, box[p_: p_ + 5]) if structure is None else structure
+    K = st.n_ambiguous
+    nbeta = 5 + K
+    blo, bhi = _inner_ranges(problem, box, st)
+    # ---- columns -------------------------------------------------------------------------
+    lo, hi = [box[:, 0]], [box[:, 1]]  # theta, ml, cl, mr, cr, z0
+    ncol = p + 5
+    box_cols = np.arange(p + 5)
+    col_dl, col_dr = ncol, ncol + 1
+    lo.append(blo[[B_DL, B_DR]])
+    hi.append(bhi[[B_DL, B_DR]])
+    ncol += 2
+    col_v = np.arange(ncol, ncol + K)
+    lo.append(blo[5:])
+    hi.append(bhi[5:])
+    ncol += K
+    beta_cols = np.concatenate([[p, col_dl, p + 2, col_dr, p + 4], col_v]).astype(np.int64)
+    # products b_j beta_k and a_i beta_k (RLT)
+    th_lo, th_hi = box[:p, 0], box[:p, 1]
+    jj, kk = np.meshgrid(np.arange(p), np.arange(nbeta), indexing="ij")
+    jj, kk = jj.ravel(), kk.ravel()
+    col_prod = np.arange(ncol, ncol + jj.size).reshape(p, nbeta)
+    pl, ph = _prod_range(th_lo[jj], th_hi[jj], blo[kk], bhi[kk])
+    lo.append(pl)
+    hi.append(ph)
+    ncol += jj.size
+    # noise and the products a_i eta_t
+    col_eta = np.arange(ncol, ncol + N)
+    lo.append(-problem.deta)
+    hi.append(problem.deta)
+    ncol += N
+    n0 = problem.n0
+    t_eq = np.arange(n0, N)
+    qi, qt = [], []
+    for i in range(1, na + 1):
+        qi.append(np.full(t_eq.size, i - 1))
+        qt.append(t_eq - i)
+    qi = np.concatenate(qi) if qi else np.zeros(0, dtype=np.int64)
+    qt = np.concatenate(qt) if qt else np.zeros(0, dtype=np.int64)
+    col_q = np.arange(ncol, ncol + qi.size)
+    ql, qh = _prod_range(th_lo[qi], th_hi[qi], -problem.deta[qt], problem.deta[qt])
+    lo.append(ql)
+    hi.append(qh)
+    ncol += qi.size
+    rows = _Rows()
+    # ---- equations -----------------------------------------------------------------------
+    m = t_eq.size
+    er, ec, ev = [np.arange(m)], [col_eta[t_eq]], [-np.ones(m)]
+    for i in range(1, na + 1):
+        er += [np.arange(m), np.arange(m)]
+        ec += [np.full(m, i - 1), col_q[(i - 1) * m: i * m]]
+        ev += [y[t_eq - i], -np.ones(m)]
+    for jpos, lag in enumerate(problem.b_lags):
+        idx, val = _form_terms(st, u, t_eq - lag)
+        for c in range(2):
+            er.append(np.arange(m))
+            ec.append(col_prod[na + jpos, idx[:, c]])
+            ev.append(-val[:, c])
+    tau = FEASIBILITY_RTOL * _scale(problem, box)
+    rows.add(np.concatenate(er), np.concatenate(ec), np.concatenate(ev),
+             round_down(-y[t_eq] - tau), round_up(-y[t_eq] + tau))
+    # ---- gain (22.8) and its RLT rows ------------------------------------------------------
+    g = float(problem.gain)
+    gcols = np.arange(p)
+    gvals = np.concatenate([-g * np.ones(na), np.ones(nbc)])
+    gtol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box[:p]), axis=1))) * max(1, abs(g)))
+    rows.add(np.zeros(p, dtype=np.int64), gcols, gvals, g - gtol, g + gtol)
+    for k in range(nbeta):
+        cols = np.concatenate([col_prod[na:, k], col_prod[:na, k], [beta_cols[k]]])
+        vals = np.concatenate([np.ones(nbc), -g * np.ones(na), [-g]])
+        mag = float(np.sum(np.maximum(np.abs(pl), np.abs(ph)).reshape(p, nbeta)[:, k])
+                    + abs(g) * max(abs(blo[k]), abs(bhi[k])))
+        t = FEASIBILITY_RTOL * mag + gtol * max(abs(blo[k]), abs(bhi[k]))
+        rows.add(np.zeros(cols.size, dtype=np.int64), cols, vals, -t, t)
+    # ---- McCormick envelopes -----------------------------------------------------------------
+    rows.mccormick(col_prod.ravel(), jj, beta_cols[kk], th_lo[jj], th_hi[jj], blo[kk], bhi[kk])
+    rows.mccormick(col_q, qi, col_eta[qt], th_lo[qi], th_hi[qi], -problem.deta[qt],
+                   problem.deta[qt])
+    ml, cl, mr, cr = (box[p + i] for i in range(4))
+    rows.mccormick([col_dl, col_dr], [p, p + 2], [p + 1, p + 3], [ml[0], mr[0]],
+                   [ml[1], mr[1]], [cl[0], cr[0]], [cl[1], cr[1]])
+    _branch_rows(rows, problem, st, beta_cols)
+    _steady_rows(rows, problem, beta_cols)
+    A, rl, ru = rows.matrix(ncol)
+    lb, ub = np.concatenate(lo), np.concatenate(hi)
+    lp = HighsLP(A, rl, ru, lb, ub, options=options)
+    return JointRelaxation(lp, box_cols, beta_cols, st,
+                           {"prod": col_prod, "eta": col_eta, "q": col_q})
+
+
+def _band(rows, u_t, coef_x, bc, x_terms):
+    """``R_t <= x <= L_t`` for a linear form ``x`` (list of (column, coefficient))."""
+    cols = [c for c, _ in x_terms]
+    vals = [v for _, v in x_terms]
+    # x - m_r u + d_r >= 0
+    rows.add(np.zeros(len(cols) + 2, dtype=np.int64), [*cols, bc[B_MR], bc[B_DR]],
+             [*vals, -u_t, 1.0], 0.0, np.inf)
+    # x - m_l u - d_l <= 0
+    rows.add(np.zeros(len(cols) + 2, dtype=np.int64), [*cols, bc[B_ML], bc[B_DL]],
+             [*vals, -u_t, -1.0], -np.inf, 0.0)
+
+
+def _branch_rows(rows, problem, st, bc):
+    """Bands, the one-sided rows of ambiguous samples, and well-posedness."""
+    u = problem.u
+    _band(rows, u[0], 1.0, bc, [(bc[B_Z0], 1.0)])
+    for k, a in enumerate(st.ambiguous):
+        v = bc[5 + k]
+        _band(rows, u[a.t], 1.0, bc, [(v, 1.0)])
+        s_terms = [(bc[i], c) for i, c in _state_form(st, u, a.src_kind, a.src)]
+        cols = [v] + [c for c, _ in s_terms]
+        vals = [1.0] + [-c for _, c in s_terms]
+        if not a.up:  # x_t = min(L_t, S) <= S
+            rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, -np.inf, 0.0)
+        if not a.down:  # x_t = max(R_t, S) >= S
+            rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, 0.0, np.inf)
+    for uu in (float(u.min()), float(u.max())):  # (m_l - m_r) u + d_l + d_r >= 0
+        rows.add(np.zeros(4, dtype=np.int64), [bc[B_ML], bc[B_MR], bc[B_DL], bc[B_DR]],
+                 [uu, -uu, 1.0, 1.0], 0.0, np.inf)
+
+
+def _steady_rows(rows, problem, bc):
+    """Steady-state points: ``|y_i - line(u_i)| <= deta_i`` (widened by the tolerance)."""
+    if problem.steady is None:
+        return
+    us, ys, ds = problem.steady
+    for ui, yi, di in zip(us, ys, ds, strict=True):
+        tol = FEASIBILITY_RTOL * (abs(yi) + di) + di * FEASIBILITY_RTOL
+        if ui > 0:
+            cols, vals = [bc[B_MR], bc[B_DR]], [ui, -1.0]
+        else:
+            cols, vals = [bc[B_ML], bc[B_DL]], [ui, 1.0]
+        rows.add(np.zeros(2, dtype=np.int64), cols, vals, round_down(yi - di - tol),
+                 round_up(yi + di + tol))

@@ -1,0 +1,352 @@
+"""Guaranteed intervals of the one-record set: OBBT, then branch-and-bound per interval end.
+
+For every parameter of ``[theta, m_l, c_l, m_r, c_r]`` and both senses the exact extreme
+over the one-record set (:mod:`.problem`) is bracketed by
+
+* a **certified outer bound**: the smallest certified LP bound (:mod:`.relaxation`) over the
+  open leaves of a branch-and-bound tree on the box of ``[theta, gamma, z0]``; the tree
+  starts from the a priori box shrunk by optimality-based bound tightening (OBBT), which
+  also bounds the parameters the data determine from far outside (the RLT rows);
+* an **inner value**: the parameter at the best point that :func:`~.problem.verify_point`
+  accepts (a simulation of the backlash and the fixed-theta LP of stage 2), found by the
+  local search of :mod:`.local` from relaxation points.
+
+The search of an end stops when the gap is below ``tol * max(1, |value|)`` (status
+``"optimal"``) or at a node/time limit (status ``"limit"``: the outer bound still holds).
+"""
+
+from __future__ import annotations
+
+import heapq
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import EmptyFeasibleSetError
+from .local import restore, walk
+from .problem import RecordProblem, Witness
+from .relaxation import build_relaxation
+
+__all__ = ["EndResult", "obbt", "search_end"]
+
+_SPLIT_CLIP = 0.1
+
+
+@dataclass
+class EndResult:
+    """One interval end: certified ``bound`` (an outer bound of ``min sense * v_k``), the
+    best verified ``value`` (inf if none) and its witness, nodes, time and status."""
+
+    bound: float
+    value: float
+    witness: Witness | None
+    nodes: int
+    seconds: float
+    status: str
+
+
+def _solve(problem, box, col, sense, basis=None):
+    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis."""
+    rel = build_relaxation(problem, box)
+    lp = rel.lp
+    c = np.zeros(lp.c.size)
+    c[rel.box_cols[col]] = sense
+    lp.set_cost(c)
+    if basis is not None and basis[0].size == lp.c.size and basis[1].size == lp.A.shape[0]:
+        lp.set_basis(basis)
+    res = lp.solve()
+    x = None if res.x is None else res.x[rel.box_cols]
+    return res, x, (lp.get_basis() if res.status == "optimal" else None), rel
+
+
+def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
+         on_point=None):
+    """Shrink the box by OBBT rounds until a round shrinks no width by more than
+    ``shrink`` (relative). Every bound is certified; ``on_point(x)`` sees each LP point.
+
+    Raises
+    ------
+    EmptyFeasibleSetError
+        An LP of the relaxation is certified infeasible: no parameters explain the record.
+    """
+    box = problem.box.copy() if box is None else np.array(box, dtype=float)
+    n = box.shape[0]
+    for _ in range(max_rounds):
+        old = box.copy()
+        rel = build_relaxation(problem, box)
+        for k in range(n):
+            for sense in (1.0, -1.0):
+                c = np.zeros(rel.lp.c.size)
+                c[rel.box_cols[k]] = sense
+                rel.lp.set_cost(c)
+                res = rel.lp.solve()
+                if res.status == "infeasible":
+                    raise EmptyFeasibleSetError(
+                        "no backlash and linear block explain the record within the bounds "
+                        "(the relaxation of the one-record set is certified infeasible).")
+                if sense > 0:
+                    box[k, 0] = max(box[k, 0], res.bound)
+                else:
+                    box[k, 1] = min(box[k, 1], -res.bound)
+                if res.x is not None and on_point is not None:
+                    on_point(res.x[rel.box_cols])
+        if np.any(box[:, 0] > box[:, 1]):
+            raise EmptyFeasibleSetError(
+                "no backlash and linear block explain the record within the bounds (the "
+                "certified bounds of a parameter cross).")
+        w_old = old[:, 1] - old[:, 0]
+        w_new = box[:, 1] - box[:, 0]
+        if np.all(w_old - w_new <= shrink * np.maximum(w_old, 1e-300)):
+            break
+        if deadline is not None and time.time() > deadline:
+            break
+    return box
+
+
+def _tighten(problem, box, cols):
+    """Certified bounds of the box rows ``cols`` from one LP relaxation (None: empty)."""
+    rel = build_relaxation(problem, box)
+    box = box.copy()
+    for k in cols:
+        for sense in (1.0, -1.0):
+            c = np.zeros(rel.lp.c.size)
+            c[rel.box_cols[k]] = sense
+            rel.lp.set_cost(c)
+            res = rel.lp.solve()
+            if res.status == "infeasible":
+                return None
+            if sense > 0:
+                box[k, 0] = max(box[k, 0], res.bound)
+            else:
+                box[k, 1] = min(box[k, 1], -res.bound)
+    return None if np.any(box[:, 0] > box[:, 1]) else box
+
+
+def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
+                 on_point=None):
+    """Certified boxes whose union holds the whole set.
+
+    The dead band decides which samples are ambiguous, and a wide dead band range leaves
+    the relaxation too weak to bound anything. So the widths of ``c_l`` and ``c_r`` are
+    first brought below ``1/parts`` of their a priori range: each box's ``c`` bounds are
+    tightened by the relaxation (empty boxes are dropped, certified) and the wider ``c``
+    is bisected while still too wide; then OBBT shrinks every remaining box (a leaf).
+    On the chapter's records, boxes of the wrong dead band are certified empty by their
+    first LP. Raises EmptyFeasibleSetError when every box is empty.
+    """
+    prior = problem.box if box is None else np.asarray(box, dtype=float)
+    p = problem.p
+    cols = (p + 1, p + 3)
+    res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
+    queue, leaves = [prior.copy()], []
+    while queue:
+        b = queue.pop()
+        if deadline is None or time.time() < deadline:
+            b = _tighten(problem, b, cols)
+            if b is None:
+                continue
+            w = np.array([b[k, 1] - b[k, 0] for k in cols])
+            if np.any(w > res):
+                j = cols[int(np.argmax(w / res))]
+                lo, hi = b.copy(), b.copy()
+                lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
+                queue.extend([hi, lo])
+                continue
+        try:
+            leaves.append(obbt(problem, b, deadline=deadline, on_point=on_point))
+        except EmptyFeasibleSetError:
+            continue
+    if not leaves:
+        raise EmptyFeasibleSetError(
+            "no backlash and linear block explain the record within the bounds (the "
+            "relaxation is certified infeasible on every part of the a priori box).")
+    return leaves
+
+
+def _children(box, j, x):
+    lo, hi = box[j]
+    w = hi - lo
+    at = 0.5 * (lo + hi) if x is None else float(np.clip(x[j], lo + _SPLIT_CLIP * w,
+                                                          hi - _SPLIT_CLIP * w))
+    a, b = box.copy(), box.copy()
+    a[j, 1] = at
+    b[j, 0] = at
+    return a, b
+
+
+def _cap(box, k, sense, value):
+    """``box`` restricted to ``sense * v_k <= value`` (None if empty)."""
+    box = box.copy()
+    if sense > 0:
+        box[k, 1] = min(box[k, 1], value)
+    else:
+        box[k, 0] = max(box[k, 0], -value)
+    return None if box[k, 0] > box[k, 1] else box
+
+
+class _Incumbent:
+    """The best verified point of one end."""
+
+    def __init__(self, problem, k, sense, witness):
+        self.problem, self.k, self.sense = problem, k, sense
+        self.witness = None
+        self.value = np.inf
+        if witness is not None:
+            self.offer(witness, walk_it=True)
+
+    def offer(self, w, walk_it=False):
+        if w is None:
+            return False
+        if walk_it:
+            w = walk(self.problem, w, self.k, self.sense)
+        val = self.sense * float(w.vector[self.k])
+        if val < self.value:
+            self.value, self.witness = val, w
+            return True
+        return False
+
+
+class _Pseudocosts:
+    """Average bound gain per split of every variable (both sides), seeded by strong
+    branching at the root: the spatial tree splits where splitting has paid (on the
+    chapter's record, splitting the backlash never moves the bound of ``b_1``, splitting
+    ``a_i`` does)."""
+
+    def __init__(self, n):
+        self.sum = np.zeros((n, 2))
+        self.cnt = np.zeros((n, 2))
+
+    def add(self, j, side, gain):
+        self.sum[j, side] += max(gain, 0.0)
+        self.cnt[j, side] += 1
+
+    def choose(self, box, root_w):
+        mean = np.where(self.cnt > 0, self.sum / np.maximum(self.cnt, 1), np.nan)
+        known = np.nanmean(mean) if np.any(self.cnt > 0) else 1.0
+        mean = np.where(np.isnan(mean), known if np.isfinite(known) else 1.0, mean)
+        rel = (box[:, 1] - box[:, 0]) / np.maximum(root_w, 1e-300)
+        score = np.maximum(mean[:, 0], 1e-12) * np.maximum(mean[:, 1], 1e-12) * rel
+        score[rel <= 1e-9] = -1.0
+        return int(np.argmax(score))
+
+
+def _rc_tighten(box, cols_r, bound, target):
+    """Reduced-cost bound tightening: the LP bound ``bound`` holds with the term
+    ``min(r_j l_j, r_j u_j)`` updated for any sub-box (and the sub-box's McCormick rows are
+    tighter still), so the part of ``v_j`` where it exceeds ``target`` is cut. Widened by a
+    relative 1e-9 for rounding."""
+    slack = target - bound
+    if cols_r is None or not (np.isfinite(slack) and slack > 0):
+        return box
+    box = box.copy()
+    with np.errstate(divide="ignore"):
+        d = slack / np.abs(cols_r) * (1.0 + 1e-9)
+    d = d + 1e-12 * np.maximum(1.0, np.abs(box).max(axis=1))
+    up = cols_r > 0
+    box[up, 1] = np.minimum(box[up, 1], box[up, 0] + d[up])
+    dn = cols_r < 0
+    box[dn, 0] = np.maximum(box[dn, 0], box[dn, 1] - d[dn])
+    return box
+
+
+class _EndSearch:
+    """Branch-and-bound state of one interval end (``min sense * v_k``)."""
+
+    def __init__(self, problem, box0, k, sense, start, tol, max_nodes, stop):
+        self.pr, self.k, self.sense, self.tol = problem, k, sense, tol
+        self.max_nodes, self.stop = max_nodes, stop
+        self.inc = _Incumbent(problem, k, sense, start)
+        self.root_w = box0[:, 1] - box0[:, 0]
+        self.end0 = box0[k, 0] if sense > 0 else -box0[k, 1]
+        self.pc = _Pseudocosts(box0.shape[0])
+        self.heap, self.count, self.nodes, self.searches = [], 0, 0, 1
+        self.pruned = np.inf  # smallest certified bound of a node dropped for its bound
+        self.push(self.end0, box0, None, None)
+
+    def gap_tol(self):
+        v = self.inc.value
+        return self.tol * max(1.0, abs(v)) if np.isfinite(v) else 0.0
+
+    def push(self, bound, box, basis, origin):
+        heapq.heappush(self.heap, (bound, self.count, box, basis, origin))
+        self.count += 1
+
+    def solve(self, box, bound, basis):
+        """Solve a node: (bound, LP point, basis, tightened box) or None if it is dropped."""
+        if np.isfinite(self.inc.value):
+            box = _cap(box, self.k, self.sense, self.inc.value)
+            if box is None:
+                return None
+        res, x, nb, rel = _solve(self.pr, box, self.k, self.sense, basis)
+        self.nodes += 1
+        if res.status == "infeasible":
+            return None
+        node_bound = max(bound, res.bound)
+        self.local_search(x)
+        if node_bound >= self.inc.value - self.gap_tol():
+            self.pruned = min(self.pruned, node_bound)
+            return None
+        r = None if res.reduced is None else res.reduced[rel.box_cols]
+        box = _rc_tighten(box, r, res.bound, self.inc.value - self.gap_tol())
+        return node_bound, x, nb, box
+
+    def local_search(self, x):
+        """A verified point from a node LP point (at most one search per 4 nodes)."""
+        if x is None or self.sense * x[self.k] >= self.inc.value - self.gap_tol():
+            return
+        if 4 * self.searches > self.nodes + 4:
+            return
+        self.searches += 1
+        self.inc.offer(restore(self.pr, x, self.pr.box, max_iter=8))
+
+    def branch(self, node_bound, x, nb, box, strong=False):
+        """Split the node; at the root, solve both children of every variable first."""
+        if strong:
+            self.strong_branching(node_bound, x, nb, box)
+        j = self.pc.choose(box, self.root_w)
+        for side, child in enumerate(_children(box, j, x)):
+            self.push(node_bound, child, nb, (j, side, node_bound))
+
+    def strong_branching(self, node_bound, x, nb, box):
+        for j in range(box.shape[0]):
+            if box[j, 1] - box[j, 0] <= 1e-9 * self.root_w[j]:
+                continue
+            for side, child in enumerate(_children(box, j, x)):
+                res, *_ = _solve(self.pr, child, self.k, self.sense, nb)
+                gain = np.inf if res.status == "infeasible" else res.bound - node_bound
+                self.pc.add(j, side, min(gain, 10 * abs(node_bound) + 1.0))
+
+    def run(self) -> str:
+        while self.heap:
+            bound, _, box, basis, origin = self.heap[0]
+            if bound >= self.inc.value - self.gap_tol():
+                return "optimal"
+            if self.nodes >= self.max_nodes or time.time() > self.stop:
+                return "limit"
+            heapq.heappop(self.heap)
+            out = self.solve(box, bound, basis)
+            if origin is not None and out is not None:
+                self.pc.add(origin[0], origin[1], out[0] - origin[2])
+            if out is not None:
+                self.branch(*out, strong=origin is None)
+        return "optimal"
+
+    def outer(self) -> float:
+        """Certified bound: the minimum lies in an open node, in a node dropped for its
+        bound, or is the incumbent (never below the starting box's end)."""
+        heap_min = min((h[0] for h in self.heap), default=np.inf)
+        return max(min(heap_min, self.pruned, self.inc.value), self.end0)
+
+
+def search_end(problem: RecordProblem, box0, k, sense, start=None, *, tol=1e-4,
+               max_nodes=2000, time_limit=None, deadline=None) -> EndResult:
+    """Branch-and-bound for ``min sense * v_k`` over the one-record set inside ``box0`` (a
+    certified outer box, e.g. from :func:`obbt`); ``start`` is a verified point."""
+    t0 = time.time()
+    stop = min(t0 + time_limit if time_limit else np.inf, deadline or np.inf)
+    srch = _EndSearch(problem, np.asarray(box0, dtype=float), k, sense, start, tol,
+                      max_nodes, stop)
+    status = srch.run()
+    return EndResult(srch.outer(), srch.inc.value, srch.inc.witness, srch.nodes,
+                     time.time() - t0, status)

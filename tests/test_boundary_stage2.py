@@ -79,7 +79,7 @@ def make_case(i):
 
 def _problem(kw):
     return EIVProblem(kw["y"], kw["x"], kw["dx"], kw["deta"], kw["na"], kw["nb"],
-                      gain=kw["gain"])
+                      steady_state_gain=kw["gain"])
 
 
 def _estimator(kw, method, **extra):
@@ -213,7 +213,7 @@ def test_property_exact_inside_lp_and_finite(rec):
     w = lfilter(B, A, x)
     d = rel * scale
     noise = rng.uniform(-d, d, n) if pattern == "uniform" else _pattern(pattern, n, d, rng)
-    pr = EIVProblem(w + noise, x, 0.0, d, 2, 2, gain=1.0)
+    pr = EIVProblem(w + noise, x, 0.0, d, 2, 2, steady_state_gain=1.0)
     theta = np.array([-0.76, 0.82, 2.15, -1.09])
     lp = lp_bounds(pr, check_box=False)
     assert np.all(np.isfinite(lp.bounds))

@@ -20,7 +20,7 @@ def _problem(gain=None, scale=1.0, seed=0, N=40):
     x = scale * np.where(rng.random(N) < 0.5, 1.0, -1.0)
     w = lfilter([0.0, 0.5], [1.0, -0.6], x)
     y = w + scale * 0.02 * np.where(rng.random(N) < 0.5, 1.0, -1.0)  # noise at +-bound
-    return EIVProblem(y, x, 0.0, scale * 0.02, na=1, nb=1, gain=gain)
+    return EIVProblem(y, x, 0.0, scale * 0.02, na=1, nb=1, steady_state_gain=gain)
 
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])

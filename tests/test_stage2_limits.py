@@ -93,7 +93,7 @@ def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
     import hammerbound.relaxations.moment.relaxation as moment_module
 
     x, y = chapter_record(15)
-    pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, gain=1.0)
+    pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, steady_state_gain=1.0)
     lp = lp_bounds(pr, check_box=False).bounds
     # no certificate for any bound (as after a solver failure)
     monkeypatch.setattr(moment_module, "verified_lower_bound", lambda *a, **k: None)
@@ -111,7 +111,7 @@ def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
 def _problem(n, dx=0.0, na=2, groups=False, gain=1.0):
     x, y = chapter_record(n)
     g = (x < 0).astype(int) if groups else None
-    return EIVProblem(y, x, dx, 0.05, na, 2, gain=gain, groups=g)
+    return EIVProblem(y, x, dx, 0.05, na, 2, steady_state_gain=gain, groups=g)
 
 
 @pytest.mark.parametrize("n,order,dx,na,groups,gain", [
@@ -152,7 +152,7 @@ def _scaled_record(scale):
     x = np.where(rng.random(n) < 0.5, 1.0, -1.0) * scale
     d = 0.05 * scale
     y = lfilter([0.0, 2.15, -1.09], [1.0, -0.76, 0.82], x) + d * rng.choice([-1.0, 1.0], n)
-    return EIVProblem(y, x, 0.0, d, 2, 2, gain=None), d
+    return EIVProblem(y, x, 0.0, d, 2, 2, steady_state_gain=None), d
 
 
 @pytest.mark.parametrize("scale", [1e-6, 1e-3, 1e3, 1e6])

@@ -293,7 +293,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 f"need more than {what} + 1 = {n0 + 1} samples; got {n}."
             )
         return EIVProblem(yy, x, dx, deta, na=self.na, nb=self.nb, nk=self._nk(),
-                          gain=self.steady_state_gain, groups=groups,
+                          steady_state_gain=self.steady_state_gain, groups=groups,
                           theta_box=self.theta_box)
 
     def _nk(self) -> int:

@@ -20,6 +20,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.validation import check_is_fitted
 
+from .._compat import is_given
 from ..data.validation import as_signal, as_theta, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..stage1.estimator import BacklashSetEstimator
@@ -74,17 +75,64 @@ def _central_system(backlash, A, B, dt=None):
         return HammersteinSystem._unchecked(backlash, (A, B), dt=dt)
 
 
+def _stage_estimator(value, cls, name, example):
+    """A clone of the stage estimator ``value`` (an instance of ``cls``), or a typed error
+    that says what to pass (a class, a string, another estimator)."""
+    if isinstance(value, cls):
+        return clone(value)
+    if isinstance(value, type) and issubclass(value, cls):
+        got = f"the class {cls.__name__} itself"
+    elif isinstance(value, str):
+        got = f"the string {value!r}"
+    else:
+        got = f"a {type(value).__name__}"
+    raise ParameterValidationError(
+        f"{name} must be a {cls.__name__} instance; got {got}. Pass e.g. {name}={example} "
+        f"(its options, such as method=..., go to the {cls.__name__}).")
+
+
+def _stage_estimators(backlash, linear, output_bound):
+    """Clones of both stage estimators; refuses, before any work, a missing output bound."""
+    bl_example = "BacklashSetEstimator(output_bound=0.05)"
+    lin_example = "LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05)"
+    bl = None if backlash is None else _stage_estimator(
+        backlash, BacklashSetEstimator, "backlash", bl_example)
+    if bl is None or _no_bound(bl):
+        raise ParameterValidationError(
+            "HammersteinBacklashIdentifier: the stage-1 estimator has no output_bound. Stage "
+            "1 rests on the bound of the steady-state output errors, which has no default: "
+            f"pass backlash={bl_example} (your sensor's error bound).")
+    lin = LinearEIVSetEstimator() if linear is None else _stage_estimator(
+        linear, LinearEIVSetEstimator, "linear", lin_example)
+    if output_bound is None and _no_bound(lin):
+        raise ParameterValidationError(
+            "HammersteinBacklashIdentifier: the stage-2 estimator has no output_bound. Stage "
+            "2 rests on the bound of the PRBS output errors, which has no default: pass "
+            f"linear={lin_example} (or fit(..., output_bound=...)).")
+    return bl, lin
+
+
+def _no_bound(est) -> bool:
+    """Whether a stage estimator was given no output bound (under either name)."""
+    return est.output_bound is None and not is_given(est.noise_bound)
+
+
 class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     """Guaranteed bounds on a backlash-Hammerstein system (stages 1 and 2 of the chapter).
 
     Parameters
     ----------
-    backlash : BacklashSetEstimator or None
-        Stage-1 estimator (default ``BacklashSetEstimator(noise_bound=0.05)``); its
-        ``noise_bound`` is the bound on the steady-state output errors.
-    linear : LinearEIVSetEstimator or None
-        Stage-2 estimator (default ``LinearEIVSetEstimator()``, i.e. ``na = nb = 2``,
-        order-1 moment relaxation); its ``noise_bound`` bounds the PRBS output errors.
+    backlash : BacklashSetEstimator
+        Stage-1 estimator, e.g. ``BacklashSetEstimator(output_bound=0.05)``; its
+        ``output_bound`` is the bound on the steady-state output errors. Required (``None``,
+        the default for scikit-learn, makes :meth:`fit` raise
+        :class:`~hammerbound.exceptions.ParameterValidationError`): the guarantee rests on
+        that bound.
+    linear : LinearEIVSetEstimator
+        Stage-2 estimator, e.g. ``LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05)``;
+        its ``output_bound`` bounds the PRBS output errors. Required like ``backlash``
+        (unless ``fit`` gets ``output_bound=``: then ``None`` means
+        ``LinearEIVSetEstimator()``, ``na = nb = 2``, order-1 moment relaxation).
         Stage 2 always imposes the unit steady-state gain (22.8) that makes the
         backlash/linear split identifiable (stage 1 measures ``G(1) m``, read as ``m``):
         a ``linear`` estimator with ``steady_state_gain=None`` (its default) is cloned
@@ -148,7 +196,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             the measured steady outputs).
         output_bound : float or array of shape (N,), optional
             Per-sample bound on the PRBS output errors for this fit, overriding the stage-2
-            ``noise_bound``; sample-aligned, so scikit-learn's CV splits it with the data.
+            ``output_bound``; sample-aligned, so scikit-learn's CV splits it with the data.
 
         Returns
         -------
@@ -168,12 +216,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             raise ParameterValidationError(
                 f"inner_signal must be one of {INNER_SIGNALS}; got {self.inner_signal!r}."
             )
-        bl = BacklashSetEstimator() if self.backlash is None else clone(self.backlash)
-        lin = LinearEIVSetEstimator() if self.linear is None else clone(self.linear)
-        if not isinstance(bl, BacklashSetEstimator) or not isinstance(lin, LinearEIVSetEstimator):
-            raise ParameterValidationError(
-                "backlash must be a BacklashSetEstimator and linear a LinearEIVSetEstimator."
-            )
+        bl, lin = _stage_estimators(self.backlash, self.linear, output_bound)
         g = lin.steady_state_gain
         if g is None:
             lin.set_params(steady_state_gain=1.0)  # (22.8), explicitly on the clone

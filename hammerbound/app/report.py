@@ -67,15 +67,14 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     out.mkdir(exist_ok=True)
     bl, lin = ident.backlash_, ident.linear_
     lines = [f"# {title}", ""]
-    ob = getattr(ident, "output_bound_", None)
-    deta = np.broadcast_to(np.asarray(lin.noise_bound if ob is None else ob, float),
-                           np.shape(prbs_y))
+    deta = lin.problem_.output_bound
     lines += ["## Experiment", "",
-              f"- steady-state points: {np.size(steady_u)} (noise bound {bl.noise_bound!r})",
+              f"- steady-state points: {np.size(steady_u)} (output error bound "
+              f"{_bound_text(bl.output_bound_)})",
               f"- PRBS samples: N = {np.size(prbs_u)}, level u* = {ident.u_star_:g} "
               f"(admissible range for Result 1: ({bl.admissible_prbs_range()[0]:.4g}, "
               f"{bl.admissible_prbs_range()[1]:.4g}))",
-              f"- PRBS output noise bound {lin.noise_bound!r}; SNR of the measured output "
+              f"- PRBS output error bound {_bound_text(deta)}; SNR of the measured output "
               f"against the bound (22.39): {snr_db(np.asarray(prbs_y) - 0, deta):.1f} dB",
               f"- stage 2: method `{lin.method}`"
               + (f", relaxation order {lin.relaxation_order}, solver {lin.solver}"
@@ -91,7 +90,7 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     fig.savefig(out / "backlash_sets.png", dpi=120)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    plot_backlash(bl, steady_u, steady_y, ax, noise_bound=bl.noise_bound,
+    plot_backlash(bl, steady_u, steady_y, ax, output_bound=bl.output_bound_,
                   u_star=ident.u_star_, inner_bounds=ident.inner_bounds_,
                   true_backlash=gamma_true)
     ax.set_title("backlash characteristic and its guaranteed band")
@@ -150,3 +149,10 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     path = out / "report.md"
     path.write_text("\n".join(lines))
     return path
+
+
+def _bound_text(bound) -> str:
+    """``0.05`` for a constant bound, ``0.01..0.05 (per sample)`` otherwise."""
+    v = np.asarray(bound, dtype=float)
+    lo, hi = float(np.min(v)), float(np.max(v))
+    return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"

@@ -46,10 +46,9 @@ DEFAULT_B_BOUND = 1.0e4
 
 
 def _deprecated(old: str, new: str) -> None:
-    import warnings
+    from .._compat import warn_renamed
 
-    warnings.warn(f"{old} is deprecated and will be removed in 0.3.0; use {new} instead.",
-                  DeprecationWarning, stacklevel=3)
+    warn_renamed(old, new, stacklevel=3)
 
 
 def _as_1d(name, v, n=None, *, positive=False, nonneg=False):

@@ -83,7 +83,7 @@ def _problem(kw):
 
 
 def _estimator(kw, method, **extra):
-    est = LinearEIVSetEstimator(na=kw["na"], nb=kw["nb"], noise_bound=kw["deta"],
+    est = LinearEIVSetEstimator(na=kw["na"], nb=kw["nb"], output_bound=kw["deta"],
                                 steady_state_gain=kw["gain"], method=method, **extra)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SearchLimitWarning)
@@ -238,7 +238,7 @@ def test_property_total_budget_keeps_lp_knowledge(seed, budget):
     n = 40
     x = np.where(rng.random(n) < 0.5, 1.0, -1.0)
     y = lfilter([0.0, 2.15, -1.09], [1.0, -0.76, 0.82], x) + rng.uniform(-0.05, 0.05, n)
-    est = LinearEIVSetEstimator(noise_bound=0.05, steady_state_gain=1.0, method="exact",
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="exact",
                                 total_time_limit=budget, tol=1e-6)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")

@@ -204,7 +204,7 @@ def test_report_overwrite_is_explicit(csv_files, tmp_path):
 
     ex, _, _ = csv_files
     ident = HammersteinBacklashIdentifier(
-        BacklashSetEstimator(0.02), LinearEIVSetEstimator(noise_bound=0.02, method="lp"))
+        BacklashSetEstimator(0.02), LinearEIVSetEstimator(output_bound=0.02, method="lp"))
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     rep = tmp_path / "rep"
     args = (ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, rep)

@@ -266,8 +266,8 @@ def test_diagnose_and_locate_accept_iodata():
     u = np.repeat(np.random.default_rng(0).uniform(-1, 1, 20), 5)
     y = lfilter([0.0, 0.5], [1.0, -0.5], u) + 0.3
     data = IOData(u, y, dt=0.1, input_name="voltage", input_unit="V")
-    rep = diagnose(G, data, noise_bound=0.01, candidates=["offset", "delay"])
-    ref = diagnose(G, u, y, noise_bound=0.01, candidates=["offset", "delay"])
+    rep = diagnose(G, data, output_bound=0.01, candidates=["offset", "delay"])
+    ref = diagnose(G, u, y, output_bound=0.01, candidates=["offset", "delay"])
     assert rep.effect == ref.effect == "offset"
     assert rep.gap_before == ref.gap_before and rep.gap_after == ref.gap_after
     assert rep.refined_model.dt == 0.1 and rep.refined_model.linear.dt == 0.1
@@ -277,25 +277,25 @@ def test_diagnose_and_locate_accept_iodata():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
-    dis = locate(G, data, noise_bound=0.01)
+    dis = locate(G, data, output_bound=0.01)
     assert dis.gap == pytest.approx(locate(G, u, y, 0.01).gap, rel=1e-12)
     # dt from the data when the model has none
     G1 = control.tf([0.0, 0.5], [1.0, -0.5], True)
-    assert diagnose(G1, data, noise_bound=0.01, candidates=["offset"]).refined_model.dt == 0.1
+    assert diagnose(G1, data, output_bound=0.01, candidates=["offset"]).refined_model.dt == 0.1
 
 
 @pytest.mark.parametrize("call, error, words", [
     (lambda G, d, u, y: diagnose(G, d, 0.01), DataValidationError,
      "noise bound goes by keyword"),
     (lambda G, d, u, y: diagnose(G, d, y, 0.01), DataValidationError, "without y"),
-    (lambda G, d, u, y: diagnose(G, u, d, noise_bound=0.01), DataValidationError,
+    (lambda G, d, u, y: diagnose(G, u, d, output_bound=0.01), DataValidationError,
      "in place of u"),
-    (lambda G, d, u, y: diagnose(G, u, noise_bound=0.01), DataValidationError,
+    (lambda G, d, u, y: diagnose(G, u, output_bound=0.01), DataValidationError,
      "y (the measured output) is missing"),
-    (lambda G, d, u, y: diagnose(G, d), ParameterValidationError, "noise_bound is required"),
+    (lambda G, d, u, y: diagnose(G, d), ParameterValidationError, "output_bound is required"),
     (lambda G, d, u, y: locate(G, d, 0.01), DataValidationError, "locate(model, data"),
     (lambda G, d, u, y: diagnose(control.tf([0.0, 0.5], [1.0, -0.5], 0.2), d,
-                                 noise_bound=0.01), ParameterValidationError, "dt = 0.2"),
+                                 output_bound=0.01), ParameterValidationError, "dt = 0.2"),
 ])
 def test_iodata_misuse_says_what_to_pass(call, error, words):
     G = control.tf([0.0, 0.5], [1.0, -0.5], 0.1)

@@ -38,7 +38,7 @@ def test_step_of_a_decimal_column_is_that_decimal(tmp_path, step):
     t = np.arange(u.size) * step
     d = hb.IOData.from_csv(write(tmp_path / "r.csv", ["t", "u", "y"], [t, u, y]))
     assert d.dt == step
-    est = hb.LinearEIVSetEstimator(1, 1, noise_bound=0.01, method="lp").fit(d)
+    est = hb.LinearEIVSetEstimator(1, 1, output_bound=0.01, method="lp").fit(d)
     assert est.dt_ == step and est.to_transfer_function().dt == step
     assert hb.IOData.from_frame({"t": t, "u": u, "y": y}).dt == step
 

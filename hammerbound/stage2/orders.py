@@ -46,7 +46,7 @@ def largest_order(nk: int, n_samples: int) -> int:
 def _what_works(nk: int, n_samples: int) -> str:
     k = largest_order(nk, n_samples)
     if k == 0:
-        return f"no order works with N = {n_samples} samples; use a longer record"
+        return f"no order works with N = {n_samples} samples"
     return f"with N = {n_samples} samples, orders up to na = nb = {k} work"
 
 
@@ -76,4 +76,4 @@ def check_orders(na: int, nb: int, nk: int, n_samples: int, *,
             f"{orders} has p = {p} parameters, which need at least {need} equations "
             f"({EQUATIONS_PER_PARAMETER} per parameter), but N = {n_samples} samples give "
             f"{max(n_eq, 0)} (one per sample from t = n0 = {n0}). Use a longer record "
-            f"(N >= {n0 + need}) or lower orders: {_what_works(nk, n_samples)}.")
+            f"(N >= {n0 + need}) or lower orders ({_what_works(nk, n_samples)}).")

@@ -166,7 +166,7 @@ def test_stdout_to_stderr_keeps_stdout_clean(capfd):
 
 
 # ----------------------------------------------------------------------------- the CLI
-_TINY = ["demo", "--N", "100", "--noise-levels", "0.05", "--method", "lp", "--seeds", "0",
+_TINY = ["demo", "--N", "100", "--output-bounds", "0.05", "--method", "lp", "--seeds", "0",
          "--report", ""]
 
 

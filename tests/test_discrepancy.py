@@ -155,7 +155,7 @@ def test_noise_bound_too_small_for_the_noise_does_not_invent_an_effect():
     assert rep.effect is None
     assert not rep.consistent_before and not rep.consistent_after
     assert rep.gap_after == rep.gap_before > 0.01
-    assert "Check the noise bound" in rep.message
+    assert "Check the output bound" in rep.message
 
 
 def test_effect_below_noise_bound_is_reported_as_undecidable():
@@ -428,7 +428,7 @@ def test_cli_names_effect_and_writes_json_and_plot(tmp_path, capsys):
     u, y = make_data("offset", 0.3, 0)
     csv = _write_csv(tmp_path / "data.csv", u, y)
     png = tmp_path / "fig.png"
-    rc = diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02",
+    rc = diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02",
                             "--candidates", "offset,delay", "--json", "--plot", str(png)])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
@@ -440,7 +440,7 @@ def test_cli_names_effect_and_writes_json_and_plot(tmp_path, capsys):
 def test_cli_text_output_headerless_and_named_columns(tmp_path, capsys):
     u, y = make_data("offset", 0.3, 0)
     csv = _write_csv(tmp_path / "plain.csv", u, y, header=None)
-    rc = diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02", "--candidates", "offset"])
+    rc = diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02", "--candidates", "offset"])
     assert rc == 0
     assert "effect                   : offset" in capsys.readouterr().out
     # named columns in another order, plus an extra column
@@ -452,22 +452,22 @@ def test_cli_text_output_headerless_and_named_columns(tmp_path, capsys):
     np.testing.assert_array_equal(uu, u)
     np.testing.assert_array_equal(yy, y)
     # the noise bound is too small: exit code 1 (inconsistent after)
-    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--noise-bound", "0.005", "--u-column",
-                            "force", "--y-column", "position", "--candidates", "offset"])
+    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--output-bound", "0.005", "--u-col",
+                            "force", "--y-col", "position", "--candidates", "offset"])
     assert rc == 1
 
 
 def test_cli_missing_column(tmp_path, capsys):
     u, y = make_data(None, 0.0, 0)
     csv = _write_csv(tmp_path / "d.csv", u, y, header="u,output")
-    rc = diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02"])
+    rc = diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02"])
     assert rc == 2
     err = capsys.readouterr().err
-    assert "column 'y'" in err and "['u', 'output']" in err and "--y-column" in err
+    assert "column 'y'" in err and "['u', 'output']" in err and "--y-col" in err
 
     one = tmp_path / "one.csv"
     one.write_text("\n".join(f"{a:.17g}" for a in u) + "\n")
-    assert diagnose_cli_main([str(one), *CLI_MODEL, "--noise-bound", "0.02"]) == 2
+    assert diagnose_cli_main([str(one), *CLI_MODEL, "--output-bound", "0.02"]) == 2
     assert "y column (index 1) is missing: found 1 column(s)" in capsys.readouterr().err
 
 
@@ -479,7 +479,7 @@ def test_cli_bad_rows(tmp_path, capsys):
     lines[20] = "nan,0.1"  # file line 21
     path = tmp_path / "bad.csv"
     path.write_text("\n".join(lines) + "\n")
-    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--noise-bound", "0.02"])
+    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--output-bound", "0.02"])
     assert rc == 2
     err = capsys.readouterr().err
     assert "3 row(s)" in err
@@ -492,24 +492,24 @@ def test_cli_other_errors(tmp_path, capsys):
     u, y = make_data(None, 0.0, 0)
     csv = _write_csv(tmp_path / "d.csv", u, y)
     assert diagnose_cli_main([str(tmp_path / "missing.csv"), *CLI_MODEL,
-                              "--noise-bound", "0.02"]) == 2
+                              "--output-bound", "0.02"]) == 2
     assert "cannot read" in capsys.readouterr().err
     assert diagnose_cli_main([csv, "--num", "0 x", "--den", "1 -0.5",
-                              "--noise-bound", "0.02"]) == 2
+                              "--output-bound", "0.02"]) == 2
     assert "--num must be numbers" in capsys.readouterr().err
     assert diagnose_cli_main([csv, "--num", "0 1", "--den", "1 -1.5",
-                              "--noise-bound", "0.02"]) == 2
+                              "--output-bound", "0.02"]) == 2
     assert "unstable" in capsys.readouterr().err
-    assert diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "-1"]) == 2
+    assert diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "-1"]) == 2
     assert "output_bound" in capsys.readouterr().err
-    assert diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02",
+    assert diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02",
                               "--candidates", "friction"]) == 2
     assert "unknown candidate" in capsys.readouterr().err
-    assert diagnose_cli_main([csv, *CLI_MODEL]) == 2  # argparse: missing --noise-bound
-    assert "--noise-bound" in capsys.readouterr().err
+    assert diagnose_cli_main([csv, *CLI_MODEL]) == 2  # argparse: missing --output-bound
+    assert "--output-bound" in capsys.readouterr().err
     empty = tmp_path / "empty.csv"
     empty.write_text("u,y\n")
-    assert diagnose_cli_main([str(empty), *CLI_MODEL, "--noise-bound", "0.02"]) == 2
+    assert diagnose_cli_main([str(empty), *CLI_MODEL, "--output-bound", "0.02"]) == 2
     assert "no data rows" in capsys.readouterr().err
 
 

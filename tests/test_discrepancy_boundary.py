@@ -95,7 +95,7 @@ def test_cli_exits_0_on_a_correct_model_with_noise_at_the_bound(effect, tmp_path
                                       zip(u.tolist(), y.tolist(), strict=True)))
     r = subprocess.run(
         [sys.executable, "-m", "hammerbound", "diagnose", str(path), "--num", "0 0.2 0.1",
-         "--den", "1 -1.2 0.5", "--noise-bound", repr(NB), "--candidates", effect],
+         "--den", "1 -1.2 0.5", "--output-bound", repr(NB), "--candidates", effect],
         capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "0.0% outside" in r.stdout.split("gap after")[1].splitlines()[0]

@@ -231,7 +231,7 @@ def _cli(tmp_path, *args):
                                                                             strict=True)))
     return subprocess.run(
         [sys.executable, "-m", "hammerbound", "diagnose", str(csv), "--num", "0 0.2 0.1",
-         "--den", "1 -1.2 0.5", "--noise-bound", "0.02", *args],
+         "--den", "1 -1.2 0.5", "--output-bound", "0.02", *args],
         capture_output=True, text=True, timeout=600)
 
 
@@ -286,7 +286,7 @@ def test_diagnose_and_locate_accept_iodata():
 
 @pytest.mark.parametrize("call, error, words", [
     (lambda G, d, u, y: diagnose(G, d, 0.01), DataValidationError,
-     "noise bound goes by keyword"),
+     "output bound goes by keyword"),
     (lambda G, d, u, y: diagnose(G, d, y, 0.01), DataValidationError, "without y"),
     (lambda G, d, u, y: diagnose(G, u, d, output_bound=0.01), DataValidationError,
      "in place of u"),

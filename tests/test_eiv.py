@@ -144,7 +144,8 @@ BAD = [
     (dict(), dict(input_bound=-0.1), ParameterValidationError, ">= 0"),
     (dict(na=-1), {}, ParameterValidationError, "na"),
     (dict(nb=1.5), {}, ParameterValidationError, "nb"),
-    (dict(nb=0), {}, ParameterValidationError, "nb >= 1 or b0"),
+    (dict(nb=0), {}, ParameterValidationError, "nb >= 1 or nk=0"),
+    (dict(output_bound=None), {}, ParameterValidationError, "output_bound is not set"),
     (dict(method="simplex"), {}, ParameterValidationError, "method must be one of"),
     (dict(relaxation_order=0), {}, ParameterValidationError, "relaxation_order"),
     (dict(steady_state_gain=0.0), {}, ParameterValidationError, "steady_state_gain"),
@@ -161,7 +162,7 @@ def test_bad_input(params, data, err, match):
     kw = dict(X=x, y=y, input_bound=0.003)
     kw.update(data)
     with pytest.raises(err, match=match):
-        LinearEIVSetEstimator(**{"method": "lp", **params}).fit(**kw)
+        LinearEIVSetEstimator(**{"method": "lp", "output_bound": 0.05, **params}).fit(**kw)
 
 
 def test_inconsistent_data_names_the_equation():

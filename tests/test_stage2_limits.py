@@ -77,7 +77,7 @@ def test_total_budget_shared_by_parallel_workers():
 def test_identifier_passes_the_budget_to_stage_2():
     ex = hb.chapter_example(0.05, N=60)
     lin = LinearEIVSetEstimator(output_bound=0.05, method="exact", steady_state_gain=1.0)
-    ident = hb.HammersteinBacklashIdentifier(linear=lin)
+    ident = hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05), linear=lin)
     ident.set_params(linear__total_time_limit=0.0)
     assert clone(ident).get_params()["linear__total_time_limit"] == 0.0
     with warnings.catch_warnings():

@@ -207,7 +207,7 @@ def test_cli_identify_refuses_extreme_scale_before_the_work(tmp_path):
                                                      zip(up * s, yp * s, strict=True)))
     r = subprocess.run(
         [sys.executable, "-m", "hammerbound", "identify", "--steady", str(tmp_path / "ss.csv"),
-         "--prbs", str(tmp_path / "pr.csv"), "--steady-noise", "2e298", "--prbs-noise", "2e298",
+         "--prbs", str(tmp_path / "pr.csv"), "--steady-output-bound", "2e298", "--output-bound", "2e298",
          "--method", "lp"],
         capture_output=True, text=True, timeout=300, cwd=ROOT)
     assert r.returncode == 2, r.stderr

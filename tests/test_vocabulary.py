@@ -262,16 +262,16 @@ def test_orders_beyond_the_lp_orthants_are_refused_before_any_lp(monkeypatch, me
 def test_short_record_is_refused_and_the_suggested_order_works(monkeypatch):
     from hammerbound.stage2.orders import check_orders, largest_order
 
-    x, y = _record(12)
+    x, y = _record(8)
     with monkeypatch.context() as m:
         _no_lp(m)
         with pytest.raises(DataValidationError, match="orders up to na = nb = 2") as ei:
             hb.LinearEIVSetEstimator(3, 3, output_bound=0.05, method="lp").fit(x, y)
-    assert "N >= 15" in str(ei.value)
-    k = largest_order(1, 12)
-    check_orders(k, k, 1, 12)
+    assert "N >= 9" in str(ei.value)
+    k = largest_order(1, 8)
+    check_orders(k, k, 1, 8)
     with pytest.raises(DataValidationError):
-        check_orders(k + 1, k + 1, 1, 12)
+        check_orders(k + 1, k + 1, 1, 8)
     est = hb.LinearEIVSetEstimator(k, k, output_bound=0.05, method="lp").fit(x, y)
     assert est.contains(np.r_[A[1:], B[1:]])
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..systems.experiments import snr_db
+from ..tables import bound_text
 from .paths import check_output_dir
 
 __all__ = ["REPORT_FILES", "write_report", "interval_table"]
@@ -70,11 +71,11 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     deta = lin.problem_.output_bound
     lines += ["## Experiment", "",
               f"- steady-state points: {np.size(steady_u)} (output error bound "
-              f"{_bound_text(bl.output_bound_)})",
+              f"{bound_text(bl.output_bound_)})",
               f"- PRBS samples: N = {np.size(prbs_u)}, level u* = {ident.u_star_:g} "
               f"(admissible range for Result 1: ({bl.admissible_prbs_range()[0]:.4g}, "
               f"{bl.admissible_prbs_range()[1]:.4g}))",
-              f"- PRBS output error bound {_bound_text(deta)}; SNR of the measured output "
+              f"- PRBS output error bound {bound_text(deta)}; SNR of the measured output "
               f"against the bound (22.39): {snr_db(np.asarray(prbs_y) - 0, deta):.1f} dB",
               f"- stage 2: method `{lin.method}`"
               + (f", relaxation order {lin.relaxation_order}, solver {lin.solver}"
@@ -150,9 +151,3 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     path.write_text("\n".join(lines))
     return path
 
-
-def _bound_text(bound) -> str:
-    """``0.05`` for a constant bound, ``0.01..0.05 (per sample)`` otherwise."""
-    v = np.asarray(bound, dtype=float)
-    lo, hi = float(np.min(v)), float(np.max(v))
-    return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"

@@ -281,14 +281,19 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     def summary(self) -> str:
         """Text summary: PRBS level, stage-2 settings and the interval table."""
         check_is_fitted(self, "bounds_")
-        from ..tables import interval_text
+        from ..tables import bound_text, interval_text
 
         lin = self.linear_
         pr = lin.problem_
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
                 f"{self.inner_signal}, N = {pr.N}, dt = "
-                f"{'not given' if self.dt_ is None else f'{self.dt_:g}'}")
+                f"{'not given' if self.dt_ is None else f'{self.dt_:g}'}\n"
+                f"assumptions: steady-state output error bound |eta| <= "
+                f"{bound_text(self.backlash_.output_bound_)}; PRBS output error bound "
+                f"|eta_t| <= {bound_text(pr.output_bound)}; inner-signal bounds from stage 1 "
+                f"(|dx_t| <= {bound_text(pr.input_bound)}, Result 1 checked for every "
+                "feasible backlash); unit steady-state gain of the linear block (22.8)")
         return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     @property

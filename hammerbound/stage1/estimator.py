@@ -331,11 +331,14 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     def summary(self) -> str:
         """Text summary: the exact feasible sets and the tight intervals (22.24)."""
         check_is_fitted(self, "left_")
-        from ..tables import interval_text
+        from ..tables import bound_text, interval_text
 
         head = (f"BacklashSetEstimator: exact feasible sets, left {len(self.left_.vertices)} "
                 f"and right {len(self.right_.vertices)} vertices, inputs in "
-                f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]")
+                f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]\n"
+                f"assumptions: output error bound |eta| <= {bound_text(self.output_bound_)}; "
+                "the steady-state samples are at steady state; unit steady-state gain of the "
+                "linear block (22.8)")
         return interval_text(("ml", "cl", "mr", "cr"), self.gamma_bounds_, title=head)
 
     # ------------------------------------------------------------------ model set (issue 16)

@@ -42,6 +42,7 @@ from ..exceptions import (
 from ..modelset.estimator import ModelSetMixin
 from ..relaxations.problem import EIVProblem
 from ..stage1.feasible_set import FeasibleSet
+from ..tables import bound_text
 from .linear_model import LinearModelMixin
 from .orders import check_orders
 
@@ -128,8 +129,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     -----
     Every method starts from the polytopic LP over the ``2^p`` sign orthants of ``theta``
     (``p`` parameters), and the data must give enough equations to bound them: ``fit``
-    refuses at once, before any LP, orders with ``p > 12`` or fewer than ``2 p`` equations
-    (:mod:`hammerbound.stage2.orders`).
+    refuses at once, before any LP, orders with ``p > 12`` or fewer equations than
+    parameters (:mod:`hammerbound.stage2.orders`).
 
     Attributes
     ----------
@@ -334,28 +335,30 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
 
         return b_lags_of(self.nb, self._nk())
 
+    def _assumption_list(self, problem) -> list[str]:
+        """The assumptions that shaped the feasible set, one phrase each."""
+        g = self.steady_state_gain
+        gain = ("no steady-state gain constraint" if g is None else
+                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8)")
+        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
+               if self.theta_box is None else "user theta_box")
+        dx = bound_text(problem.input_bound)
+        shared = ("" if problem.n_groups == problem.N else
+                  f", shared by {problem.n_groups} sample groups")
+        exact = " (exact input)" if not np.any(problem.input_bound) else ""
+        return [f"output error bound |eta_t| <= {bound_text(problem.output_bound)}",
+                f"input error bound |dx_t| <= {dx}{exact}{shared}", gain, box]
+
     def _assumptions(self, problem) -> str:
         """One sentence naming every assumption that shaped the feasible set."""
         lags = problem.b_lags
         b_terms = " + ".join(f"b{j}" + (f" q^-{j}" if j else "") for j in lags)
         a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
-        g = self.steady_state_gain
-        gain = ("no steady-state gain constraint" if g is None else
-                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8; pass "
-                "steady_state_gain=None for a plain EIV problem)")
-
-        def rng(v):
-            lo, hi = float(np.min(v)), float(np.max(v))
-            return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"
-
-        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
-               if self.theta_box is None else "user theta_box")
-        shared = ("" if problem.n_groups == problem.N else
-                  f"; input errors shared by {problem.n_groups} sample groups")
+        items = self._assumption_list(problem)
+        if self.steady_state_gain is not None:
+            items[2] += " (pass steady_state_gain=None for a plain EIV problem)"
         return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
-                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); {gain}; output error "
-                f"bound |eta_t| <= {rng(problem.deta)}; input error bound |dx_t| <= "
-                f"{rng(problem.dx)}{shared}; {box}.")
+                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
 
     def _box_hint(self, problem) -> str:
         """A hint for badly scaled data, whose true b_j may lie outside the default box."""

@@ -3,9 +3,9 @@
 Every stage-2 method starts from the polytopic LP of :mod:`hammerbound.relaxations.lp`,
 which solves ``2p + 1`` LPs in each of the ``2^p`` sign orthants of ``theta`` (``p``
 parameters): its cost doubles with every parameter (``python -m benchmarks.lp_orders``:
-seconds up to ``p = 8``, minutes at ``p = 12``, hours beyond). And every parameter needs
-equations to bound it: with fewer than :data:`EQUATIONS_PER_PARAMETER` equations per
-parameter the intervals are set by the a priori box rather than by the data. So
+seconds up to ``p = 8``, minutes at ``p = 12``, hours beyond). And the data must give at
+least one equation per parameter: with fewer equations than parameters some direction of
+``theta`` is not bounded by the data (only by the a priori box). So
 :func:`check_orders` refuses, at once, ``p >`` :data:`MAX_PARAMETERS` and records too
 short for the orders, and says which orders would work.
 """
@@ -20,7 +20,7 @@ __all__ = ["EQUATIONS_PER_PARAMETER", "MAX_PARAMETERS", "check_orders", "largest
 #: Most parameters ``p = na + len(B)`` a fit accepts (``2^12 = 4096`` LP orthants).
 MAX_PARAMETERS = 12
 #: Fewest equations (samples after the first ``n0 = max(na, last input lag)``) per parameter.
-EQUATIONS_PER_PARAMETER = 2
+EQUATIONS_PER_PARAMETER = 1
 
 
 def _size(na: int, nb: int, nk: int) -> tuple[int, int]:
@@ -59,7 +59,7 @@ def check_orders(na: int, nb: int, nk: int, n_samples: int, *,
     ParameterValidationError
         More than :data:`MAX_PARAMETERS` parameters.
     DataValidationError
-        Fewer than ``EQUATIONS_PER_PARAMETER * p`` equations.
+        Fewer equations than parameters.
     """
     p, n0 = _size(na, nb, nk)
     orders = f"{owner}(na={na}, nb={nb}, nk={nk})"
@@ -73,7 +73,7 @@ def check_orders(na: int, nb: int, nk: int, n_samples: int, *,
     need = EQUATIONS_PER_PARAMETER * p
     if n_eq < need:
         raise DataValidationError(
-            f"{orders} has p = {p} parameters, which need at least {need} equations "
-            f"({EQUATIONS_PER_PARAMETER} per parameter), but N = {n_samples} samples give "
+            f"{orders} has p = {p} parameters, which need at least {need} equations (one "
+            f"per parameter, or the data cannot bound them all), but N = {n_samples} samples give "
             f"{max(n_eq, 0)} (one per sample from t = n0 = {n0}). Use a longer record "
             f"(N >= {n0 + need}) or lower orders ({_what_works(nk, n_samples)}).")

@@ -130,7 +130,7 @@ class IOData:
         header = csv_header(path, delimiter=delimiter)
         t = cls._time_column(header, t, (u, y), str(path), dt, spell)
         data = read_columns(path, [u, y] + ([t] if t else []), delimiter=delimiter,
-                            argument_names=argument_names)
+                            argument_names=spell)
         return cls._build(data[u], data[y], data.get(t), t, dt, str(path), u, y, names, spell)
 
     @classmethod

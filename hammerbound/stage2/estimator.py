@@ -26,13 +26,11 @@ interval):
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
-from .._compat import DEPRECATED, is_given, renamed_value, warn_renamed
-from ..data.validation import as_bound, as_real, as_signal, check_excited, check_scale
+from .._compat import DEPRECATED, is_given, renamed_value
+from ..data.validation import as_bound, as_signal, check_excited, check_scale
 from ..exceptions import (
     DataValidationError,
     EmptyFeasibleSetError,
@@ -45,10 +43,9 @@ from ..stage1.feasible_set import FeasibleSet
 from ..tables import bound_text
 from .linear_model import LinearModelMixin
 from .orders import check_orders
+from .params import METHODS, check_params
 
 __all__ = ["LinearEIVSetEstimator", "METHODS"]
-
-METHODS = ("moment", "lp", "exact")
 
 
 class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, BaseEstimator):
@@ -212,73 +209,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
 
     # ------------------------------------------------------------------ validation
     def _check_params(self):
-        for name in ("na", "nb"):
-            v = getattr(self, name)
-            if not isinstance(v, numbers.Integral) or isinstance(v, bool) or v < 0:
-                raise ParameterValidationError(f"{name} must be an integer >= 0; got {v!r}.")
-        nk = self.nk
-        if nk is not None and (not isinstance(nk, numbers.Integral) or isinstance(nk, bool)
-                               or nk < 0):
-            raise ParameterValidationError(
-                f"nk (input delay) must be an integer >= 0; got {nk!r}.")
-        if is_given(self.b0):
-            warn_renamed("LinearEIVSetEstimator(b0=...)", "nk=0 (direct term b0) or nk=1",
-                         stacklevel=3)
-            if not isinstance(self.b0, (bool, np.bool_)):
-                raise ParameterValidationError(
-                    f"b0 must be True or False (better: nk=0 for a direct term); got "
-                    f"{self.b0!r}.")
-            if self.b0 and nk not in (None, 0, 1):
-                raise ParameterValidationError(
-                    f"b0=True means a direct term (nk=0) but nk={nk}: pass only nk.")
-        mn = self.max_nodes
-        if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
-            raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
-        tl = self.time_limit
-        if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
-            raise ParameterValidationError(
-                f"time_limit must be a number of seconds >= 0; got {tl!r}."
-            )
-        ttl = self.total_time_limit
-        if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
-                                or not ttl >= 0):
-            raise ParameterValidationError(
-                f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
-            )
-        if self.nb == 0 and self._nk() != 0:
-            raise ParameterValidationError(
-                "B has no coefficient: use nb >= 1 or nk=0 (the direct term b0)."
-            )
-        if self.method not in METHODS:
-            raise ParameterValidationError(
-                f"method must be one of {METHODS}; got {self.method!r}."
-            )
-        r = self.relaxation_order
-        if not isinstance(r, numbers.Integral) or isinstance(r, bool) or r < 1:
-            raise ParameterValidationError(
-                f"relaxation_order must be an integer >= 1 (the chapter uses 2); got {r!r}."
-            )
-        if self.on_failure not in ("box", "raise"):
-            raise ParameterValidationError(
-                f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
-            )
-        if self.relaxation_basis not in ("sparse", "full"):
-            raise ParameterValidationError(
-                f"relaxation_basis must be 'sparse' or 'full'; got {self.relaxation_basis!r}."
-            )
-        as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
-                example="1.0")
-        if not (isinstance(self.tol, numbers.Real) and self.tol > 0):
-            raise ParameterValidationError(f"tol must be > 0; got {self.tol!r}.")
-        if not (isinstance(self.n_jobs, numbers.Integral) and (self.n_jobs >= 1 or self.n_jobs == -1)):
-            raise ParameterValidationError(f"n_jobs must be a positive integer or -1; got {self.n_jobs!r}.")
-        if self.solver_options is not None and not isinstance(self.solver_options, dict):
-            from ..exceptions import SolverOptionError
-
-            raise SolverOptionError(
-                f"solver_options must be a dict of native solver options or None; got "
-                f"{type(self.solver_options).__name__}."
-            )
+        check_params(self)
 
     def _constructor_output_bound(self, stacklevel=6):
         """The constructor's ``output_bound`` (or the deprecated ``noise_bound``)."""

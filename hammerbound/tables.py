@@ -21,7 +21,7 @@ def bound_text(bound) -> str:
     """``"0.05"`` for a constant bound, ``"0.01..0.05 (per sample)"`` otherwise."""
     v = np.asarray(bound, dtype=float)
     lo, hi = float(np.min(v)), float(np.max(v))
-    return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"
+    return f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g} (per sample)"
 
 
 def bound_status(names, infos=(), box_limited=()) -> list[str]:

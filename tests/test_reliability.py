@@ -304,7 +304,7 @@ def test_stage1_outlier_is_named(steady05, method):
     with pytest.raises(EmptyFeasibleSetError) as info:
         hb.BacklashSetEstimator(0.05, method=method).fit(steady05.u, y)
     assert info.value.side == "left" and info.value.first_index == 17
-    assert "index 17" in str(info.value) and "noise bound" in str(info.value)
+    assert "index 17" in str(info.value) and "output bound" in str(info.value)
 
 
 @pytest.mark.parametrize("method", ["polygon", "algorithm"])

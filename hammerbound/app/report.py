@@ -51,8 +51,8 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     OutputPathError
         ``outdir`` is a file, its parent is missing or it is not writable.
 
-    The report lists the experiment (sizes, noise bounds, SNR of the PRBS output against
-    the noise bound), the backlash feasible sets (vertices, orthotope, figure), the
+    The report lists the experiment (sizes, output error bounds, SNR of the PRBS output against
+    the bound), the backlash feasible sets (vertices, orthotope, figure), the
     inner-signal bounds, the linear-block intervals with per-bound solver information,
     and the guaranteed one-step output envelope against the data.
     """
@@ -143,7 +143,7 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
               "### Output envelope", "",
               "Every noise-free output consistent with the intervals and the past data lies "
               "in the one-step band; measurements may deviate from it by at most the noise "
-              f"bound. Fraction of measurements within band +- noise bound: {inside:.3f} "
+              f"bound. Fraction of measurements within band +- output bound: {inside:.3f} "
               f"(over the {int(banded.sum())} samples that have a band; the first "
               f"{int((~banded).sum())} start the recursion).",
               "", "![envelope](envelope.png)", ""]

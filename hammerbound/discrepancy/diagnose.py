@@ -406,7 +406,7 @@ def _message(bound, gap_before, consistent_before, chosen, added, fits, combos, 
                  for e, (_, v) in zip(chosen.effects, chosen.model.effects, strict=True)]
         what = " + ".join(parts)
         if len(added) == 1 and not old:
-            msg = (f"Missing effect: {what}; with it the data are consistent with the noise "
+            msg = (f"Missing effect: {what}; with it the data are consistent with the output "
                    f"bound (gap {gap_before:.4g} -> {chosen.error:.4g} <= {bound:.4g}).")
             others = [c for c in fits if c.consistent and c.name != added[0]]
             if others:

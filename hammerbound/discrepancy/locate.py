@@ -192,7 +192,7 @@ def locate_design(s, d: Design, u, y, bound, skip, window, max_lag, coef_box=1e3
     hints = []  # (candidate the hint points to, or None for a plain observation; text)
     out_fit = outside(y, fit.prediction, bound, skip)
     if not np.any(out_fit):
-        hints.append((None, "the data are consistent with the model class under the noise "
+        hints.append((None, "the data are consistent with the model class under the output "
                             "bound"))
     else:
         if certified_above(fit.lower, y, fit.error, bound, skip):

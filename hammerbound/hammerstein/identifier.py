@@ -289,11 +289,11 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
                 f"{self.inner_signal}, N = {pr.N}, dt = "
                 f"{'not given' if self.dt_ is None else f'{self.dt_:g}'}\n"
-                f"assumptions: steady-state output error bound |eta| <= "
-                f"{bound_text(self.backlash_.output_bound_)}; PRBS output error bound "
-                f"|eta_t| <= {bound_text(pr.output_bound)}; inner-signal bounds from stage 1 "
-                f"(|dx_t| <= {bound_text(pr.input_bound)}, Result 1 checked for every "
-                "feasible backlash); unit steady-state gain of the linear block (22.8)")
+                f"assumptions: output error bounds |eta| <= "
+                f"{bound_text(self.backlash_.output_bound_)} (steady state), "
+                f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "
+                f"bounds |dx_t| <= {bound_text(pr.input_bound)}; unit steady-state gain of "
+                "the linear block (22.8)")
         return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     @property

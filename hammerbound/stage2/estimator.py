@@ -287,7 +287,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
         items = self._assumption_list(problem)
         if self.steady_state_gain is not None:
-            items[2] += " (pass steady_state_gain=None for a plain EIV problem)"
+            items[2] = items[2][:-1] + "; pass steady_state_gain=None for a plain EIV problem)"
         return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
                 f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
 

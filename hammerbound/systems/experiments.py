@@ -36,7 +36,7 @@ __all__ = [
     "uniform_noise",
 ]
 
-#: The six output-noise bounds of Tables 22.1-22.3.
+#: The six output error bounds (delta_eta) of Tables 22.1-22.3.
 CHAPTER_NOISE_LEVELS = (0.005, 0.02, 0.05, 0.15, 0.2, 0.3)
 
 #: Backlash of section 22.5: m_l = 0.25, c_l = 0.0628, m_r = 0.26, c_r = 0.0489.
@@ -79,7 +79,7 @@ def _check_system(system):
 
 def uniform_noise(n: int, bound, random_state=None) -> np.ndarray:
     """Bounded noise ``eta ~ U[-bound, +bound]`` (section 22.5)."""
-    bound = as_bound("noise bound", bound, n, allow_zero=True)
+    bound = as_bound("bound", bound, n, allow_zero=True)
     return _rng(random_state).uniform(-1.0, 1.0, n) * bound
 
 

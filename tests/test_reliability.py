@@ -283,11 +283,11 @@ def test_limited_exact_search_stays_outer(small_chapter, limits):
 
 
 # ------------------------------------------------------------------------------ infeasible data
-def _side_feasible(u, y, nb, side) -> bool:
-    """Independent check: is {(m, beta) >= 0 : |m u -+ beta - y| <= nb} non-empty?"""
+def _side_feasible(u, y, bound, side) -> bool:
+    """Independent check: is {(m, beta) >= 0 : |m u -+ beta - y| <= bound} non-empty?"""
     s = -1.0 if side == "right" else 1.0  # right: y = m u - beta; left: y = m u + beta
     A = np.column_stack([u, s * np.ones_like(u)])
-    res = linprog([0.0, 0.0], A_ub=np.vstack([A, -A]), b_ub=np.r_[y + nb, -(y - nb)],
+    res = linprog([0.0, 0.0], A_ub=np.vstack([A, -A]), b_ub=np.r_[y + bound, -(y - bound)],
                   bounds=[(0, None), (0, None)], method="highs")
     return res.status == 0
 

@@ -61,7 +61,7 @@ def main(argv=None) -> int:
     moment8 = _refusal(hb.LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0,
                                                 method="moment", relaxation_order=8),
                        ex.prbs.x, ex.prbs.y)
-    refusals = {"na=nb=40, N=%d" % args.N: {"seconds": big[0], "error": big[1]},
+    refusals = {f"na=nb=40, N={args.N}": {"seconds": big[0], "error": big[1]},
                 "moment order 8, N=100": {"seconds": moment8[0], "error": moment8[1]}}
     for name, r in refusals.items():
         print(f"refused {name}: {r['error']} after {r['seconds']:.4f} s")

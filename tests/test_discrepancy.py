@@ -501,7 +501,7 @@ def test_cli_other_errors(tmp_path, capsys):
                               "--output-bound", "0.02"]) == 2
     assert "unstable" in capsys.readouterr().err
     assert diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "-1"]) == 2
-    assert "output_bound" in capsys.readouterr().err
+    assert "--output-bound" in capsys.readouterr().err
     assert diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02",
                               "--candidates", "friction"]) == 2
     assert "unknown candidate" in capsys.readouterr().err

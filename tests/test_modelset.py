@@ -290,7 +290,8 @@ def test_envelope_on_the_gain_plane(chapter_fit, chapter_samples):
     Gk = np.abs(responses(P[:500], wk, 2, [1, 2]))
     assert np.all(Gk <= env.mag_upper_between[k]) and np.all(Gk >= env.mag_lower_between[k])
     with pytest.raises(ParameterValidationError, match="gain constraint"):
-        hb.LinearEIVSetEstimator(2, 2, steady_state_gain=None, method="lp").fit(
+        hb.LinearEIVSetEstimator(2, 2, output_bound=0.05, steady_state_gain=None,
+                                 method="lp").fit(
             *chapter_like_data(N=40)[:2]).frequency_response_bounds(on_gain_plane=True)
 
 

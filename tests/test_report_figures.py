@@ -31,7 +31,7 @@ def test_report_fraction_over_banded_samples_and_figures(fitted, tmp_path):
     ex, ident = fitted
     path = write_report(ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, tmp_path)
     text = path.read_text()
-    m = re.search(r"within band \+- noise bound: ([0-9.]+) \(over the (\d+) samples", text)
+    m = re.search(r"within band \+- output bound: ([0-9.]+) \(over the (\d+) samples", text)
     assert m, text
     # own count: the guaranteed band +- the bound contains every measurement
     lo, hi = ident.output_envelope(ex.prbs.u, ex.prbs.y)

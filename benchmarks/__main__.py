@@ -7,6 +7,7 @@
     python -m benchmarks coverage [--quick] [--dask] ...
     python -m benchmarks moment2  [--N 10 20 50 100] [--full-N 10]
     python -m benchmarks weights                # certified uncertainty weights by order
+    python -m benchmarks orders [--orders 2 3 4 5 6]  # LP time by model order, guard refusals
     python -m benchmarks report                 # regenerate docs/benchmarks.md from results/
     python -m benchmarks all --quick            # every benchmark, then the report
 
@@ -25,6 +26,7 @@ COMMANDS = {
     "moment2": "moment_order2",
     "coverage": "coverage",
     "weights": "weights",
+    "orders": "lp_orders",
     "report": "report",
 }
 

@@ -72,12 +72,12 @@ def run_method(example, label: str, *, n_jobs: int = 2, time_limit: float = 600.
 
     opts = dict(METHODS[label])
     inner = opts.pop("inner_signal", "independent")
-    nb_ = example.noise_bound
+    bound = example.output_bound
     if opts["method"] == "lp":
         n_jobs = 1  # ~10 ms per LP: a process pool costs more than it saves
-    lin = hb.LinearEIVSetEstimator(na=na, nb=nb, noise_bound=nb_, n_jobs=n_jobs,
+    lin = hb.LinearEIVSetEstimator(na=na, nb=nb, output_bound=bound, n_jobs=n_jobs,
                                    time_limit=time_limit, **opts)
-    idf = hb.HammersteinBacklashIdentifier(backlash=hb.BacklashSetEstimator(nb_), linear=lin,
+    idf = hb.HammersteinBacklashIdentifier(backlash=hb.BacklashSetEstimator(bound), linear=lin,
                                            inner_signal=inner)
     u = example.prbs.u if u is None else u
     y = example.prbs.y if y is None else y

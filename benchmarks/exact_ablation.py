@@ -31,7 +31,7 @@ VARIANTS = ("all", "no-local", "no-shared-branching", "no-parent-basis")
 def _problem(deta, N, inner):
     ex = hb.chapter_example(deta, N=N, random_state=0)
     ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(noise_bound=deta, method="lp"),
+        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(output_bound=deta, method="lp"),
         inner_signal=inner)
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     return ident.linear_.problem_

@@ -35,7 +35,7 @@ def main(argv=None) -> int:
             ex = hb.chapter_example(deta, N=args.N, random_state=0)
             ident = hb.HammersteinBacklashIdentifier(
                 hb.BacklashSetEstimator(deta),
-                hb.LinearEIVSetEstimator(noise_bound=deta, method="exact", n_jobs=args.n_jobs,
+                hb.LinearEIVSetEstimator(output_bound=deta, method="exact", n_jobs=args.n_jobs,
                                          time_limit=args.time_limit),
                 inner_signal=inner)
             load0 = C.loadavg()

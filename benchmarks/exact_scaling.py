@@ -65,7 +65,7 @@ class _PeakRSS:
 def _problem(N, deta):
     ex = hb.chapter_example(deta, N=N, random_state=0)
     ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(noise_bound=deta, method="lp"),
+        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(output_bound=deta, method="lp"),
         inner_signal="independent")
     t = time.perf_counter()
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)

@@ -81,7 +81,7 @@ def linear_block(name, est, y, x, dx, dt, n_samples, rng):
     rep["n_samples"] = len(S)
     rep["sample_lps"] = S.n_lp
     ok, rep["t_own_lp_verify"] = timed(
-        lambda: [own_feasible(th, y, x, dx, est.noise_bound, na, lags) for th in S.theta])
+        lambda: [own_feasible(th, y, x, dx, est.output_bound, na, lags) for th in S.theta])
     rep["samples_verified_by_own_lp"] = int(np.sum(ok))
     nyq = np.pi / dt
     w = np.logspace(np.log10(1e-3 * nyq), np.log10(nyq), 512)
@@ -163,7 +163,7 @@ def main(argv=None):
     # ---------------------------------------------------------------- chapter example
     ex = hb.chapter_example(0.05, N=N, random_state=0)
     idf = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"))
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="exact"))
     _, t_fit = timed(lambda: idf.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady))
     rep, env, S = linear_block("chapter", idf.linear_, ex.prbs.y, idf.xc_, idf.dx_, 1.0, ns, rng)
     rep["t_fit"] = t_fit
@@ -207,7 +207,7 @@ def main(argv=None):
     if LRIC.exists():
         d = np.loadtxt(LRIC, delimiter=",", skiprows=1)
         u_l, y_l = d[:, 1], d[:, 2]
-        est = hb.LinearEIVSetEstimator(1, 1, b0=True, noise_bound=0.05, steady_state_gain=None,
+        est = hb.LinearEIVSetEstimator(1, 1, nk=0, output_bound=0.05, steady_state_gain=None,
                                        method="exact")
         _, t_fit = timed(lambda: est.fit(u_l, y_l, input_bound=0.05))
         rep, _, _ = linear_block("lric", est, y_l, u_l, 0.05, 0.1, ns, rng)

@@ -42,7 +42,7 @@ OUT = C.RESULTS / "moment_order2.json"
 def stage2_problem(N: int, noise: float, seed: int):
     """The stage-2 EIV problem of the chapter example, as the estimator builds it."""
     ex = hb.chapter_example(noise, N=N, random_state=seed)
-    lin = hb.LinearEIVSetEstimator(na=2, nb=2, noise_bound=noise, method="lp")
+    lin = hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=noise, method="lp")
     idf = hb.HammersteinBacklashIdentifier(backlash=hb.BacklashSetEstimator(noise), linear=lin)
     idf.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     pr = idf.linear_.problem_

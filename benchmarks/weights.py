@@ -41,18 +41,18 @@ def records():
         u = u0 + rng.uniform(-0.02, 0.02, N)
         y = y0 + rng.uniform(-0.02, 0.02, N)
         n = 1 if name == "first" else 2
-        out[name] = (hb.LinearEIVSetEstimator(n, n, noise_bound=0.02, method="exact").fit(
+        out[name] = (hb.LinearEIVSetEstimator(n, n, output_bound=0.02, method="exact").fit(
             hb.IOData(u, y, dt=dt), input_bound=0.02), dt)
     r2 = np.random.default_rng(7)
     u0 = np.repeat(r2.uniform(-1, 1, 26), 6)[:150]
     y0 = control.forced_response(plants["second"], T=np.arange(150) * dt, U=u0).outputs
     u, y = u0 + 0.02 * r2.choice([-1.0, 1.0], 150), y0 + 0.02 * r2.choice([-1.0, 1.0], 150)
-    out["second_at_bound"] = (hb.LinearEIVSetEstimator(2, 2, noise_bound=0.02,
+    out["second_at_bound"] = (hb.LinearEIVSetEstimator(2, 2, output_bound=0.02,
                                                        method="exact").fit(
         hb.IOData(u, y, dt=dt), input_bound=0.02), dt)
     ex = hb.chapter_example(0.05, N=200, random_state=0)
     idf = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"),
     ).fit(hb.IOData(ex.prbs.u, ex.prbs.y, dt=1.0), steady_state=ex.steady)
     out["chapter_lp"] = (idf.linear_, 1.0)
     return out

@@ -29,7 +29,7 @@ def main(argv=None):
         ex = hb.chapter_example(noise, N=N, random_state=seed)
         idf = hb.HammersteinBacklashIdentifier(
             backlash=hb.BacklashSetEstimator(noise),
-            linear=hb.LinearEIVSetEstimator(noise_bound=noise, method="exact", n_jobs=2)).fit(
+            linear=hb.LinearEIVSetEstimator(output_bound=noise, method="exact", n_jobs=2)).fit(
             ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
         infos = idf.linear_.bound_info_
         wlo = np.array([infos[2 * k].witness[k] for k in range(4)])

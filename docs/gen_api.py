@@ -8,6 +8,7 @@ from pathlib import Path
 MODULES = [
     ("hammerbound", None),
     ("hammerbound.systems.experiments", None),
+    ("hammerbound.stage2.orders", ["check_orders", "largest_order"]),
     ("hammerbound.relaxations.lp", ["lp_bounds"]),
     ("hammerbound.relaxations.moment.relaxation", ["moment_bounds", "MomentRelaxation"]),
     ("hammerbound.relaxations.exact.bnb", ["exact_bounds"]),

@@ -64,3 +64,39 @@ def install() -> None:
     """Put the finder on ``sys.meta_path`` (once)."""
     if not any(isinstance(f, _MovedModule) for f in sys.meta_path):
         sys.meta_path.append(_MovedModule())
+
+
+# ---------------------------------------------------------------------------------------
+# renamed parameters (one name per concept, issue 27.3)
+# ---------------------------------------------------------------------------------------
+#: default of a deprecated constructor parameter (scikit-learn's convention)
+DEPRECATED = "deprecated"
+
+
+def warn_renamed(old: str, new: str, *, stacklevel: int = 2) -> None:
+    """FutureWarning: ``old`` is deprecated, removed in :data:`REMOVAL`; use ``new``."""
+    warnings.warn(f"{old} is deprecated and will be removed in {REMOVAL}; use {new} instead.",
+                  FutureWarning, stacklevel=stacklevel + 1)
+
+
+def is_given(value) -> bool:
+    """Whether a deprecated parameter was set (its value is not the sentinel)."""
+    return not (isinstance(value, str) and value == DEPRECATED)
+
+
+def renamed_value(owner: str, new: str, new_value, old: str, old_value, *,
+                  unset=None, stacklevel: int = 3):
+    """The value of parameter ``new``, taking the deprecated ``old`` into account.
+
+    ``old_value`` is the sentinel :data:`DEPRECATED` when not given; otherwise a
+    FutureWarning names ``new``, and giving both raises ParameterValidationError.
+    """
+    if not is_given(old_value):
+        return new_value
+    warn_renamed(f"{owner}({old}=...)", f"{new}=...", stacklevel=stacklevel)
+    if new_value is not unset:
+        from .exceptions import ParameterValidationError
+
+        raise ParameterValidationError(
+            f"{owner} got both {old}= (deprecated) and {new}=; pass only {new}=.")
+    return old_value

@@ -52,7 +52,7 @@ class OutputExistsError(OutputPathError, FileExistsError):
 
 
 class EmptyFeasibleSetError(HammerboundError, ValueError):
-    """No parameter of the model class explains the data within the noise bound.
+    """No parameter of the model class explains the data within the error bounds.
 
     Attributes
     ----------

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._compat import DEPRECATED, renamed_value
+
 __all__ = ["backlash_band", "plot_backlash", "plot_envelope", "plot_feasible_set",
            "plot_intervals"]
 
@@ -93,15 +95,19 @@ def backlash_band(bl, u):
     return tuple(out)
 
 
-def plot_backlash(bl, u=None, y=None, ax=None, *, noise_bound=None, u_star=None,
-                  inner_bounds=None, true_backlash=None):
+def plot_backlash(bl, u=None, y=None, ax=None, *, output_bound=None, u_star=None,
+                  inner_bounds=None, true_backlash=None, noise_bound=DEPRECATED):
     """The backlash characteristic ``x`` versus ``u`` with its guaranteed band.
 
     Draws the central left and right lines, the band each line can occupy over the exact
     feasible set (:func:`backlash_band`), the steady-state points ``(u, y)`` with their
     error bars (with the unit gain (22.8), the steady output is the inner signal), and,
     when given, the inner-signal bounds at the PRBS levels ``+-u*`` and the true lines.
+    ``output_bound``: half-length of the error bars (default: none drawn);
+    ``noise_bound`` is its deprecated name (removed in 0.3.0).
     """
+    output_bound = renamed_value("plot_backlash", "output_bound", output_bound,
+                                 "noise_bound", noise_bound)
     ax = _axes(ax)
     if u is not None:
         umax = float(np.max(np.abs(u)))
@@ -119,8 +125,8 @@ def plot_backlash(bl, u=None, y=None, ax=None, *, noise_bound=None, u_star=None,
         ax.plot(grid, g[0] * (grid + g[1]), "r--", lw=0.8, label="true lines")
         ax.plot(grid, g[2] * (grid - g[3]), "r--", lw=0.8)
     if u is not None and y is not None:
-        yerr = None if noise_bound is None else np.broadcast_to(
-            np.asarray(noise_bound, float), np.shape(y))
+        yerr = None if output_bound is None else np.broadcast_to(
+            np.asarray(output_bound, float), np.shape(y))
         ax.errorbar(u, y, yerr=yerr, fmt=".", color="k", ms=3, lw=0.6, capsize=0,
                     label="steady-state points")
     if u_star is not None and inner_bounds is not None:

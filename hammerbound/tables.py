@@ -9,12 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["interval_frame", "interval_records", "interval_text", "bound_status"]
+__all__ = ["bound_status", "bound_text", "interval_frame", "interval_records", "interval_text"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 #: how a non-optimal end was obtained (the bound is guaranteed in every case)
 STATUS_WORDS = {"inaccurate": "from dual (solver inaccurate)",
                 "limit": "at time/node limit (outer bound)"}
+
+
+def bound_text(bound) -> str:
+    """``"0.05"`` for a constant bound, ``"0.01..0.05 (per sample)"`` otherwise."""
+    v = np.asarray(bound, dtype=float)
+    lo, hi = float(np.min(v)), float(np.max(v))
+    return f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g} (per sample)"
 
 
 def bound_status(names, infos=(), box_limited=()) -> list[str]:

@@ -49,8 +49,8 @@ def make_eiv_problem(N=60, deta=0.05, dx=0.003, two_level=False, seed=0, normali
     xc = np.where(u > 0, x_hi * g + shift[0], x_lo * g + shift[1])
     theta = np.concatenate([A_TRUE[1:], B_TRUE[1:] / g])
     groups = (u < 0).astype(int) if two_level else None
-    prob = EIVProblem(y, xc, dx, deta, na=2, nb=2, b0=False,
-                      gain=1.0 if normalise else None, groups=groups)
+    prob = EIVProblem(y, xc, dx, deta, na=2, nb=2,
+                      steady_state_gain=1.0 if normalise else None, groups=groups)
     return prob, theta
 
 
@@ -67,7 +67,7 @@ def make_two_level(seed, N=80, deta=0.05, dx=(0.01, 0.03), levels=(0.25, -0.23),
     noise = rng.choice([-1.0, 1.0], N) if at_bound else rng.uniform(-1.0, 1.0, N)
     y = lfilter(CH_B, CH_A, true_x) + deta * noise
     dxs = np.where(s, dx[0], dx[1])
-    pr = EIVProblem(y, nominal, dxs, deta, 2, 2, gain=1.0, groups=(~s).astype(int))
+    pr = EIVProblem(y, nominal, dxs, deta, 2, 2, steady_state_gain=1.0, groups=(~s).astype(int))
     return pr, np.concatenate([CH_A[1:], CH_B[1:]])
 
 

@@ -7,7 +7,7 @@ the part that tells the user what to change.
 
 Used by ``tests/test_error_table.py`` (runs every case) and ``docs/gen_errors.py`` (writes
 ``docs/errors.md`` with the real messages). Data are small and deterministic (the chapter's
-example at ``noise_bound = 0.05``, ``N = 40``, ``random_state = 0``), so the table is
+example at ``output_bound = 0.05``, ``N = 40``, ``random_state = 0``), so the table is
 reproducible.
 """
 
@@ -86,7 +86,7 @@ def stage1():
 
 @functools.cache
 def stage2():
-    return hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, method="lp").fit(x_inner(), y_prbs())
+    return hb.LinearEIVSetEstimator(2, 2, output_bound=0.05, method="lp").fit(x_inner(), y_prbs())
 
 
 @functools.cache
@@ -96,8 +96,14 @@ def identified():
 
 
 def lin(**kw):
-    kw = {"na": 2, "nb": 2, "noise_bound": 0.05, "method": "lp", **kw}
+    kw = {"na": 2, "nb": 2, "output_bound": 0.05, "method": "lp", **kw}
     return hb.LinearEIVSetEstimator(**kw)
+
+
+def ident(**kw):
+    """The identifier with both stage estimators given (``bl``, ``lin`` in the table)."""
+    kw = {"backlash": hb.BacklashSetEstimator(0.05), "linear": lin(), **kw}
+    return hb.HammersteinBacklashIdentifier(**kw)
 
 
 def with_value(a, i, v):
@@ -141,6 +147,10 @@ def _tf(*args):
 C = ErrorCase
 CASES: list[ErrorCase] = [
     # ------------------------------------------------------------- stage 1: backlash
+    C("s1-no-output-bound", "stage 1", "no output error bound",
+      "BacklashSetEstimator().fit(u_ss, y_ss)",
+      lambda: hb.BacklashSetEstimator().fit(u_ss(), y_ss()),
+      ParameterValidationError, "BacklashSetEstimator(output_bound="),
     C("s1-nan-output", "stage 1", "NaN in the steady-state outputs",
       "BacklashSetEstimator(0.05).fit(u_ss, y_ss with y_ss[3] = nan)",
       lambda: hb.BacklashSetEstimator(0.05).fit(u_ss(), with_value(y_ss(), 3, np.nan)),
@@ -169,20 +179,20 @@ CASES: list[ErrorCase] = [
       "BacklashSetEstimator(0.05).fit(['1.0', 'a'], [0.1, 0.2])",
       lambda: hb.BacklashSetEstimator(0.05).fit(["1.0", "a"], [0.1, 0.2]),
       DataValidationError, "numeric"),
-    C("s1-noise-zero", "stage 1", "zero noise bound",
-      "BacklashSetEstimator(noise_bound=0).fit(u_ss, y_ss)",
+    C("s1-noise-zero", "stage 1", "zero output error bound",
+      "BacklashSetEstimator(output_bound=0).fit(u_ss, y_ss)",
       lambda: hb.BacklashSetEstimator(0.0).fit(u_ss(), y_ss()),
       ParameterValidationError, "> 0"),
-    C("s1-noise-negative", "stage 1", "negative noise bound",
-      "BacklashSetEstimator(noise_bound=-0.05).fit(u_ss, y_ss)",
+    C("s1-noise-negative", "stage 1", "negative output error bound",
+      "BacklashSetEstimator(output_bound=-0.05).fit(u_ss, y_ss)",
       lambda: hb.BacklashSetEstimator(-0.05).fit(u_ss(), y_ss()),
       ParameterValidationError, "> 0"),
-    C("s1-noise-length", "stage 1", "per-sample noise bound of the wrong length",
-      "BacklashSetEstimator(noise_bound=[0.05] * 3).fit(u_ss, y_ss)",
+    C("s1-noise-length", "stage 1", "per-sample output error bound of the wrong length",
+      "BacklashSetEstimator(output_bound=[0.05] * 3).fit(u_ss, y_ss)",
       lambda: hb.BacklashSetEstimator([0.05] * 3).fit(u_ss(), y_ss()),
       ParameterValidationError, "one value per sample"),
-    C("s1-noise-text", "stage 1", "noise bound given as text",
-      "BacklashSetEstimator(noise_bound='small').fit(u_ss, y_ss)",
+    C("s1-noise-text", "stage 1", "output error bound given as text",
+      "BacklashSetEstimator(output_bound='small').fit(u_ss, y_ss)",
       lambda: hb.BacklashSetEstimator("small").fit(u_ss(), y_ss()),
       ParameterValidationError, "number"),
     C("s1-method", "stage 1", "unknown stage-1 method",
@@ -261,18 +271,18 @@ CASES: list[ErrorCase] = [
     C("s2-too-short", "stage 2", "fewer samples than the model order needs",
       "LinearEIVSetEstimator(na=2, nb=2, ...).fit(x[:3], y[:3])",
       lambda: lin().fit(x_inner()[:3], y_prbs()[:3]),
-      DataValidationError, "need more than"),
-    C("s2-noise-zero", "stage 2", "zero output-noise bound",
-      "LinearEIVSetEstimator(noise_bound=0, ...).fit(x, y)",
-      lambda: lin(noise_bound=0.0).fit(x_inner(), y_prbs()),
+      DataValidationError, "Use a longer record (N >= 6)"),
+    C("s2-noise-zero", "stage 2", "zero output error bound",
+      "LinearEIVSetEstimator(output_bound=0, ...).fit(x, y)",
+      lambda: lin(output_bound=0.0).fit(x_inner(), y_prbs()),
       ParameterValidationError, "must be > 0"),
-    C("s2-noise-none", "stage 2", "missing noise bound",
-      "LinearEIVSetEstimator(noise_bound=None, ...).fit(x, y)",
-      lambda: lin(noise_bound=None).fit(x_inner(), y_prbs()),
-      ParameterValidationError, "must be a number"),
-    C("s2-noise-length", "stage 2", "per-sample noise bound of the wrong length",
-      "LinearEIVSetEstimator(noise_bound=[0.05, 0.05], ...).fit(x, y)",
-      lambda: lin(noise_bound=[0.05, 0.05]).fit(x_inner(), y_prbs()),
+    C("s2-noise-none", "stage 2", "no output error bound",
+      "LinearEIVSetEstimator(na=2, nb=2).fit(x, y)",
+      lambda: lin(output_bound=None).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "LinearEIVSetEstimator(output_bound="),
+    C("s2-noise-length", "stage 2", "per-sample output error bound of the wrong length",
+      "LinearEIVSetEstimator(output_bound=[0.05, 0.05], ...).fit(x, y)",
+      lambda: lin(output_bound=[0.05, 0.05]).fit(x_inner(), y_prbs()),
       DataValidationError, "one value per sample"),
     C("s2-input-bound-negative", "stage 2", "negative input bound",
       "LinearEIVSetEstimator(...).fit(x, y, input_bound=-0.01)",
@@ -287,13 +297,21 @@ CASES: list[ErrorCase] = [
       lambda: lin(nb=1.5).fit(x_inner(), y_prbs()),
       ParameterValidationError, "integer >= 0"),
     C("s2-no-b", "stage 2", "wrong-order model: numerator without coefficients",
-      "LinearEIVSetEstimator(nb=0, b0=False, ...).fit(x, y)",
+      "LinearEIVSetEstimator(nb=0, nk=1, ...).fit(x, y)",
       lambda: lin(nb=0).fit(x_inner(), y_prbs()),
-      ParameterValidationError, "nb >= 1 or b0=True"),
-    C("s2-b0-text", "stage 2", "b0 given as text",
-      "LinearEIVSetEstimator(b0='no', ...).fit(x, y)",
-      lambda: lin(b0="no").fit(x_inner(), y_prbs()),
-      ParameterValidationError, "True or False"),
+      ParameterValidationError, "nb >= 1 or nk=0"),
+    C("s2-nk-text", "stage 2", "input delay given as text",
+      "LinearEIVSetEstimator(nk='1', ...).fit(x, y)",
+      lambda: lin(nk="1").fit(x_inner(), y_prbs()),
+      ParameterValidationError, "integer >= 0"),
+    C("s2-orders-too-high", "stage 2", "more parameters than the methods support",
+      "LinearEIVSetEstimator(na=40, nb=40, ...).fit(x, y) with N = 40",
+      lambda: lin(na=40, nb=40).fit(x_inner(), y_prbs()),
+      ParameterValidationError, "orders up to na = nb ="),
+    C("s2-record-too-short", "stage 2", "fewer equations than parameters",
+      "LinearEIVSetEstimator(na=6, nb=6, ...).fit(x[:15], y[:15])",
+      lambda: lin(na=6, nb=6).fit(x_inner()[:15], y_prbs()[:15]),
+      DataValidationError, "orders up to na = nb = 5"),
     C("s2-method", "stage 2", "unknown stage-2 method",
       "LinearEIVSetEstimator(method='sdp', ...).fit(x, y)",
       lambda: lin(method="sdp").fit(x_inner(), y_prbs()),
@@ -357,50 +375,70 @@ CASES: list[ErrorCase] = [
       DataValidationError, "in order"),
     # ------------------------------------------------------------- both stages
     C("h-no-steady-state", "identifier", "steady-state data missing",
-      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs)",
-      lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs()),
+      "HammersteinBacklashIdentifier(bl, lin).fit(u_prbs, y_prbs)",
+      lambda: ident().fit(u_prbs(), y_prbs()),
       DataValidationError, "pass steady_state="),
     C("h-steady-state-dict", "identifier", "steady-state dict with wrong keys",
-      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs, steady_state={'x': u_ss})",
-      lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs(),
-                                                     steady_state={"x": u_ss()}),
+      "HammersteinBacklashIdentifier(bl, lin).fit(u_prbs, y_prbs, steady_state={'x': u_ss})",
+      lambda: ident().fit(u_prbs(), y_prbs(),
+                          steady_state={"x": u_ss()}),
       DataValidationError, "keys 'u' and 'y'"),
     C("h-prbs-three-levels", "identifier", "PRBS input with more than two levels",
-      "HammersteinBacklashIdentifier().fit(u_prbs with u[0] = 0.5, y_prbs, steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier().fit(
+      "HammersteinBacklashIdentifier(bl, lin).fit(u_prbs with u[0] = 0.5, y_prbs, steady_state=...)",
+      lambda: ident().fit(
           with_value(u_prbs(), 0, 0.5), y_prbs(), steady_state=(u_ss(), y_ss())),
       DataValidationError, "ordinary record"),
     C("h-length-mismatch", "identifier", "PRBS input and output of different lengths",
-      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs[:-1], steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier().fit(u_prbs(), y_prbs()[:-1],
-                                                     steady_state=(u_ss(), y_ss())),
+      "HammersteinBacklashIdentifier(bl, lin).fit(u_prbs, y_prbs[:-1], steady_state=...)",
+      lambda: ident().fit(u_prbs(), y_prbs()[:-1],
+                          steady_state=(u_ss(), y_ss())),
       DataValidationError, "same number of samples"),
     C("h-ustar-dead-zone", "identifier", "PRBS level u* inside the dead zone",
-      "HammersteinBacklashIdentifier().fit(0.03 * sign(u_prbs), y_prbs, steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier().fit(
+      "HammersteinBacklashIdentifier(bl, lin).fit(0.03 * sign(u_prbs), y_prbs, steady_state=...)",
+      lambda: ident().fit(
           0.03 * np.sign(u_prbs()), y_prbs(), steady_state=(u_ss(), y_ss())),
       ResultOneViolationError, "dead zone"),
     C("h-ustar-crossing", "identifier", "PRBS level u* past the line crossing",
-      "HammersteinBacklashIdentifier(prbs_level=3.0).fit(3 * sign(u_prbs), y_prbs, "
+      "HammersteinBacklashIdentifier(bl, lin, prbs_level=3.0).fit(3 * sign(u_prbs), y_prbs, "
       "steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier(prbs_level=3.0).fit(
+      lambda: ident(prbs_level=3.0).fit(
           3.0 * np.sign(u_prbs()), y_prbs(), steady_state=(u_ss(), y_ss())),
       ResultOneViolationError, "crossing"),
     C("h-prbs-level-text", "identifier", "prbs_level given as text",
-      "HammersteinBacklashIdentifier(prbs_level='one').fit(u_prbs, y_prbs, steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier(prbs_level="one").fit(
+      "HammersteinBacklashIdentifier(bl, lin, prbs_level='one').fit(u_prbs, y_prbs, steady_state=...)",
+      lambda: ident(prbs_level="one").fit(
           u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
       ParameterValidationError, "number u* > 0"),
     C("h-inner-signal", "identifier", "unknown inner-signal model",
-      "HammersteinBacklashIdentifier(inner_signal='three-level').fit(...)",
-      lambda: hb.HammersteinBacklashIdentifier(inner_signal="three-level").fit(
+      "HammersteinBacklashIdentifier(bl, lin, inner_signal='three-level').fit(...)",
+      lambda: ident(inner_signal="three-level").fit(
           u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
       ParameterValidationError, "one of"),
     C("h-components", "identifier", "stage estimators swapped",
       "HammersteinBacklashIdentifier(backlash=LinearEIVSetEstimator()).fit(...)",
-      lambda: hb.HammersteinBacklashIdentifier(backlash=hb.LinearEIVSetEstimator()).fit(
+      lambda: ident(backlash=hb.LinearEIVSetEstimator()).fit(
           u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
-      ParameterValidationError, "backlash must be a BacklashSetEstimator"),
+      ParameterValidationError, "backlash must be a BacklashSetEstimator instance"),
+    C("h-class-not-instance", "identifier", "the estimator class instead of an instance",
+      "HammersteinBacklashIdentifier(bl, linear=LinearEIVSetEstimator).fit(...)",
+      lambda: ident(linear=hb.LinearEIVSetEstimator).fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "Pass e.g. linear=LinearEIVSetEstimator("),
+    C("h-method-name-as-estimator", "identifier", "a method name in place of an estimator",
+      "HammersteinBacklashIdentifier(backlash='polygon', linear=lin).fit(...)",
+      lambda: ident(backlash="polygon").fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "go to the BacklashSetEstimator"),
+    C("h-no-output-bound", "identifier", "no stage estimators (no output error bound)",
+      "HammersteinBacklashIdentifier().fit(u_prbs, y_prbs, steady_state=...)",
+      lambda: hb.HammersteinBacklashIdentifier().fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "pass backlash=BacklashSetEstimator(output_bound="),
+    C("h-no-stage2-bound", "identifier", "stage-2 estimator without an output error bound",
+      "HammersteinBacklashIdentifier(bl, LinearEIVSetEstimator()).fit(...)",
+      lambda: ident(linear=hb.LinearEIVSetEstimator()).fit(
+          u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
+      ParameterValidationError, "fit(..., output_bound=...)"),
     # ------------------------------------------------------------- systems
     C("sys-backlash-negative", "systems", "negative backlash slope",
       "Backlash(-0.25, 0.06, 0.26, 0.05)",
@@ -460,11 +498,11 @@ CASES: list[ErrorCase] = [
       "square_wave_experiment(system, [1.0, 5.0], 0.05)",
       lambda: hb.square_wave_experiment(SYS, [1.0, 5.0], 0.05),
       IllPosedBacklashError, "keep the input inside"),
-    C("exp-noise-shape", "experiments", "noise bound of the wrong length",
+    C("exp-noise-shape", "experiments", "output error bound of the wrong length",
       "square_wave_experiment(system, [1.0, 2.0], [0.1, 0.2, 0.3])",
       lambda: hb.square_wave_experiment(SYS, [1.0, 2.0], [0.1, 0.2, 0.3]),
       ParameterValidationError, "one value per sample"),
-    C("exp-noise-negative", "experiments", "negative noise bound",
+    C("exp-noise-negative", "experiments", "negative output error bound",
       "prbs_experiment(system, 50, 1.0, -0.05)",
       lambda: hb.prbs_experiment(SYS, 50, 1.0, -0.05),
       ParameterValidationError, "finite and >= 0"),
@@ -527,7 +565,7 @@ CASES: list[ErrorCase] = [
       "diagnose(control.tf([1], [1, 1]), u_prbs, y_prbs, 0.05)",
       lambda: _diagnose(_tf([1.0], [1.0, 1.0]), u_prbs(), y_prbs(), 0.05),
       ParameterValidationError, "control.sample_system"),
-    C("diag-noise-negative", "discrepancy", "negative noise bound",
+    C("diag-noise-negative", "discrepancy", "negative output error bound",
       "diagnose(system, u_prbs, y_prbs, -1)",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), -1.0),
       ParameterValidationError, "finite number > 0"),
@@ -547,6 +585,10 @@ CASES: list[ErrorCase] = [
     C("s2-moment-too-large", "stage 2", "moment relaxation above its size budget",
       "LinearEIVSetEstimator(method='moment', relaxation_order=3, ...).fit(x, y)",
       lambda: lin(method="moment", relaxation_order=3).fit(x_inner(), y_prbs()),
+      RelaxationTooLargeError, "method='lp'"),
+    C("s2-moment-order-8", "stage 2", "moment relaxation of order 8 (refused at once)",
+      "LinearEIVSetEstimator(method='moment', relaxation_order=8, ...).fit(x, y)",
+      lambda: lin(method="moment", relaxation_order=8).fit(x_inner(), y_prbs()),
       RelaxationTooLargeError, "method='lp'"),
     # ------------------------------------------------------------- output paths (CLI)
     C("output-exists", "io", "output file that exists already (CLI without --force)",
@@ -603,8 +645,8 @@ CASES: list[ErrorCase] = [
       "stage1.suggest_prbs_level(margin='0.5')",
       lambda: stage1().suggest_prbs_level(margin="0.5"),
       ParameterValidationError, "without quotes"),
-    C("s1-noise-bool", "stage 1", "noise bound given as a boolean",
-      "BacklashSetEstimator(noise_bound=True).fit(u_ss, y_ss)",
+    C("s1-noise-bool", "stage 1", "output error bound given as a boolean",
+      "BacklashSetEstimator(output_bound=True).fit(u_ss, y_ss)",
       lambda: hb.BacklashSetEstimator(True).fit(u_ss(), y_ss()),
       ParameterValidationError, "pass a number"),
     C("s1-contains-nan", "stage 1", "membership of a NaN parameter in a backlash set",
@@ -615,13 +657,13 @@ CASES: list[ErrorCase] = [
       "LinearEIVSetEstimator(steady_state_gain=True, ...).fit(x, y)",
       lambda: lin(steady_state_gain=True).fit(x_inner(), y_prbs()),
       ParameterValidationError, "True is not taken as 1"),
-    C("s2-noise-bool", "stage 2", "noise bound given as a boolean",
-      "LinearEIVSetEstimator(noise_bound=True, ...).fit(x, y)",
-      lambda: lin(noise_bound=True).fit(x_inner(), y_prbs()),
+    C("s2-noise-bool", "stage 2", "output error bound given as a boolean",
+      "LinearEIVSetEstimator(output_bound=True, ...).fit(x, y)",
+      lambda: lin(output_bound=True).fit(x_inner(), y_prbs()),
       ParameterValidationError, "pass a number"),
-    C("s2-noise-two-columns", "stage 2", "per-sample noise bound with two columns",
-      "LinearEIVSetEstimator(noise_bound=np.full((N, 2), 0.05), ...).fit(x, y)",
-      lambda: lin(noise_bound=np.full((x_inner().size, 2), 0.05)).fit(x_inner(), y_prbs()),
+    C("s2-noise-two-columns", "stage 2", "per-sample output error bound with two columns",
+      "LinearEIVSetEstimator(output_bound=np.full((N, 2), 0.05), ...).fit(x, y)",
+      lambda: lin(output_bound=np.full((x_inner().size, 2), 0.05)).fit(x_inner(), y_prbs()),
       DataValidationError, "one value per sample"),
     C("s2-contains-nan", "stage 2", "membership of a NaN parameter vector",
       "stage2.contains([nan, 0.82, 2.15, -1.09])",
@@ -641,19 +683,19 @@ CASES: list[ErrorCase] = [
       lambda: identified().contains([0.25, np.nan, 0.26, 0.05], [-0.76, 0.82, 2.15, -1.09]),
       DataValidationError, "pass finite numbers"),
     C("h-prbs-level-bool", "identifier", "prbs_level given as a boolean",
-      "HammersteinBacklashIdentifier(prbs_level=True).fit(u_prbs, y_prbs, steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier(prbs_level=True).fit(
+      "HammersteinBacklashIdentifier(bl, lin, prbs_level=True).fit(u_prbs, y_prbs, steady_state=...)",
+      lambda: ident(prbs_level=True).fit(
           u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
       ParameterValidationError, "True is not taken as 1"),
     C("exp-prbs-level-numeric-text", "experiments", "PRBS level given as numeric text",
       "prbs_experiment(system, 50, '1.0', 0.05)",
       lambda: hb.prbs_experiment(SYS, 50, "1.0", 0.05),
       ParameterValidationError, "without quotes"),
-    C("diag-noise-bool", "discrepancy", "noise bound given as a boolean",
+    C("diag-noise-bool", "discrepancy", "output error bound given as a boolean",
       "diagnose(system, u_prbs, y_prbs, True)",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), True),
       ParameterValidationError, "True is not taken as 1"),
-    C("diag-noise-text", "discrepancy", "noise bound given as numeric text",
+    C("diag-noise-text", "discrepancy", "output error bound given as numeric text",
       "diagnose(system, u_prbs, y_prbs, '0.05')",
       lambda: _diagnose(SYS, u_prbs(), y_prbs(), "0.05"),
       ParameterValidationError, "without quotes"),
@@ -671,16 +713,16 @@ CASES: list[ErrorCase] = [
       lambda: hb.BacklashSetEstimator(0.05e-6).fit(1e3 * u_ss(), 1e-6 * y_ss()),
       DataScaleError, "slopes are too small"),
     C("s2-scale-huge", "stage 2", "data scaled by 1e300",
-      "LinearEIVSetEstimator(noise_bound=0.05e300, ...).fit(1e300 * x, 1e300 * y)",
-      lambda: lin(noise_bound=0.05e300).fit(1e300 * x_inner(), 1e300 * y_prbs()),
+      "LinearEIVSetEstimator(output_bound=0.05e300, ...).fit(1e300 * x, 1e300 * y)",
+      lambda: lin(output_bound=0.05e300).fit(1e300 * x_inner(), 1e300 * y_prbs()),
       DataScaleError, "leaves theta unchanged"),
     C("s2-scale-tiny", "stage 2", "data scaled by 1e-300",
-      "LinearEIVSetEstimator(noise_bound=0.05e-300, ...).fit(1e-300 * x, 1e-300 * y)",
-      lambda: lin(noise_bound=0.05e-300).fit(1e-300 * x_inner(), 1e-300 * y_prbs()),
+      "LinearEIVSetEstimator(output_bound=0.05e-300, ...).fit(1e-300 * x, 1e-300 * y)",
+      lambda: lin(output_bound=0.05e-300).fit(1e-300 * x_inner(), 1e-300 * y_prbs()),
       DataScaleError, "leaves theta unchanged"),
     C("h-scale-huge", "identifier", "PRBS data scaled by 1e300",
-      "HammersteinBacklashIdentifier().fit(1e300 * u_prbs, 1e300 * y_prbs, steady_state=...)",
-      lambda: hb.HammersteinBacklashIdentifier().fit(
+      "HammersteinBacklashIdentifier(bl, lin).fit(1e300 * u_prbs, 1e300 * y_prbs, steady_state=...)",
+      lambda: ident().fit(
           1e300 * u_prbs(), 1e300 * y_prbs(), steady_state=(u_ss(), y_ss())),
       DataScaleError, "rescale"),
     C("diag-scale-tiny", "discrepancy", "data scaled by 1e-300",
@@ -702,14 +744,14 @@ CASES: list[ErrorCase] = [
       "LinearEIVSetEstimator(nk=-1, ...).fit(x, y)",
       lambda: lin(nk=-1).fit(x_inner(), y_prbs()),
       ParameterValidationError, "integer >= 0"),
-    C("eiv-nk-and-b0", "stage 2", "b0=True together with a delay nk > 0",
+    C("eiv-nk-and-b0", "stage 2", "the deprecated b0=True together with a delay nk > 0",
       "LinearEIVSetEstimator(nk=2, b0=True, ...).fit(x, y)",
       lambda: lin(nk=2, b0=True).fit(x_inner(), y_prbs()),
       ParameterValidationError, "pass only nk"),
     C("ident-gain-not-one", "identifier", "stage-2 estimator with a gain other than 1",
-      "HammersteinBacklashIdentifier(linear=LinearEIVSetEstimator(steady_state_gain=2))"
+      "HammersteinBacklashIdentifier(bl, linear=LinearEIVSetEstimator(steady_state_gain=2))"
       ".fit(...)",
-      lambda: hb.HammersteinBacklashIdentifier(linear=lin(steady_state_gain=2.0)).fit(
+      lambda: ident(linear=lin(steady_state_gain=2.0)).fit(
           u_prbs(), y_prbs(), steady_state=(u_ss(), y_ss())),
       ParameterValidationError, "steady_state_gain=None"),
     C("iodata-kfold", "data", "non-consecutive samples of an IOData (KFold)",
@@ -737,7 +779,7 @@ CASES: list[ErrorCase] = [
       "diagnose(system, u_prbs[None, :], y_prbs, 0.05)",
       lambda: _diagnose(SYS, u_prbs()[None, :], y_prbs(), 0.05),
       DataValidationError, "shape (N,) or (N, 1)"),
-    C("noise-wrong-length", "experiments", "per-sample noise bound of the wrong length",
+    C("noise-wrong-length", "experiments", "per-sample output error bound of the wrong length",
       "uniform_noise(5, [0.1, 0.2])",
       lambda: __import__("hammerbound.systems.experiments", fromlist=["x"]).uniform_noise(
           5, [0.1, 0.2]),

@@ -127,8 +127,8 @@ def test_estimator_conventions():
     est = BacklashSetEstimator(0.05, method="algorithm")
     c = clone(est)
     assert c.get_params() == est.get_params()
-    c.set_params(noise_bound=0.1)
-    assert c.noise_bound == 0.1 and est.noise_bound == 0.05
+    c.set_params(output_bound=0.1)
+    assert c.output_bound == 0.1 and est.output_bound == 0.05
     est.fit(ex.steady.u, ex.steady.y)
     est2 = pickle.loads(pickle.dumps(est))
     np.testing.assert_array_equal(est2.gamma_bounds_, est.gamma_bounds_)
@@ -181,8 +181,8 @@ def test_sklearn_common_checks(estimator, check):
 @pytest.mark.parametrize(
     "X, y, kwargs, err, match",
     [
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"noise_bound": 0.0}, ParameterValidationError, "> 0"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"noise_bound": -1}, ParameterValidationError, "> 0"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": 0.0}, ParameterValidationError, "> 0"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": -1}, ParameterValidationError, "> 0"),
         ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, np.nan], {}, DataValidationError, "NaN"),
         ([1.0, np.inf, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "infinity|NaN"),
         ([1.0, 2.0, -1.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "inconsistent numbers of samples"),
@@ -191,12 +191,12 @@ def test_sklearn_common_checks(estimator, check):
         ([1.0, 0.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "non-zero"),
         ([[1.0, 2.0], [1, 2]], [0.2, 0.4], {}, DataValidationError, "Reshape"),
         ([], [], {}, DataValidationError, "0 sample"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"noise_bound": [0.1, 0.1]}, ParameterValidationError, "one value per sample"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"noise_bound": "0.1"}, ParameterValidationError, "number"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": [0.1, 0.1]}, ParameterValidationError, "one value per sample"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": "0.1"}, ParameterValidationError, "number"),
     ],
 )
 def test_bad_input(X, y, kwargs, err, match):
-    kw = {"noise_bound": 0.01, **kwargs}
+    kw = {"output_bound": 0.01, **kwargs}
     with pytest.raises(err, match=match):
         BacklashSetEstimator(**kw).fit(X, y)
 

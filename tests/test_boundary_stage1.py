@@ -246,7 +246,7 @@ def test_identifier_extremal_noise_both_stages(pattern, su, sy):
     y = w + factor * D * signs
     ident = hb.HammersteinBacklashIdentifier(
         hb.BacklashSetEstimator(D),
-        hb.LinearEIVSetEstimator(noise_bound=D, method="lp"),
+        hb.LinearEIVSetEstimator(output_bound=D, method="lp"),
     ).fit(u, y, steady_state=(u_ss, y_ss))
     theta = np.r_[A_TRUE[1:], B_TRUE[1:]]
     assert ident.contains(gamma, theta), (ident.gamma_bounds_, ident.theta_bounds_)

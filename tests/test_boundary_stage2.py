@@ -79,11 +79,11 @@ def make_case(i):
 
 def _problem(kw):
     return EIVProblem(kw["y"], kw["x"], kw["dx"], kw["deta"], kw["na"], kw["nb"],
-                      gain=kw["gain"])
+                      steady_state_gain=kw["gain"])
 
 
 def _estimator(kw, method, **extra):
-    est = LinearEIVSetEstimator(na=kw["na"], nb=kw["nb"], noise_bound=kw["deta"],
+    est = LinearEIVSetEstimator(na=kw["na"], nb=kw["nb"], output_bound=kw["deta"],
                                 steady_state_gain=kw["gain"], method=method, **extra)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SearchLimitWarning)
@@ -213,7 +213,7 @@ def test_property_exact_inside_lp_and_finite(rec):
     w = lfilter(B, A, x)
     d = rel * scale
     noise = rng.uniform(-d, d, n) if pattern == "uniform" else _pattern(pattern, n, d, rng)
-    pr = EIVProblem(w + noise, x, 0.0, d, 2, 2, gain=1.0)
+    pr = EIVProblem(w + noise, x, 0.0, d, 2, 2, steady_state_gain=1.0)
     theta = np.array([-0.76, 0.82, 2.15, -1.09])
     lp = lp_bounds(pr, check_box=False)
     assert np.all(np.isfinite(lp.bounds))
@@ -238,7 +238,7 @@ def test_property_total_budget_keeps_lp_knowledge(seed, budget):
     n = 40
     x = np.where(rng.random(n) < 0.5, 1.0, -1.0)
     y = lfilter([0.0, 2.15, -1.09], [1.0, -0.76, 0.82], x) + rng.uniform(-0.05, 0.05, n)
-    est = LinearEIVSetEstimator(noise_bound=0.05, steady_state_gain=1.0, method="exact",
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="exact",
                                 total_time_limit=budget, tol=1e-6)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")

@@ -128,7 +128,7 @@ def test_records_chapter_stage1_against_direct_fit():
         hi_ = ex.prbs.u > 0
         xc = np.where(hi_, sum(xh) / 2, sum(xl) / 2)
         dx = np.where(hi_, (xh[1] - xh[0]) / 2, (xl[1] - xl[0]) / 2)
-        b = LinearEIVSetEstimator(noise_bound=0.05, method="lp", steady_state_gain=1.0).fit(
+        b = LinearEIVSetEstimator(output_bound=0.05, method="lp", steady_state_gain=1.0).fit(
             xc, ex.prbs.y, input_bound=dx).bounds_
         assert np.allclose(b[:, 0], [r["lowers"][k] for r in t22], atol=1e-9)
         assert np.allclose(b[:, 1], [r["uppers"][k] for r in t22], atol=1e-9)
@@ -166,7 +166,7 @@ def test_stdout_to_stderr_keeps_stdout_clean(capfd):
 
 
 # ----------------------------------------------------------------------------- the CLI
-_TINY = ["demo", "--N", "100", "--noise-levels", "0.05", "--method", "lp", "--seeds", "0",
+_TINY = ["demo", "--N", "100", "--output-bounds", "0.05", "--method", "lp", "--seeds", "0",
          "--report", ""]
 
 

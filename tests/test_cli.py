@@ -28,7 +28,7 @@ def csv_files(tmp_path):
 
 
 def test_demo_prints_tables_beside_chapter(capsys):
-    rc = main(["demo", "--noise-levels", "0.005", "0.05", "--method", "lp", "--report", ""])
+    rc = main(["demo", "--output-bounds", "0.005", "0.05", "--method", "lp", "--report", ""])
     out = capsys.readouterr().out
     assert rc == 0
     assert "Table 22.1" in out and "Table 22.2" in out and "Table 22.3" in out
@@ -40,8 +40,8 @@ def test_demo_prints_tables_beside_chapter(capsys):
 
 def test_identify_json_and_report(csv_files, tmp_path, capsys):
     ex, ss, pr = csv_files
-    rc = main(["identify", "--steady", str(ss), "--prbs", str(pr), "--steady-noise", "0.02",
-               "--prbs-noise", "0.02", "--method", "lp", "--json",
+    rc = main(["identify", "--steady", str(ss), "--prbs", str(pr), "--steady-output-bound", "0.02",
+               "--output-bound", "0.02", "--method", "lp", "--json",
                "--report", str(tmp_path / "rep")])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
@@ -59,8 +59,8 @@ def test_identify_missing_column(csv_files, tmp_path, capsys):
     _, ss, _ = csv_files
     bad = tmp_path / "bad.csv"
     _write(bad, [1.0, -1.0], [0.1, -0.1], header="input,output")
-    rc = main(["identify", "--steady", str(ss), "--prbs", str(bad), "--steady-noise", "0.02",
-               "--prbs-noise", "0.02"])
+    rc = main(["identify", "--steady", str(ss), "--prbs", str(bad), "--steady-output-bound", "0.02",
+               "--output-bound", "0.02"])
     err = capsys.readouterr().err
     assert rc == 2 and "missing column" in err and "input" in err
 
@@ -69,30 +69,34 @@ def test_identify_bad_row(csv_files, tmp_path, capsys):
     _, ss, _ = csv_files
     bad = tmp_path / "bad.csv"
     bad.write_text("u,y\n1.0,0.2\n-1.0,abc\n")
-    rc = main(["identify", "--steady", str(ss), "--prbs", str(bad), "--steady-noise", "0.02",
-               "--prbs-noise", "0.02"])
+    rc = main(["identify", "--steady", str(ss), "--prbs", str(bad), "--steady-output-bound", "0.02",
+               "--output-bound", "0.02"])
     err = capsys.readouterr().err
     assert rc == 2 and "line 3" in err and "not a number" in err
 
 
 def test_identify_missing_file(tmp_path, capsys):
     rc = main(["identify", "--steady", str(tmp_path / "nope.csv"), "--prbs", "x.csv",
-               "--steady-noise", "0.02", "--prbs-noise", "0.02"])
+               "--steady-output-bound", "0.02", "--output-bound", "0.02"])
     assert rc == 2 and "no such file" in capsys.readouterr().err
 
 
 def test_help_everywhere(capsys):
-    for cmd in (["--help"], ["demo", "--help"], ["identify", "--help"], ["benchmark", "--help"]):
+    for cmd in (["--help"], ["demo", "--help"], ["identify", "--help"], ["benchmark", "--help"],
+                ["eiv", "--help"], ["diagnose", "--help"]):
         with pytest.raises(SystemExit) as e:
             main(cmd)
         assert e.value.code == 0
-    assert main(["diagnose", "--help"]) == 0
-    assert "usage" in capsys.readouterr().out.lower()
+        assert "usage" in capsys.readouterr().out.lower()
+    from hammerbound.app.cli import diagnose_cli_main
+
+    assert diagnose_cli_main(["--help"]) == 0
+    assert "--force" in capsys.readouterr().out
 
 
 def test_benchmark_quick(tmp_path, capsys):
     out = tmp_path / "b.json"
-    rc = main(["benchmark", "--N", "40", "--noise-bound", "0.005", "--output", str(out)])
+    rc = main(["benchmark", "--N", "40", "--output-bound", "0.005", "--output", str(out)])
     assert rc == 0
     rows = json.loads(out.read_text())
     assert [r["method"] for r in rows] == ["lp", "moment", "exact", "exact"]
@@ -183,9 +187,9 @@ def test_check_output_dir_cases(tmp_path):
 @pytest.mark.parametrize("argv, fragment", [
     (["benchmark", "--output", "{tmp}"], "is a directory"),
     (["benchmark", "--output", "/dev/null"], "not a regular file"),
-    (["identify", "--steady", "s.csv", "--prbs", "p.csv", "--steady-noise", "0.02",
-      "--prbs-noise", "0.02", "--report", "{tmp}/no/rep"], "does not exist"),
-    (["diagnose", "d.csv", "--num", "0 1", "--den", "1 -0.5", "--noise-bound", "0.1",
+    (["identify", "--steady", "s.csv", "--prbs", "p.csv", "--steady-output-bound", "0.02",
+      "--output-bound", "0.02", "--report", "{tmp}/no/rep"], "does not exist"),
+    (["diagnose", "d.csv", "--num", "0 1", "--den", "1 -0.5", "--output-bound", "0.1",
       "--plot", "{tmp}/no/fig.png"], "does not exist"),
     (["demo", "--report", "{tmp}/no/rep"], "does not exist"),
 ])
@@ -204,7 +208,7 @@ def test_report_overwrite_is_explicit(csv_files, tmp_path):
 
     ex, _, _ = csv_files
     ident = HammersteinBacklashIdentifier(
-        BacklashSetEstimator(0.02), LinearEIVSetEstimator(noise_bound=0.02, method="lp"))
+        BacklashSetEstimator(0.02), LinearEIVSetEstimator(output_bound=0.02, method="lp"))
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     rep = tmp_path / "rep"
     args = (ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, rep)

@@ -17,8 +17,8 @@ from hammerbound.data.csv_reader import example_data_path
 
 ROOT = Path(__file__).resolve().parents[1]
 LRIC_EXACT = np.array([[-0.9217, -0.8830], [0.7195, 0.7935], [-0.3227, -0.2428]])
-LRIC_ARGS = ["--na", "1", "--nb", "1", "--nk", "0", "--input-noise", "0.05",
-             "--output-noise", "0.05", "--dt", "0.1"]
+LRIC_ARGS = ["--na", "1", "--nb", "1", "--nk", "0", "--input-bound", "0.05",
+             "--output-bound", "0.05", "--dt", "0.1"]
 
 
 def _record(tmp_path, t=None, names=("u", "y"), N=40, seed=1):
@@ -73,7 +73,7 @@ def test_eiv_text_output_names_and_model(capsys):
 
 def test_eiv_time_column_gives_dt_and_columns_by_name(tmp_path, capsys):
     path = _record(tmp_path, t=0.25 * np.arange(40) + 3.0, names=("volt", "speed"))
-    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.01",
                "--u-col", "volt", "--y-col", "speed", "--method", "lp", "--json"])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
@@ -85,7 +85,7 @@ def test_eiv_time_column_gives_dt_and_columns_by_name(tmp_path, capsys):
 
 def test_eiv_sample_counter_time_column_with_dt(tmp_path, capsys):
     path = _record(tmp_path, t=np.arange(40))
-    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.01",
                "--dt", "0.1", "--method", "lp", "--json"])
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["data"]["dt"] == 0.1
@@ -97,7 +97,7 @@ def test_eiv_sample_counter_time_column_with_dt(tmp_path, capsys):
 ])
 def test_eiv_bad_time_column(tmp_path, capsys, t, extra, match):
     path = _record(tmp_path, t=t)
-    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.01",
                "--method", "lp", "--json", *extra])
     cap = capsys.readouterr()
     assert rc == 2 and cap.out == ""
@@ -106,13 +106,13 @@ def test_eiv_bad_time_column(tmp_path, capsys, t, extra, match):
 
 def test_eiv_missing_column_and_gain_error(tmp_path, capsys):
     path = _record(tmp_path)
-    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.01",
                "--u-col", "volt", "--json"])
     cap = capsys.readouterr()
     assert rc == 2 and cap.out == "" and "volt" in cap.err
     # a wrong gain constraint: the error names it
-    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-noise", "0.01",
-               "--gain", "3", "--method", "lp", "--json"])
+    rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.01",
+               "--steady-state-gain", "3", "--method", "lp", "--json"])
     cap = capsys.readouterr()
     assert rc == 2 and cap.out == ""
     assert "EmptyFeasibleSetError" in cap.err and "B(1)/A(1) = 3" in cap.err
@@ -123,10 +123,15 @@ def test_eiv_total_time_limit_zero_reports_lp_bounds_with_status_limit(capsys):
     args = ["eiv", str(example_data_path()), *LRIC_ARGS, "--json"]
     assert main([*args, "--method", "lp"]) == 0
     lp = json.loads(capsys.readouterr().out)
-    with pytest.warns(Warning, match="stopped early"):
-        rc = main([*args, "--method", "exact", "--total-time-limit", "0"])
+    rc = main([*args, "--method", "exact", "--total-time-limit", "0"])
     assert rc == 0
-    out = json.loads(capsys.readouterr().out)
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    # the warning: one stderr line in command-line terms (no source path, no keywords)
+    lines = [ln for ln in cap.err.splitlines() if "stopped early" in ln]
+    assert len(lines) == 1 and lines[0].startswith("hammerbound eiv: warning: SearchLimitWarning")
+    assert "--total-time-limit" in lines[0] and "time_limit" not in lines[0]
+    assert ".py" not in cap.err and "warnings.warn" not in cap.err
     lo, hi = np.array(out["lower"]), np.array(out["upper"])
     assert np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
     # never wider than the LP bound, and still around the exact intervals

@@ -79,8 +79,8 @@ def data(tmp_path_factory):
 
 def _identify_args(data, *extra):
     ss, pr, _ = data
-    return ("identify", "--steady", ss, "--prbs", pr, "--steady-noise", "0.02",
-            "--prbs-noise", "0.02", "--method", "lp", *extra)
+    return ("identify", "--steady", ss, "--prbs", pr, "--steady-output-bound", "0.02",
+            "--output-bound", "0.02", "--method", "lp", *extra)
 
 
 def _state(path: Path):
@@ -150,7 +150,7 @@ def test_identify_json_exact_two_jobs_stdout_is_only_json(data):
 
 
 def test_demo_json_stdout_is_only_json_and_progress_on_stderr(tmp_path):
-    res = run_cli("demo", "--N", 30, 40, "--noise-levels", 0.02, 0.05, "--method", "lp",
+    res = run_cli("demo", "--N", 30, 40, "--output-bounds", 0.02, 0.05, "--method", "lp",
                   "--n-jobs", 2, "--seeds", 0, 1, "--json", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert "HiGHS" not in res.stdout
@@ -175,7 +175,7 @@ def test_demo_json_stdout_is_only_json_and_progress_on_stderr(tmp_path):
 
 
 def test_demo_text_tables_on_stdout_quiet(tmp_path):
-    res = run_cli("demo", "--N", 30, "--noise-levels", 0.05, "--method", "lp", "--report", "",
+    res = run_cli("demo", "--N", 30, "--output-bounds", 0.05, "--method", "lp", "--report", "",
                   "--quiet", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert "Table 22.1" in res.stdout and "Table (N=30)" in res.stdout
@@ -230,7 +230,7 @@ def test_benchmark_output_checked_before_the_run(tmp_path):
 def test_benchmark_output_force_overwrites(tmp_path):
     target = tmp_path / "out.json"
     target.write_text('{"previous": "results"}')
-    res = run_cli("benchmark", "--N", 30, "--noise-bound", 0.02, "--output", target, "--force")
+    res = run_cli("benchmark", "--N", 30, "--output-bound", 0.02, "--output", target, "--force")
     assert res.returncode == 0, res.stderr
     rows = json.loads(target.read_text())
     assert [r["method"] for r in rows] == ["lp", "moment", "exact", "exact"]
@@ -240,7 +240,7 @@ def test_benchmark_output_force_overwrites(tmp_path):
 
 
 def test_demo_never_overwrites_a_previous_report(tmp_path):
-    args = ("demo", "--N", 30, "--noise-levels", 0.05, "--method", "lp", "--quiet")
+    args = ("demo", "--N", 30, "--output-bounds", 0.05, "--method", "lp", "--quiet")
     rep = _previous_report(tmp_path / "demo-report")  # the default ./demo-report
     before = _state(rep)
     res = run_cli(*args, cwd=tmp_path)
@@ -259,7 +259,7 @@ def test_diagnose_plot_checked_and_force(data, tmp_path):
     target = tmp_path / "fig.png"
     target.write_bytes(b"my figure")
     before = _state(target)
-    args = ("diagnose", pr, "--num", "0 1", "--den", "1 -0.5", "--noise-bound", "0.5",
+    args = ("diagnose", pr, "--num", "0 1", "--den", "1 -0.5", "--output-bound", "0.5",
             "--candidates", "offset", "--plot", target)
     res = run_cli(*args)
     _assert_refused(res, "diagnose", "already exists", "--force")
@@ -289,7 +289,7 @@ def test_eiv_json_stdout_is_only_json(tmp_path):
     y = y0 + rng.uniform(-0.05, 0.05, N)
     _write_csv(tmp_path / "eiv.csv", u, y)
     res = run_cli("eiv", tmp_path / "eiv.csv", "--na", 1, "--nb", 1, "--nk", 0,
-                  "--input-noise", 0.05, "--output-noise", 0.05, "--method", "lp",
+                  "--input-bound", 0.05, "--output-bound", 0.05, "--method", "lp",
                   "--n-jobs", 2, "--json")
     assert res.returncode == 0, res.stderr
     assert "HiGHS" not in res.stdout

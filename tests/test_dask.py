@@ -25,7 +25,7 @@ from hammerbound import (  # noqa: E402
 def _identifier(deta, method, n_jobs):
     return HammersteinBacklashIdentifier(
         BacklashSetEstimator(deta),
-        LinearEIVSetEstimator(noise_bound=deta, method=method, n_jobs=n_jobs))
+        LinearEIVSetEstimator(output_bound=deta, method=method, n_jobs=n_jobs))
 
 
 @pytest.fixture(scope="module")

@@ -87,7 +87,7 @@ def make_data(effect, value, seed, noise_level=0.95 * NB):
 def test_names_hidden_effect_and_closes_gap(effect, seed):
     value, tol = EFFECTS[effect]
     u, y = make_data(effect, value, seed)
-    rep = diagnose(G, u, y, noise_bound=NB)
+    rep = diagnose(G, u, y, output_bound=NB)
 
     assert rep.effect == effect, rep.summary()
     assert rep.gap_after <= NB < rep.gap_before
@@ -137,7 +137,7 @@ def test_locate_reports_conditions_shift_lag_and_hysteresis():
 @pytest.mark.parametrize("seed", [0, 1])
 def test_no_missing_effect_is_not_invented(seed):
     u, y = make_data(None, 0.0, seed)
-    rep = diagnose(G, u, y, noise_bound=NB)
+    rep = diagnose(G, u, y, output_bound=NB)
     assert rep.effect is None
     assert rep.consistent_before and rep.consistent_after
     assert rep.gap_after == rep.gap_before <= NB
@@ -151,18 +151,18 @@ def test_noise_bound_too_small_for_the_noise_does_not_invent_an_effect():
     # true noise +-0.019 but the user claims 0.01: the model is inconsistent, yet no
     # candidate explains the excess, so none is named and the message says why
     u, y = make_data(None, 0.0, 0)
-    rep = diagnose(G, u, y, noise_bound=0.01)
+    rep = diagnose(G, u, y, output_bound=0.01)
     assert rep.effect is None
     assert not rep.consistent_before and not rep.consistent_after
     assert rep.gap_after == rep.gap_before > 0.01
-    assert "Check the noise bound" in rep.message
+    assert "Check the output bound" in rep.message
 
 
 def test_effect_below_noise_bound_is_reported_as_undecidable():
     # offset 0.02 with noise +-0.019: consistent under a bound of 0.04, so nothing may be
     # named, but the report says an offset would reduce the error
     u, y = make_data("offset", 0.02, 0)
-    rep = diagnose(G, u, y, noise_bound=0.04)
+    rep = diagnose(G, u, y, output_bound=0.04)
     assert rep.effect is None and rep.consistent_before
     assert rep.gap_before <= 0.04
     assert "neither be confirmed nor excluded" in rep.message
@@ -173,7 +173,7 @@ def test_effect_below_noise_bound_is_reported_as_undecidable():
 @pytest.mark.parametrize(("effect", "value"), [("offset", 0.03), ("backlash", 0.02)])
 def test_effect_just_above_noise_bound_is_found(effect, value):
     u, y = make_data(effect, value, 1)
-    rep = diagnose(G, u, y, noise_bound=NB)
+    rep = diagnose(G, u, y, output_bound=NB)
     assert NB < rep.gap_before < 3 * NB
     assert rep.effect == effect
     assert rep.gap_after <= NB
@@ -184,7 +184,7 @@ def test_noise_bound_smaller_than_noise_with_effect_is_honest():
     # the data consistent, so nothing is named; the offset is reported as the closest
     # candidate with the share of the gap it removes, in separate fields
     u, y = make_data("offset", 0.3, 0)
-    rep = diagnose(G, u, y, noise_bound=0.01, max_effects=1)
+    rep = diagnose(G, u, y, output_bound=0.01, max_effects=1)
     assert rep.effect is None and rep.effects_added == ()
     assert not rep.consistent_after and rep.gap_after == rep.gap_before
     assert rep.closest[0] == "offset"
@@ -197,11 +197,11 @@ def test_noise_bound_smaller_than_noise_with_effect_is_honest():
 def test_second_effect_found_on_refined_model():
     # diagnose on a RefinedModel refits the effects already in it together with the new one
     u = _input(0)
-    first = diagnose(G, u, _true_output("delay", 2, u) + _noise(0, u.size), noise_bound=NB,
+    first = diagnose(G, u, _true_output("delay", 2, u) + _noise(0, u.size), output_bound=NB,
                      candidates=["delay", "offset"])
     assert first.effect == "delay" and first.consistent_after
     y = _true_output("delay", 2, u) + 0.3 + _noise(0, u.size)
-    second = diagnose(first.refined_model, u, y, noise_bound=NB, candidates=["offset"])
+    second = diagnose(first.refined_model, u, y, output_bound=NB, candidates=["offset"])
     assert second.effect == "offset" and second.effects_added == ("offset",)
     assert second.gap_after <= NB < second.gap_before
     assert [e for e, _ in second.refined_model.effects] == ["delay", "offset"]
@@ -211,7 +211,7 @@ def test_second_effect_found_on_refined_model():
 
 def test_refit_none_and_candidate_subset():
     u, y = make_data("offset", 0.3, 0)
-    rep = diagnose(G, u, y, noise_bound=NB, refit="none", candidates=["delay", "offset"])
+    rep = diagnose(G, u, y, output_bound=NB, refit="none", candidates=["delay", "offset"])
     assert [c.name for c in rep.candidates] == ["delay", "offset"]
     assert rep.effect == "offset"
     np.testing.assert_allclose(rep.refined_model.B, B)  # the model was not refitted
@@ -234,7 +234,7 @@ def _hammerstein_data(effect, value, seed=3):
 @pytest.mark.parametrize(("effect", "value"), [("saturation", 0.6), ("delay", 1)])
 def test_hammerstein_system_model(effect, value):
     H, u, y = _hammerstein_data(effect, value)
-    rep = diagnose(H, u, y, noise_bound=NB)
+    rep = diagnose(H, u, y, output_bound=NB)
     assert rep.effect == effect
     assert rep.gap_after <= NB < rep.gap_before
     assert rep.refined_model.inner == BL
@@ -242,7 +242,7 @@ def test_hammerstein_system_model(effect, value):
 
 def test_hammerstein_system_with_extra_backlash_maps_back():
     H, u, y = _hammerstein_data("backlash", 0.1)
-    rep = diagnose(H, u, y, noise_bound=NB)
+    rep = diagnose(H, u, y, output_bound=NB)
     assert rep.effect == "backlash" and rep.gap_after <= NB
     H2 = rep.refined_model.to_hammerstein()
     assert isinstance(H2, HammersteinSystem)
@@ -265,7 +265,7 @@ class _FittedIdentifier:
 
 def test_object_with_system_attribute():
     H, u, y = _hammerstein_data("offset", 0.2)
-    rep = diagnose(_FittedIdentifier(H), u, y, noise_bound=NB)
+    rep = diagnose(_FittedIdentifier(H), u, y, output_bound=NB)
     assert rep.effect == "offset" and rep.gap_after <= NB < rep.gap_before
     assert rep.refined_model.inner == BL
 
@@ -283,9 +283,9 @@ def test_unfitted_or_wrong_system_attribute():
 
     u, y = make_data(None, 0.0, 0)
     with pytest.raises(ParameterValidationError, match="not fitted.*fit"):
-        diagnose(Identifier(), u, y, noise_bound=NB)
+        diagnose(Identifier(), u, y, output_bound=NB)
     with pytest.raises(ParameterValidationError, match="system_ is a tuple"):
-        diagnose(_FittedIdentifier((A, B)), u, y, noise_bound=NB)
+        diagnose(_FittedIdentifier((A, B)), u, y, output_bound=NB)
 
 
 def test_black_box_model_with_predict():
@@ -294,7 +294,7 @@ def test_black_box_model_with_predict():
             return lfilter(B, A, u)
 
     u, y = make_data("offset", 0.3, 1)
-    rep = diagnose(Sim(), u, y, noise_bound=NB, candidates=["offset", "delay"])
+    rep = diagnose(Sim(), u, y, output_bound=NB, candidates=["offset", "delay"])
     assert rep.effect == "offset" and rep.gap_after <= NB
     assert rep.refined_model.base is not None
 
@@ -310,10 +310,10 @@ def clean():
 @pytest.mark.parametrize(
     ("kwargs", "exc", "match"),
     [
-        ({"noise_bound": 0.0}, ParameterValidationError, "noise_bound must be a finite"),
-        ({"noise_bound": -1}, ParameterValidationError, "noise_bound"),
-        ({"noise_bound": float("nan")}, ParameterValidationError, "noise_bound"),
-        ({"noise_bound": "0.1"}, ParameterValidationError, "single positive number"),
+        ({"output_bound": 0.0}, ParameterValidationError, "output_bound must be a finite"),
+        ({"output_bound": -1}, ParameterValidationError, "output_bound"),
+        ({"output_bound": float("nan")}, ParameterValidationError, "output_bound"),
+        ({"output_bound": "0.1"}, ParameterValidationError, "single positive number"),
         ({"candidates": ["friction"]}, ParameterValidationError, "unknown candidate.*friction"),
         ({"candidates": []}, ParameterValidationError, "candidates is empty"),
         ({"refit": "all"}, ParameterValidationError, "refit must be"),
@@ -327,7 +327,7 @@ def clean():
 )
 def test_bad_parameters(clean, kwargs, exc, match):
     u, y = clean
-    kw = {"noise_bound": NB, **kwargs}
+    kw = {"output_bound": NB, **kwargs}
     with pytest.raises(exc, match=match):
         diagnose(G, u, y, **kw)
 
@@ -337,30 +337,30 @@ def test_bad_data(clean):
     y_nan = y.copy()
     y_nan[7] = np.nan
     with pytest.raises(DataValidationError, match="y contains NaN or inf.*sample 7"):
-        diagnose(G, u, y_nan, noise_bound=NB)
+        diagnose(G, u, y_nan, output_bound=NB)
     with pytest.raises(DataValidationError, match="u has 300 samples but y has 299"):
-        diagnose(G, u, y[:-1], noise_bound=NB)
+        diagnose(G, u, y[:-1], output_bound=NB)
     with pytest.raises(DataValidationError, match="1-D signal"):
-        diagnose(G, np.ones((10, 3)), np.ones((10, 3)), noise_bound=NB)
+        diagnose(G, np.ones((10, 3)), np.ones((10, 3)), output_bound=NB)
     with pytest.raises(DataValidationError, match="real numbers"):
-        diagnose(G, ["a"] * 20, y[:20], noise_bound=NB)
+        diagnose(G, ["a"] * 20, y[:20], output_bound=NB)
     with pytest.raises(DataValidationError, match="identically zero"):
-        diagnose(G, np.zeros(50), y[:50], noise_bound=NB)
+        diagnose(G, np.zeros(50), y[:50], output_bound=NB)
     with pytest.raises(DataValidationError, match="at least 10"):
-        diagnose(G, u[:5], y[:5], noise_bound=NB)
+        diagnose(G, u[:5], y[:5], output_bound=NB)
     # typed errors are also ValueErrors
     with pytest.raises(ValueError):
-        diagnose(G, u, y[:-1], noise_bound=NB)
+        diagnose(G, u, y[:-1], output_bound=NB)
 
 
 def test_bad_models(clean):
     u, y = clean
     with pytest.raises(ParameterValidationError, match="continuous-time.*sample_system"):
-        diagnose(control.tf([1.0], [1.0, 1.0]), u, y, noise_bound=NB)
+        diagnose(control.tf([1.0], [1.0, 1.0]), u, y, output_bound=NB)
     with pytest.raises(ParameterValidationError, match="unstable"):
-        diagnose(control.tf([0.0, 1.0], [1.0, -1.5], True), u, y, noise_bound=NB)
+        diagnose(control.tf([0.0, 1.0], [1.0, -1.5], True), u, y, output_bound=NB)
     with pytest.raises(ParameterValidationError, match="not supported.*TransferFunction"):
-        diagnose("G", u, y, noise_bound=NB)
+        diagnose("G", u, y, output_bound=NB)
 
     class WrongLength:
         def predict(self, u):
@@ -371,14 +371,14 @@ def test_bad_models(clean):
             raise RuntimeError("boom")
 
     with pytest.raises(DataValidationError, match="returned 299 samples for 300 inputs"):
-        diagnose(WrongLength(), u, y, noise_bound=NB)
+        diagnose(WrongLength(), u, y, output_bound=NB)
     with pytest.raises(ParameterValidationError, match=r"model.predict\(u\) failed.*boom"):
-        diagnose(Broken(), u, y, noise_bound=NB)
+        diagnose(Broken(), u, y, output_bound=NB)
 
 
 def test_to_hammerstein_refuses_non_backlash_models():
     u, y = make_data("offset", 0.3, 0)
-    rep = diagnose(G, u, y, noise_bound=NB, candidates=["offset"])
+    rep = diagnose(G, u, y, output_bound=NB, candidates=["offset"])
     with pytest.raises(ParameterValidationError, match="without offset"):
         rep.refined_model.to_hammerstein()
     with pytest.raises(ParameterValidationError, match="has no backlash"):
@@ -393,7 +393,7 @@ def test_plot_summary_and_dict(tmp_path):
     from matplotlib.figure import Figure
 
     u, y = make_data("deadzone", 0.2, 0)
-    rep = diagnose(G, u, y, noise_bound=NB, candidates=["deadzone", "saturation"])
+    rep = diagnose(G, u, y, output_bound=NB, candidates=["deadzone", "saturation"])
     assert isinstance(rep, DiagnosisReport)
     out = tmp_path / "diag.png"
     fig = rep.plot(out)
@@ -405,7 +405,7 @@ def test_plot_summary_and_dict(tmp_path):
     d = json.loads(json.dumps(rep.to_dict(), allow_nan=False))
     assert d["effect"] == "deadzone" and d["gap_after"] <= NB
 
-    rep0 = diagnose(G, *make_data(None, 0.0, 0), noise_bound=NB, candidates=["offset"])
+    rep0 = diagnose(G, *make_data(None, 0.0, 0), output_bound=NB, candidates=["offset"])
     fig = rep0.plot(max_samples=100)
     assert isinstance(fig, Figure)
     plt.close(fig)
@@ -428,7 +428,7 @@ def test_cli_names_effect_and_writes_json_and_plot(tmp_path, capsys):
     u, y = make_data("offset", 0.3, 0)
     csv = _write_csv(tmp_path / "data.csv", u, y)
     png = tmp_path / "fig.png"
-    rc = diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02",
+    rc = diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02",
                             "--candidates", "offset,delay", "--json", "--plot", str(png)])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
@@ -440,7 +440,7 @@ def test_cli_names_effect_and_writes_json_and_plot(tmp_path, capsys):
 def test_cli_text_output_headerless_and_named_columns(tmp_path, capsys):
     u, y = make_data("offset", 0.3, 0)
     csv = _write_csv(tmp_path / "plain.csv", u, y, header=None)
-    rc = diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02", "--candidates", "offset"])
+    rc = diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02", "--candidates", "offset"])
     assert rc == 0
     assert "effect                   : offset" in capsys.readouterr().out
     # named columns in another order, plus an extra column
@@ -452,22 +452,22 @@ def test_cli_text_output_headerless_and_named_columns(tmp_path, capsys):
     np.testing.assert_array_equal(uu, u)
     np.testing.assert_array_equal(yy, y)
     # the noise bound is too small: exit code 1 (inconsistent after)
-    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--noise-bound", "0.005", "--u-column",
-                            "force", "--y-column", "position", "--candidates", "offset"])
+    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--output-bound", "0.005", "--u-col",
+                            "force", "--y-col", "position", "--candidates", "offset"])
     assert rc == 1
 
 
 def test_cli_missing_column(tmp_path, capsys):
     u, y = make_data(None, 0.0, 0)
     csv = _write_csv(tmp_path / "d.csv", u, y, header="u,output")
-    rc = diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02"])
+    rc = diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02"])
     assert rc == 2
     err = capsys.readouterr().err
-    assert "column 'y'" in err and "['u', 'output']" in err and "--y-column" in err
+    assert "column 'y'" in err and "['u', 'output']" in err and "--y-col" in err
 
     one = tmp_path / "one.csv"
     one.write_text("\n".join(f"{a:.17g}" for a in u) + "\n")
-    assert diagnose_cli_main([str(one), *CLI_MODEL, "--noise-bound", "0.02"]) == 2
+    assert diagnose_cli_main([str(one), *CLI_MODEL, "--output-bound", "0.02"]) == 2
     assert "y column (index 1) is missing: found 1 column(s)" in capsys.readouterr().err
 
 
@@ -479,7 +479,7 @@ def test_cli_bad_rows(tmp_path, capsys):
     lines[20] = "nan,0.1"  # file line 21
     path = tmp_path / "bad.csv"
     path.write_text("\n".join(lines) + "\n")
-    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--noise-bound", "0.02"])
+    rc = diagnose_cli_main([str(path), *CLI_MODEL, "--output-bound", "0.02"])
     assert rc == 2
     err = capsys.readouterr().err
     assert "3 row(s)" in err
@@ -492,28 +492,28 @@ def test_cli_other_errors(tmp_path, capsys):
     u, y = make_data(None, 0.0, 0)
     csv = _write_csv(tmp_path / "d.csv", u, y)
     assert diagnose_cli_main([str(tmp_path / "missing.csv"), *CLI_MODEL,
-                              "--noise-bound", "0.02"]) == 2
+                              "--output-bound", "0.02"]) == 2
     assert "cannot read" in capsys.readouterr().err
     assert diagnose_cli_main([csv, "--num", "0 x", "--den", "1 -0.5",
-                              "--noise-bound", "0.02"]) == 2
+                              "--output-bound", "0.02"]) == 2
     assert "--num must be numbers" in capsys.readouterr().err
     assert diagnose_cli_main([csv, "--num", "0 1", "--den", "1 -1.5",
-                              "--noise-bound", "0.02"]) == 2
+                              "--output-bound", "0.02"]) == 2
     assert "unstable" in capsys.readouterr().err
-    assert diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "-1"]) == 2
-    assert "noise_bound" in capsys.readouterr().err
-    assert diagnose_cli_main([csv, *CLI_MODEL, "--noise-bound", "0.02",
+    assert diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "-1"]) == 2
+    assert "--output-bound" in capsys.readouterr().err
+    assert diagnose_cli_main([csv, *CLI_MODEL, "--output-bound", "0.02",
                               "--candidates", "friction"]) == 2
     assert "unknown candidate" in capsys.readouterr().err
-    assert diagnose_cli_main([csv, *CLI_MODEL]) == 2  # argparse: missing --noise-bound
-    assert "--noise-bound" in capsys.readouterr().err
+    assert diagnose_cli_main([csv, *CLI_MODEL]) == 2  # argparse: missing --output-bound
+    assert "--output-bound" in capsys.readouterr().err
     empty = tmp_path / "empty.csv"
     empty.write_text("u,y\n")
-    assert diagnose_cli_main([str(empty), *CLI_MODEL, "--noise-bound", "0.02"]) == 2
+    assert diagnose_cli_main([str(empty), *CLI_MODEL, "--output-bound", "0.02"]) == 2
     assert "no data rows" in capsys.readouterr().err
 
 
 def test_errors_are_hammerbound_errors(clean):
     u, y = clean
     with pytest.raises(HammerboundError):
-        diagnose(G, u, y, noise_bound=0)
+        diagnose(G, u, y, output_bound=0)

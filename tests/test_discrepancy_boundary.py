@@ -1,7 +1,7 @@
 """Discrepancy diagnosis with noise *exactly* at the bound (issue 13, item 2).
 
 The truth is simulated here with scipy's lfilter (not with the package); the noise is
-``+-noise_bound`` exactly, so the true model's minimax error equals the bound and only the
+``+-output_bound`` exactly, so the true model's minimax error equals the bound and only the
 tolerance policy (hammerbound.tolerances) separates "consistent" from "inconsistent".
 """
 
@@ -63,7 +63,7 @@ def _data(effect, seed=3):
 @pytest.mark.parametrize("effect", list(EFFECTS))
 def test_noise_exactly_at_the_bound_is_consistent_after_the_right_effect(effect):
     u, y = _data(effect)
-    rep = diagnose(G, u, y, noise_bound=NB)
+    rep = diagnose(G, u, y, output_bound=NB)
     assert rep.effect == effect, rep.summary()
     assert rep.consistent_after and not rep.consistent_before
     assert rep.fraction_outside_after == 0.0  # the same rule as consistent_after
@@ -82,7 +82,7 @@ def test_noise_exactly_at_the_bound_is_consistent_after_the_right_effect(effect)
 def test_noise_slightly_beyond_the_bound_is_not_called_consistent():
     """The tolerance only covers rounding: 1e-6 beyond the bound is an inconsistency."""
     u, y = _data("backlash")
-    rep = diagnose(G, u, y, noise_bound=NB * (1 - 1e-6), candidates=["backlash"])
+    rep = diagnose(G, u, y, output_bound=NB * (1 - 1e-6), candidates=["backlash"])
     assert not rep.consistent_after
     assert rep.fraction_outside_after > 0.0
 
@@ -95,7 +95,7 @@ def test_cli_exits_0_on_a_correct_model_with_noise_at_the_bound(effect, tmp_path
                                       zip(u.tolist(), y.tolist(), strict=True)))
     r = subprocess.run(
         [sys.executable, "-m", "hammerbound", "diagnose", str(path), "--num", "0 0.2 0.1",
-         "--den", "1 -1.2 0.5", "--noise-bound", repr(NB), "--candidates", effect],
+         "--den", "1 -1.2 0.5", "--output-bound", repr(NB), "--candidates", effect],
         capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "0.0% outside" in r.stdout.split("gap after")[1].splitlines()[0]

@@ -43,11 +43,11 @@ def _noise(n, bound, mode, seed):
     return bound * rng.choice([-1.0, 1.0], n)  # every sample exactly at +-bound
 
 
-def _consistent(y, pred, nb):
+def _consistent(y, pred, bound):
     """The package's consistency rule, written out: inside the band up to the outward
-    tolerance 1e-9 (|y| + |yhat| + nb)."""
-    return bool(np.all(np.abs(y - pred) <= nb + FEASIBILITY_RTOL * (np.abs(y) + np.abs(pred)
-                                                                     + nb)))
+    tolerance 1e-9 (|y| + |yhat| + bound)."""
+    return bool(np.all(np.abs(y - pred) <= bound + FEASIBILITY_RTOL * (np.abs(y) + np.abs(pred)
+                                                                     + bound)))
 
 
 # ------------------------------------------------------------------ 11a: output saturation
@@ -120,12 +120,12 @@ DT_TRUE_B = np.array([0.0, 0.0, 0.0, 0.0, 0.2, 0.1])
 @pytest.mark.parametrize("seed, mode", [(0, "uniform"), (4, "uniform"), (2, "uniform"),
                                         (0, "at_bound"), (1, "at_bound")])
 def test_delay_is_the_total_delay_of_the_refit(seed, mode):
-    nb = 0.02
+    bound = 0.02
     rng = np.random.default_rng(seed)
     u = np.repeat(rng.uniform(-1, 1, 40), 6)
-    y = lfilter(DT_TRUE_B, DT_A, u) + _noise(u.size, 0.95 * nb if mode == "uniform" else nb,
+    y = lfilter(DT_TRUE_B, DT_A, u) + _noise(u.size, 0.95 * bound if mode == "uniform" else bound,
                                             mode, seed)
-    rep = diagnose(DT_MODEL, u, y, nb, candidates=["delay"])
+    rep = diagnose(DT_MODEL, u, y, bound, candidates=["delay"])
     assert rep.effect == "delay" and rep.consistent_after, rep.summary()
     B = rep.refined_model.B
     d = rep.candidate("delay").value
@@ -135,22 +135,22 @@ def test_delay_is_the_total_delay_of_the_refit(seed, mode):
     assert B[4:6] == pytest.approx(DT_TRUE_B[4:6], abs=0.01)
     assert dict(rep.refined_model.effects)["delay"] == 4.0
     assert "delay (d = 4)" in rep.message
-    assert _consistent(y, rep.refined_model.predict(u), nb)
+    assert _consistent(y, rep.refined_model.predict(u), bound)
 
 
 # ------------------------------------------------------------------ 11c: asym_backlash
-def _asym_data(seed=0, nb=0.01):
+def _asym_data(seed=0, bound=0.01):
     rng = np.random.default_rng(seed)
     u = np.repeat(rng.uniform(-1, 1, 25), 6)
-    e = rng.uniform(-0.9 * nb, 0.9 * nb, u.size)
-    e[u.size // 3], e[2 * u.size // 3] = nb, -nb  # two samples exactly at the bound
-    return u, _chapter(u) + e, nb
+    e = rng.uniform(-0.9 * bound, 0.9 * bound, u.size)
+    e[u.size // 3], e[2 * u.size // 3] = bound, -bound  # two samples exactly at the bound
+    return u, _chapter(u) + e, bound
 
 
 def test_asym_backlash_reported_in_the_chapters_convention_and_to_hammerstein():
-    u, y, nb = _asym_data()
+    u, y, bound = _asym_data()
     G = control.tf(CH_B, CH_A, True)  # the linear block: the backlash is missing
-    rep = diagnose(G, u, y, nb, candidates=["asym_backlash"])
+    rep = diagnose(G, u, y, bound, candidates=["asym_backlash"])
     assert rep.effect == "asym_backlash", rep.summary()
     ml, cl, mr, cr = rep.candidate("asym_backlash").value
     assert ml == pytest.approx(CH_GAMMA[0], rel=0.02) and mr == pytest.approx(CH_GAMMA[2],
@@ -166,17 +166,17 @@ def test_asym_backlash_reported_in_the_chapters_convention_and_to_hammerstein():
     # re-simulated, the system is the refined model and explains the data
     sim = hs.simulate(u)
     np.testing.assert_allclose(sim, rep.refined_model.predict(u), rtol=0, atol=1e-12)
-    assert _consistent(y, sim, nb)
+    assert _consistent(y, sim, bound)
     # and on a new input it stays close to the truth (own simulation)
     u2 = np.repeat(np.random.default_rng(7).uniform(-1, 1, 30), 5)
-    assert np.max(np.abs(hs.simulate(u2) - _chapter(u2))) < 3 * nb
+    assert np.max(np.abs(hs.simulate(u2) - _chapter(u2))) < 3 * bound
 
 
 def test_asym_backlash_negative_gain_keeps_the_normalised_slopes():
     # a linear block of negative static gain cannot give the gain to the slopes (> 0)
-    u, y, nb = _asym_data(seed=1)
+    u, y, bound = _asym_data(seed=1)
     G = control.tf(-CH_B, CH_A, True)
-    rep = diagnose(G, u, -y, nb, candidates=["asym_backlash"])
+    rep = diagnose(G, u, -y, bound, candidates=["asym_backlash"])
     assert rep.effect == "asym_backlash", rep.summary()
     ml, _, mr, _ = rep.candidate("asym_backlash").value
     assert (ml + mr) / 2 == pytest.approx(1.0, rel=1e-12)
@@ -231,7 +231,7 @@ def _cli(tmp_path, *args):
                                                                             strict=True)))
     return subprocess.run(
         [sys.executable, "-m", "hammerbound", "diagnose", str(csv), "--num", "0 0.2 0.1",
-         "--den", "1 -1.2 0.5", "--noise-bound", "0.02", *args],
+         "--den", "1 -1.2 0.5", "--output-bound", "0.02", *args],
         capture_output=True, text=True, timeout=600)
 
 
@@ -266,8 +266,8 @@ def test_diagnose_and_locate_accept_iodata():
     u = np.repeat(np.random.default_rng(0).uniform(-1, 1, 20), 5)
     y = lfilter([0.0, 0.5], [1.0, -0.5], u) + 0.3
     data = IOData(u, y, dt=0.1, input_name="voltage", input_unit="V")
-    rep = diagnose(G, data, noise_bound=0.01, candidates=["offset", "delay"])
-    ref = diagnose(G, u, y, noise_bound=0.01, candidates=["offset", "delay"])
+    rep = diagnose(G, data, output_bound=0.01, candidates=["offset", "delay"])
+    ref = diagnose(G, u, y, output_bound=0.01, candidates=["offset", "delay"])
     assert rep.effect == ref.effect == "offset"
     assert rep.gap_before == ref.gap_before and rep.gap_after == ref.gap_after
     assert rep.refined_model.dt == 0.1 and rep.refined_model.linear.dt == 0.1
@@ -277,25 +277,25 @@ def test_diagnose_and_locate_accept_iodata():
     import matplotlib.pyplot as plt
 
     plt.close(fig)
-    dis = locate(G, data, noise_bound=0.01)
+    dis = locate(G, data, output_bound=0.01)
     assert dis.gap == pytest.approx(locate(G, u, y, 0.01).gap, rel=1e-12)
     # dt from the data when the model has none
     G1 = control.tf([0.0, 0.5], [1.0, -0.5], True)
-    assert diagnose(G1, data, noise_bound=0.01, candidates=["offset"]).refined_model.dt == 0.1
+    assert diagnose(G1, data, output_bound=0.01, candidates=["offset"]).refined_model.dt == 0.1
 
 
 @pytest.mark.parametrize("call, error, words", [
     (lambda G, d, u, y: diagnose(G, d, 0.01), DataValidationError,
-     "noise bound goes by keyword"),
+     "output bound goes by keyword"),
     (lambda G, d, u, y: diagnose(G, d, y, 0.01), DataValidationError, "without y"),
-    (lambda G, d, u, y: diagnose(G, u, d, noise_bound=0.01), DataValidationError,
+    (lambda G, d, u, y: diagnose(G, u, d, output_bound=0.01), DataValidationError,
      "in place of u"),
-    (lambda G, d, u, y: diagnose(G, u, noise_bound=0.01), DataValidationError,
+    (lambda G, d, u, y: diagnose(G, u, output_bound=0.01), DataValidationError,
      "y (the measured output) is missing"),
-    (lambda G, d, u, y: diagnose(G, d), ParameterValidationError, "noise_bound is required"),
+    (lambda G, d, u, y: diagnose(G, d), ParameterValidationError, "output_bound is required"),
     (lambda G, d, u, y: locate(G, d, 0.01), DataValidationError, "locate(model, data"),
     (lambda G, d, u, y: diagnose(control.tf([0.0, 0.5], [1.0, -0.5], 0.2), d,
-                                 noise_bound=0.01), ParameterValidationError, "dt = 0.2"),
+                                 output_bound=0.01), ParameterValidationError, "dt = 0.2"),
 ])
 def test_iodata_misuse_says_what_to_pass(call, error, words):
     G = control.tf([0.0, 0.5], [1.0, -0.5], 0.1)

@@ -34,14 +34,14 @@ def _data(N=60, deta=0.05, dx=0.003, two_level=False, seed=0):
 @pytest.mark.parametrize("method", ["lp", "moment", "exact"])
 def test_true_theta_inside_and_witnesses_inside(method):
     x, y, theta, _ = _data(N=50, deta=0.05)
-    est = LinearEIVSetEstimator(noise_bound=0.05, method=method).fit(x, y, input_bound=0.003)
+    est = LinearEIVSetEstimator(output_bound=0.05, method=method).fit(x, y, input_bound=0.003)
     assert est.bounds_.shape == (4, 2)
     assert est.contains(theta)
     assert est.param_names_ == ("a1", "a2", "b1", "b2")
     assert len(est.bound_info_) == 8
     assert all(info.certified for info in est.bound_info_)
     # a verified-feasible point (exact witnesses) must lie inside every method's intervals
-    ex = LinearEIVSetEstimator(noise_bound=0.05, method="exact").fit(x, y, input_bound=0.003)
+    ex = LinearEIVSetEstimator(output_bound=0.05, method="exact").fit(x, y, input_bound=0.003)
     for info in ex.bound_info_:
         assert check_theta(est.problem_, info.witness).feasible
         assert est.contains(info.witness, tol=1e-9)
@@ -49,7 +49,7 @@ def test_true_theta_inside_and_witnesses_inside(method):
 
 def test_methods_nest_lp_moment_exact():
     x, y, _, _ = _data(N=60, deta=0.02, seed=3)
-    res = {m: LinearEIVSetEstimator(noise_bound=0.02, method=m).fit(x, y, input_bound=0.003)
+    res = {m: LinearEIVSetEstimator(output_bound=0.02, method=m).fit(x, y, input_bound=0.003)
            for m in ("lp", "moment", "exact")}
     inner = res["exact"].result_.extra["inner"]  # verified-feasible extreme values
     for m in ("lp", "moment"):
@@ -62,8 +62,8 @@ def test_methods_nest_lp_moment_exact():
 
 def test_two_level_groups_tighter_and_sound():
     x, y, theta, groups = _data(N=60, deta=0.05, two_level=True, seed=1)
-    indep = LinearEIVSetEstimator(noise_bound=0.05, method="exact").fit(x, y, input_bound=0.003)
-    two = LinearEIVSetEstimator(noise_bound=0.05, method="exact").fit(
+    indep = LinearEIVSetEstimator(output_bound=0.05, method="exact").fit(x, y, input_bound=0.003)
+    two = LinearEIVSetEstimator(output_bound=0.05, method="exact").fit(
         x, y, input_bound=0.003, input_groups=groups)
     assert two.contains(theta) and indep.contains(theta)
     assert np.all(two.bounds_[:, 0] >= indep.bounds_[:, 0] - 1e-6)
@@ -73,7 +73,7 @@ def test_two_level_groups_tighter_and_sound():
 
 def test_predict_score_transfer_function():
     x, y, theta, _ = _data(N=80, deta=0.01)
-    est = LinearEIVSetEstimator(noise_bound=0.01, method="exact").fit(x, y, input_bound=0.003)
+    est = LinearEIVSetEstimator(output_bound=0.01, method="exact").fit(x, y, input_bound=0.003)
     tf = est.to_transfer_function()
     assert isinstance(tf, control.TransferFunction) and tf.dt == 1.0
     _, yt = control.forced_response(tf, U=x)
@@ -86,7 +86,7 @@ def test_predict_score_transfer_function():
 
 def test_one_step_envelope_contains_noise_free_output():
     pr, theta = make_eiv_problem(N=80, deta=0.05, dx=0.003, seed=2)
-    est = LinearEIVSetEstimator(noise_bound=0.05, method="lp").fit(pr.x, pr.y, input_bound=0.003)
+    est = LinearEIVSetEstimator(output_bound=0.05, method="lp").fit(pr.x, pr.y, input_bound=0.003)
     lo, hi = est.one_step_envelope(pr.x, pr.y, input_bound=0.003)
     # the noise-free output with the true theta: regenerate as in make_eiv_problem
     rng = np.random.default_rng(2)
@@ -103,7 +103,7 @@ def test_one_step_envelope_contains_noise_free_output():
 
 def test_sklearn_conventions():
     x, y, _, _ = _data(N=40, deta=0.05)
-    est = LinearEIVSetEstimator(na=2, nb=2, noise_bound=0.05, method="lp")
+    est = LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05, method="lp")
     c = clone(est).set_params(method="exact", tol=1e-3)
     assert est.method == "lp" and c.method == "exact"
     est.fit(x.reshape(-1, 1), y, input_bound=0.003)
@@ -117,8 +117,8 @@ def test_per_sample_bounds_and_deterministic():
     x, y, theta, _ = _data(N=50, deta=0.05)
     deta = np.full(50, 0.05)
     dx = np.full(50, 0.003)
-    a = LinearEIVSetEstimator(noise_bound=deta, method="lp").fit(x, y, input_bound=dx)
-    b = LinearEIVSetEstimator(noise_bound=0.05, method="lp").fit(x, y, input_bound=0.003)
+    a = LinearEIVSetEstimator(output_bound=deta, method="lp").fit(x, y, input_bound=dx)
+    b = LinearEIVSetEstimator(output_bound=0.05, method="lp").fit(x, y, input_bound=0.003)
     np.testing.assert_array_equal(a.bounds_, b.bounds_)
     assert a.contains(theta)
 
@@ -126,7 +126,7 @@ def test_per_sample_bounds_and_deterministic():
 def test_stability_box_is_a_reported_prior():
     # with large noise the LP bound on a2 is set by the stability box |a2| <= 1 (A1)
     x, y, theta, _ = _data(N=60, deta=0.3, seed=0)
-    est = LinearEIVSetEstimator(noise_bound=0.3, method="lp").fit(x, y, input_bound=0.003)
+    est = LinearEIVSetEstimator(output_bound=0.3, method="lp").fit(x, y, input_bound=0.003)
     assert est.contains(theta)
     assert all(s.startswith("a") for s in est.box_limited_)
 
@@ -138,13 +138,14 @@ BAD = [
     (dict(), dict(X=[], y=[]), DataValidationError, "empty"),
     (dict(), dict(X=["a"] * 20, y=[0.0] * 20), DataValidationError, "real numbers"),
     (dict(), dict(X=[1, -1, 1], y=[0.0, 0.1, 0.2]), DataValidationError, "samples"),
-    (dict(noise_bound=0.0), {}, ParameterValidationError, "> 0"),
-    (dict(noise_bound=-1.0), {}, ParameterValidationError, "> 0"),
-    (dict(noise_bound=np.ones(3)), {}, DataValidationError, "one value per sample"),
+    (dict(output_bound=0.0), {}, ParameterValidationError, "> 0"),
+    (dict(output_bound=-1.0), {}, ParameterValidationError, "> 0"),
+    (dict(output_bound=np.ones(3)), {}, DataValidationError, "one value per sample"),
     (dict(), dict(input_bound=-0.1), ParameterValidationError, ">= 0"),
     (dict(na=-1), {}, ParameterValidationError, "na"),
     (dict(nb=1.5), {}, ParameterValidationError, "nb"),
-    (dict(nb=0), {}, ParameterValidationError, "nb >= 1 or b0"),
+    (dict(nb=0), {}, ParameterValidationError, "nb >= 1 or nk=0"),
+    (dict(output_bound=None), {}, ParameterValidationError, "output_bound is not set"),
     (dict(method="simplex"), {}, ParameterValidationError, "method must be one of"),
     (dict(relaxation_order=0), {}, ParameterValidationError, "relaxation_order"),
     (dict(steady_state_gain=0.0), {}, ParameterValidationError, "steady_state_gain"),
@@ -161,7 +162,7 @@ def test_bad_input(params, data, err, match):
     kw = dict(X=x, y=y, input_bound=0.003)
     kw.update(data)
     with pytest.raises(err, match=match):
-        LinearEIVSetEstimator(**{"method": "lp", **params}).fit(**kw)
+        LinearEIVSetEstimator(**{"method": "lp", "output_bound": 0.05, **params}).fit(**kw)
 
 
 def test_inconsistent_data_names_the_equation():
@@ -169,7 +170,7 @@ def test_inconsistent_data_names_the_equation():
     y = y.copy()
     y[25] += 1.0  # an outlier no model explains
     with pytest.raises(EmptyFeasibleSetError) as ei:
-        LinearEIVSetEstimator(noise_bound=0.01, method="lp").fit(x, y, input_bound=0.003)
+        LinearEIVSetEstimator(output_bound=0.01, method="lp").fit(x, y, input_bound=0.003)
     assert ei.value.first_index is not None and 25 <= ei.value.first_index <= 27
     assert "t =" in str(ei.value)
 
@@ -179,12 +180,12 @@ def test_unexciting_input_is_unbounded():
     x = np.ones(40)  # constant input: b1, b2 are not separately identifiable
     y = np.ones(40) + rng.uniform(-0.01, 0.01, 40)
     with pytest.raises(UnboundedSetError, match="b"):
-        LinearEIVSetEstimator(noise_bound=0.01, method="lp").fit(x, y, input_bound=0.0)
+        LinearEIVSetEstimator(output_bound=0.01, method="lp").fit(x, y, input_bound=0.0)
 
 
 def test_exact_progress_bar_and_limits():
     x, y, theta, _ = _data(N=40, deta=0.05)
-    est = LinearEIVSetEstimator(noise_bound=0.05, method="exact", progress=True, max_nodes=2)
+    est = LinearEIVSetEstimator(output_bound=0.05, method="exact", progress=True, max_nodes=2)
     est.fit(x, y, input_bound=0.003)
     assert est.contains(theta)
     limited = [i for i in est.bound_info_ if i.status == "limit"]

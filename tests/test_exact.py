@@ -178,7 +178,7 @@ def test_inconsistent_data_raise_empty_set_with_the_equation():
     pr, _ = make_eiv_problem(N=30, deta=0.05, seed=3)
     y = pr.y.copy()
     y[12:] -= 2.0
-    bad = EIVProblem(y, pr.x, pr.dx, pr.deta, 2, 2, gain=1.0)
+    bad = EIVProblem(y, pr.x, pr.dx, pr.deta, 2, 2, steady_state_gain=1.0)
     with pytest.raises(EmptyFeasibleSetError, match="equation t = ") as ei:
         exact_bounds(bad, tol=TOL)
     assert 12 <= ei.value.first_index <= 14
@@ -193,7 +193,7 @@ def _varying_inner_signal(seed, deta_scale, N=30, deta=0.01, dxv=0.05):
     rng = np.random.default_rng(seed)
     lev = np.where(rng.random(N) < 0.5, 1.0, -1.0)
     y = lfilter(B_TRUE, A_TRUE, lev + rng.uniform(-dxv, dxv, N)) + rng.uniform(-deta, deta, N)
-    return EIVProblem(y, lev, dxv, deta * deta_scale, 2, 2, gain=1.0,
+    return EIVProblem(y, lev, dxv, deta * deta_scale, 2, 2, steady_state_gain=1.0,
                       groups=(lev < 0).astype(int))
 
 
@@ -212,7 +212,7 @@ def test_empty_two_level_set_raises(seed, deta_scale):
 
 def test_constant_input_is_unbounded():
     pr, _ = make_eiv_problem(N=30, deta=0.05, seed=6)
-    bad = EIVProblem(pr.y, np.full(pr.N, 0.5), pr.dx, pr.deta, 2, 2, gain=1.0)
+    bad = EIVProblem(pr.y, np.full(pr.N, 0.5), pr.dx, pr.deta, 2, 2, steady_state_gain=1.0)
     with pytest.raises(UnboundedSetError, match="b1"):
         exact_bounds(bad, tol=TOL)
 
@@ -285,7 +285,7 @@ def test_property_true_theta_inside_lp_and_exact(system):
     deta = rel_noise * np.sqrt(np.mean(w**2))  # noise level relative to the output
     y = w + rng.uniform(-deta, deta, N)
     xc = x + rng.uniform(-dx, dx, N)
-    pr = EIVProblem(y, xc, dx, deta, na=na, nb=na, gain=1.0)
+    pr = EIVProblem(y, xc, dx, deta, na=na, nb=na, steady_state_gain=1.0)
     theta = np.concatenate([A[1:], B[1:]])
     assert check_theta(pr, theta).feasible
     lp = lp_bounds(pr, check_box=False)
@@ -379,7 +379,7 @@ def test_node_lp_options_keep_scaling_for_badly_scaled_data():
     assert opts(pr, "simplex_dual_edge_weight_strategy") == 1
     for f in (1e5, 1e-4):  # the gain row's unit coefficients must not hide the data scale
         other = EIVProblem(pr.y * f, pr.x * f, pr.dx * f, pr.deta * f, na=2, nb=2,
-                           b0=False, gain=1.0)
+                           steady_state_gain=1.0)
         assert opts(other, "simplex_scale_strategy") != 0
     with pytest.raises(ValueError, match="no_such_option"):
         HighsLP(np.eye(1), [0.0], [1.0], [0.0], [1.0], options={"no_such_option": 1})

@@ -34,7 +34,7 @@ def record(N=120, seed=3, at_bound=True):
 def fit(data, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return hb.LinearEIVSetEstimator(2, 2, noise_bound=0.005, method="exact").fit(
+        return hb.LinearEIVSetEstimator(2, 2, output_bound=0.005, method="exact").fit(
             data, input_bound=0.0, **kw)
 
 
@@ -83,14 +83,14 @@ def test_identifier_uses_its_fitted_dt():
     ex = hb.chapter_example(0.05, N=60, random_state=0)
     data = hb.IOData(ex.prbs.u, ex.prbs.y, dt=0.1)
     idf = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="exact"),
     ).fit(data, steady_state=ex.steady)
     env = idf.frequency_response_bounds()
     assert env.omega[-1] == pytest.approx(10 * np.pi) and env.frequency_unit == "rad/s"
     assert idf.uncertainty_weight(order=1).W.dt == 0.1
     assert idf.frequency_response_bounds(dt=0.5).omega[-1] == pytest.approx(2 * np.pi)
     idf2 = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="exact"),
     ).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     assert idf2.frequency_response_bounds().frequency_unit == "rad/sample"
 

@@ -25,7 +25,7 @@ from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS
 def _ident(deta, method="lp", inner="independent", **kw):
     return HammersteinBacklashIdentifier(
         BacklashSetEstimator(deta),
-        LinearEIVSetEstimator(noise_bound=deta, method=method, **kw),
+        LinearEIVSetEstimator(output_bound=deta, method=method, **kw),
         inner_signal=inner,
     )
 
@@ -69,7 +69,7 @@ def test_moment_order1_on_chapter_example(deta):
 def test_nested_params_clone_pickle():
     ident = _ident(0.05)
     params = ident.get_params()
-    assert params["linear__noise_bound"] == 0.05
+    assert params["linear__output_bound"] == 0.05
     assert params["backlash__method"] == "polygon"
     ident.set_params(linear__relaxation_order=2, linear__method="moment")
     assert ident.linear.relaxation_order == 2
@@ -100,7 +100,7 @@ def test_grid_search_over_orders_time_ordered():
     ex = chapter_example(0.02, N=120)
     base = HammersteinBacklashIdentifier(
         BacklashSetEstimator(0.02),
-        LinearEIVSetEstimator(noise_bound=0.02, method="lp", theta_box=None))
+        LinearEIVSetEstimator(output_bound=0.02, method="lp", theta_box=None))
     grid = GridSearchCV(base, {"linear__na": [2, 3], "linear__nb": [2]},
                         cv=TimeSeriesSplit(n_splits=2), error_score="raise")
     grid.fit(ex.prbs.u, ex.prbs.y, steady_state={"u": ex.steady.u, "y": ex.steady.y})

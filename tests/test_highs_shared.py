@@ -34,7 +34,7 @@ SCRIPT = textwrap.dedent('''
     theta = np.array([-0.5, 0.8])            # y_t = 0.5 y_(t-1) + 0.8 x_(t-1)
     y = lfilter([0.0, 0.8], [1.0, -0.5], x) + rng.uniform(-0.05, 0.05, x.size)
     for method in ("lp", "exact"):
-        est = LinearEIVSetEstimator(1, 1, noise_bound=0.05, method=method).fit(x, y)
+        est = LinearEIVSetEstimator(1, 1, output_bound=0.05, method=method).fit(x, y)
         assert est.contains(theta), (method, est.bounds_)
         print(method, "ok")
 ''')

@@ -158,7 +158,7 @@ def test_restore_gives_up_on_an_empty_linearisation():
     None instead of a point (nothing unverified ever comes out)."""
     pr, _ = make_two_level(0, N=60, deta=0.05)
     bad = EIVProblem(pr.y + 10.0 * np.sign(np.sin(np.arange(pr.N))), pr.x, pr.dx, pr.deta,
-                     2, 2, gain=1.0, groups=pr.groups)
+                     2, 2, steady_state_gain=1.0, groups=pr.groups)
     box = np.array([[-2.0, 2.0], [-1.0, 1.0], [-10.0, 10.0], [-10.0, 10.0]])
     assert restore(_Pool(bad), [(box.mean(axis=1), np.zeros(bad.N), np.zeros(bad.n_groups))],
                    box) is None

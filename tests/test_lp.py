@@ -101,7 +101,7 @@ def test_true_theta_inside_lp_intervals(seed, deta, two_level):
 def test_lp_intervals_shrink_with_the_noise_bound():
     """Same data, larger deta: the outer set grows, so the LP intervals must be nested."""
     pr, theta = make_eiv_problem(N=40, deta=0.05, seed=7)
-    big = _like(pr, deta=2 * pr.deta)
+    big = _like(pr, output_bound=2 * pr.deta)
     r_small, r_big = lp_bounds(pr), lp_bounds(big)
     assert r_big.contains(theta)
     assert np.all(r_small.bounds[:, 0] >= r_big.bounds[:, 0] - 1e-9)
@@ -204,7 +204,8 @@ def test_check_theta_accepts_truth_and_rejects_outside_points():
 
 
 def _like(pr, **kw):
-    d = dict(y=pr.y, x=pr.x, dx=pr.dx, deta=pr.deta, na=pr.na, nb=pr.nb, gain=pr.gain)
+    d = dict(y=pr.y, x=pr.x, input_bound=pr.input_bound, output_bound=pr.output_bound,
+             na=pr.na, nb=pr.nb, steady_state_gain=pr.steady_state_gain)
     d.update(kw)
     return EIVProblem(**d)
 
@@ -221,7 +222,8 @@ def test_shifted_output_is_inconsistent_and_the_equation_is_named():
     assert f"t = {err.first_index}" in str(err)
     # the truncated data set up to (excluding) that equation is still consistent
     t = err.first_index
-    lp_bounds(_like(pr, y=y[:t], x=pr.x[:t], dx=pr.dx[:t], deta=pr.deta[:t]))
+    lp_bounds(_like(pr, y=y[:t], x=pr.x[:t], input_bound=pr.input_bound[:t],
+                    output_bound=pr.output_bound[:t]))
 
 
 def test_single_outlier_is_located():
@@ -237,7 +239,7 @@ def test_single_outlier_is_located():
 def test_too_small_noise_bound_is_inconsistent():
     pr, _ = make_eiv_problem(N=40, deta=0.05, seed=5)
     with pytest.raises(EmptyFeasibleSetError) as ei:
-        lp_bounds(_like(pr, deta=1e-4))
+        lp_bounds(_like(pr, output_bound=1e-4))
     assert ei.value.first_index is not None
     assert str(ei.value.first_index) in str(ei.value)
 
@@ -266,7 +268,8 @@ def test_too_few_samples_is_unbounded():
     pr, _ = make_eiv_problem(N=40, deta=0.05, seed=6)
     n = 4  # two equations for three free parameters
     with pytest.raises(UnboundedSetError):
-        lp_bounds(_like(pr, y=pr.y[:n], x=pr.x[:n], dx=pr.dx[:n], deta=pr.deta[:n]))
+        lp_bounds(_like(pr, y=pr.y[:n], x=pr.x[:n], input_bound=pr.dx[:n],
+                            output_bound=pr.deta[:n]))
 
 
 Y = np.linspace(-1, 1, 12)
@@ -274,7 +277,7 @@ X = np.where(np.arange(12) % 3 == 0, 1.0, -1.0)
 
 
 def _bad(**kw):
-    d = dict(y=Y, x=X, dx=0.01, deta=0.05, na=2, nb=2)
+    d = dict(y=Y, x=X, input_bound=0.01, output_bound=0.05, na=2, nb=2)
     d.update(kw)
     return d
 
@@ -285,11 +288,11 @@ def _bad(**kw):
     (_bad(x=X[:-1]), DataValidationError),
     (_bad(y=np.c_[Y, Y]), DataValidationError),
     (_bad(y=["a"] * 12), DataValidationError),
-    (_bad(deta=np.full(11, 0.05)), DataValidationError),
-    (_bad(deta=-0.05), ParameterValidationError),
-    (_bad(deta=0.0), ParameterValidationError),
-    (_bad(dx=-0.01), ParameterValidationError),
-    (_bad(dx=np.nan), DataValidationError),
+    (_bad(output_bound=np.full(11, 0.05)), DataValidationError),
+    (_bad(output_bound=-0.05), ParameterValidationError),
+    (_bad(output_bound=0.0), ParameterValidationError),
+    (_bad(input_bound=-0.01), ParameterValidationError),
+    (_bad(input_bound=np.nan), DataValidationError),
     (_bad(na=-1), ParameterValidationError),
     (_bad(nb=0), ParameterValidationError),
     (_bad(y=Y[:2], x=X[:2]), DataValidationError),
@@ -301,8 +304,8 @@ def _bad(**kw):
     (_bad(theta_box=np.array([[1, -1], [0, 1], [0, 1], [0, 1.0]])), ParameterValidationError),
     (_bad(theta_box=np.array([[0, np.inf], [0, 1], [0, 1], [0, 1.0]])),
      ParameterValidationError),
-    (_bad(gain=0.0), ParameterValidationError),
-    (_bad(gain=np.nan), ParameterValidationError),
+    (_bad(steady_state_gain=0.0), ParameterValidationError),
+    (_bad(steady_state_gain=np.nan), ParameterValidationError),
 ])
 def test_bad_problem_construction_raises_typed_errors(kwargs, exc):
     with pytest.raises(exc) as ei:
@@ -315,5 +318,5 @@ def test_valid_variants_are_accepted():
     groups = (X > 0).astype(int)
     pr = EIVProblem(Y, X, 0.01, 0.05, 2, 2, groups=groups)
     assert pr.n_groups == 2 and pr.p == 4
-    pr = EIVProblem(Y, X, 0.01, 0.05, 0, 1, b0=True, gain=None)  # FIR with b0
+    pr = EIVProblem(Y, X, 0.01, 0.05, 0, 1, nk=0)  # FIR with b0
     assert pr.param_names == ["b0", "b1"] and pr.n0 == 1

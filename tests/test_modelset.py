@@ -103,7 +103,7 @@ def chapter_like_data(N=80, deta=0.05, seed=1):
 @pytest.fixture(scope="module")
 def chapter_fit():
     x, y, theta = chapter_like_data()
-    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, steady_state_gain=1.0,
+    est = hb.LinearEIVSetEstimator(2, 2, output_bound=0.05, steady_state_gain=1.0,
                                    method="exact").fit(
         x, y, input_bound=DX)
     return est, x, y, theta
@@ -118,7 +118,7 @@ def chapter_samples(chapter_fit):
 def lric_fit():
     d = _lric()
     u, y = d[:, 1], d[:, 2]
-    est = hb.LinearEIVSetEstimator(1, 1, b0=True, noise_bound=0.05, steady_state_gain=None,
+    est = hb.LinearEIVSetEstimator(1, 1, nk=0, output_bound=0.05, steady_state_gain=None,
                                    method="exact").fit(u, y, input_bound=0.05)
     return est, u, y
 
@@ -193,7 +193,7 @@ def test_samples_when_every_error_is_at_the_bound():
     x, y, theta = chapter_like_data(N=40, seed=9)
     g = B_TRUE.sum() / A_TRUE.sum()
     y = lfilter(B_TRUE / g, A_TRUE, x) + 0.05 * np.where(rng.random(40) < 0.5, 1.0, -1.0)
-    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, steady_state_gain=1.0,
+    est = hb.LinearEIVSetEstimator(2, 2, output_bound=0.05, steady_state_gain=1.0,
                                    method="exact").fit(x, y)
     S = est.sample(6, random_state=0)
     for th in S.theta:
@@ -223,7 +223,7 @@ def test_sample_validates_n(chapter_fit):
 
 def test_lp_method_sampler_finds_a_seed():
     x, y, _ = chapter_like_data(N=60, seed=4)
-    est = hb.LinearEIVSetEstimator(2, 2, noise_bound=0.05, steady_state_gain=1.0,
+    est = hb.LinearEIVSetEstimator(2, 2, output_bound=0.05, steady_state_gain=1.0,
                                    method="lp").fit(x, y)
     S = est.sample(5, random_state=0)
     for th in S.theta:
@@ -290,7 +290,8 @@ def test_envelope_on_the_gain_plane(chapter_fit, chapter_samples):
     Gk = np.abs(responses(P[:500], wk, 2, [1, 2]))
     assert np.all(Gk <= env.mag_upper_between[k]) and np.all(Gk >= env.mag_lower_between[k])
     with pytest.raises(ParameterValidationError, match="gain constraint"):
-        hb.LinearEIVSetEstimator(2, 2, steady_state_gain=None, method="lp").fit(
+        hb.LinearEIVSetEstimator(2, 2, output_bound=0.05, steady_state_gain=None,
+                                 method="lp").fit(
             *chapter_like_data(N=40)[:2]).frequency_response_bounds(on_gain_plane=True)
 
 
@@ -545,7 +546,7 @@ def test_identifier_delegates_and_figures(stage1, tmp_path):
     _, ex = stage1
     idf = hb.HammersteinBacklashIdentifier(
         hb.BacklashSetEstimator(0.05),
-        hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"),
+        hb.LinearEIVSetEstimator(output_bound=0.05, method="exact"),
     ).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     gs, ts = idf.sample(5, random_state=0)
     assert gs.gamma.shape == (5, 4) and ts.theta.shape == (5, 4)

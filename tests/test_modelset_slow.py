@@ -22,7 +22,7 @@ pytestmark = pytest.mark.slow
 def fitted():
     ex = hb.chapter_example(0.05, N=100, random_state=0)
     idf = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="exact"),
     ).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     gs, ts = idf.sample(100, random_state=0)
     return idf, ex, gs, ts
@@ -78,7 +78,7 @@ def test_two_level_inner_signal_certificates():
     """Grouped input errors (one per PRBS level): the witness uses one dx per group."""
     ex = hb.chapter_example(0.05, N=60, random_state=0)
     idf = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="exact"),
         inner_signal="two-level",
     ).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     _, ts = idf.sample(10, random_state=0)

@@ -37,7 +37,7 @@ def first_order_problem(N=10, deta=0.05, dx=0.01, two_level=False, seed=0):
     shift = rng.uniform(-dx, dx, 2)
     xc = np.where(lev > 0, 1.0 + shift[0], -1.0 + shift[1])
     groups = (lev < 0).astype(int) if two_level else None
-    pr = EIVProblem(y, xc, dx, deta, na=1, nb=1, gain=1.0, groups=groups)
+    pr = EIVProblem(y, xc, dx, deta, na=1, nb=1, steady_state_gain=1.0, groups=groups)
     return pr, np.array([-0.6, 0.4])
 
 

@@ -97,7 +97,7 @@ def test_sparse_order2_contains_the_truth_with_noise_at_the_bound(i):
     pr = _problem(kw)
     assert check_theta(pr, theta).feasible
     if via_estimator:
-        est = LinearEIVSetEstimator(na=2, nb=2, noise_bound=kw["deta"], method="moment",
+        est = LinearEIVSetEstimator(na=2, nb=2, output_bound=kw["deta"], method="moment",
                                     relaxation_order=2, steady_state_gain=kw["gain"],
                                     theta_box=pr.theta_box, on_failure="box")
         bounds = est.fit(kw["x"], kw["y"], input_bound=kw["dx"]).bounds_

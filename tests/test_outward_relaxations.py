@@ -20,7 +20,7 @@ def _problem(gain=None, scale=1.0, seed=0, N=40):
     x = scale * np.where(rng.random(N) < 0.5, 1.0, -1.0)
     w = lfilter([0.0, 0.5], [1.0, -0.6], x)
     y = w + scale * 0.02 * np.where(rng.random(N) < 0.5, 1.0, -1.0)  # noise at +-bound
-    return EIVProblem(y, x, 0.0, scale * 0.02, na=1, nb=1, gain=gain)
+    return EIVProblem(y, x, 0.0, scale * 0.02, na=1, nb=1, steady_state_gain=gain)
 
 
 @pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
@@ -54,7 +54,7 @@ def test_outward_problem_widens_each_equation_by_its_scale():
 @pytest.mark.parametrize("method", ["exact", "moment"])
 def test_noise_at_bound_truth_inside_exact_and_moment(method):
     pr = _problem(seed=3, N=30)
-    est = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method=method)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method=method)
     est.fit(pr.x, pr.y)
     assert est.contains([-0.6, 0.5])
 
@@ -72,7 +72,7 @@ def test_crossing_bounds_are_reported_empty(monkeypatch):
     monkeypatch.setattr(lpmod, "lp_bounds", crossing)
     pr = _problem()
     with pytest.raises(EmptyFeasibleSetError, match="cross"):
-        hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(pr.x, pr.y)
+        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(pr.x, pr.y)
 
 
 def test_prbs_sample_off_its_level_widens_the_radius():

@@ -38,17 +38,19 @@ def _delayed(nk, N=60, seed=3, deta=0.02, dx=0.01):
 def test_plain_eiv_default_has_no_gain_constraint():
     assert LinearEIVSetEstimator().steady_state_gain is None
     u, y = lric()
-    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, noise_bound=0.05, method="lp")
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, method="lp")
     est.fit(u, y, input_bound=0.05)
     assert est.param_names_ == ("a1", "b0", "b1")
-    # same problem as the b0 spelling
-    est2 = LinearEIVSetEstimator(na=1, nb=1, b0=True, noise_bound=0.05, method="lp")
-    np.testing.assert_array_equal(est2.fit(u, y, input_bound=0.05).bounds_, est.bounds_)
+    # same problem as the deprecated b0 spelling (warns, names nk=0)
+    est2 = LinearEIVSetEstimator(na=1, nb=1, b0=True, output_bound=0.05, method="lp")
+    with pytest.warns(FutureWarning, match="nk=0"):
+        est2.fit(u, y, input_bound=0.05)
+    np.testing.assert_array_equal(est2.bounds_, est.bounds_)
 
 
 def test_gain_constraint_named_in_empty_set_error():
     u, y = lric()
-    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, noise_bound=0.05, steady_state_gain=1.0,
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, steady_state_gain=1.0,
                                 method="lp")
     with pytest.raises(EmptyFeasibleSetError) as info:
         est.fit(u, y, input_bound=0.05)
@@ -60,7 +62,7 @@ def test_gain_constraint_named_in_empty_set_error():
 
 def test_lric_exact_answer_and_independent_lp_check():
     u, y = lric()
-    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, noise_bound=0.05, method="exact")
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, method="exact")
     est.fit(u, y, input_bound=0.05)
     np.testing.assert_allclose(est.bounds_, LRIC_EXACT, atol=2e-4)
     # every verified witness is feasible by an independent LP at fixed theta
@@ -94,7 +96,7 @@ def _feasible_lp(u, y, theta, dx, deta):
 @pytest.mark.parametrize("nk", [1, 2, 3])
 def test_input_delay_nk(method, nk):
     x, y, theta = _delayed(nk)
-    est = LinearEIVSetEstimator(na=1, nb=2, nk=nk, noise_bound=0.02, method=method)
+    est = LinearEIVSetEstimator(na=1, nb=2, nk=nk, output_bound=0.02, method=method)
     est.fit(x, y, input_bound=0.01)
     assert est.param_names_ == ("a1", f"b{nk}", f"b{nk + 1}")
     assert est.contains(theta), (est.bounds_, theta)
@@ -110,7 +112,7 @@ def test_nk_wrong_delay_is_not_silently_accepted():
     # data with delay 3 fitted with delay 1: the true theta is not in that model class;
     # the set must be empty or not contain the (mis-aligned) truth
     x, y, theta = _delayed(3, deta=0.005, dx=0.0)
-    est = LinearEIVSetEstimator(na=1, nb=2, nk=1, noise_bound=0.005, method="lp")
+    est = LinearEIVSetEstimator(na=1, nb=2, nk=1, output_bound=0.005, method="lp")
     with pytest.raises(EmptyFeasibleSetError, match="nk=1"):
         est.fit(x, y, input_bound=0.0)
 
@@ -127,7 +129,7 @@ def test_nk_bad_params(kw, match):
 
 def test_identifier_imposes_unit_gain_explicitly():
     ex = hb.chapter_example(0.05, N=100, random_state=0)
-    lin = LinearEIVSetEstimator(noise_bound=0.05, method="lp")
+    lin = LinearEIVSetEstimator(output_bound=0.05, method="lp")
     ident = hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05), lin)
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     assert lin.steady_state_gain is None               # the user's object is untouched
@@ -144,7 +146,7 @@ def test_unbounded_error_names_assumptions():
     x = np.zeros(40)                      # almost no excitation: b is not bounded by the data
     x[5] = 1e-6
     y = 0.01 * np.where(rng.random(40) < 0.5, 1.0, -1.0)
-    est = LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp")
+    est = LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp")
     with pytest.raises(hb.UnboundedSetError) as info:
         est.fit(x, y)
     msg = str(info.value)
@@ -160,7 +162,7 @@ def test_one_step_envelope_with_delay_contains_noise_free_output(nk):
     B[nk], B[nk + 1] = 0.6, 0.3
     w = lfilter(B, [1.0, -0.5], x)
     y = w + 0.02 * np.where(rng.random(N) < 0.5, 1.0, -1.0)
-    est = LinearEIVSetEstimator(na=1, nb=2 if nk else 1, nk=nk, noise_bound=0.02,
+    est = LinearEIVSetEstimator(na=1, nb=2 if nk else 1, nk=nk, output_bound=0.02,
                                 method="lp").fit(x, y)
     lo, hi = est.one_step_envelope(x, y)
     n0 = max(1, nk + 1)

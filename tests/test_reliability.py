@@ -101,7 +101,7 @@ def _run_pipeline(case, N, linear_kw, inner_signal):
     n = case["order"]
     ident = hb.HammersteinBacklashIdentifier(
         hb.BacklashSetEstimator(deta),
-        hb.LinearEIVSetEstimator(na=n, nb=n, noise_bound=deta, **linear_kw),
+        hb.LinearEIVSetEstimator(na=n, nb=n, output_bound=deta, **linear_kw),
         inner_signal=inner_signal)
     try:
         ident.fit(data.u, data.y, steady_state=steady)
@@ -222,9 +222,9 @@ def small_chapter():
     ex = chapter_example(0.05, N=30, random_state=3)
     bl = hb.BacklashSetEstimator(0.05).fit(ex.steady.u, ex.steady.y)
     xc, dx = bl.inner_signal(ex.prbs.u)
-    exact = hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact", tol=1e-5).fit(
+    exact = hb.LinearEIVSetEstimator(output_bound=0.05, method="exact", tol=1e-5).fit(
         xc, ex.prbs.y, input_bound=dx)
-    lp = hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp").fit(
+    lp = hb.LinearEIVSetEstimator(output_bound=0.05, method="lp").fit(
         xc, ex.prbs.y, input_bound=dx)
     witnesses = np.array([i.witness for i in exact.bound_info_ if i.witness is not None])
     return {"ex": ex, "xc": xc, "dx": dx, "exact": exact, "lp": lp, "witnesses": witnesses}
@@ -249,7 +249,7 @@ def test_inexact_solver_never_too_tight(small_chapter, solver, options, on_failu
     if solver == "cvxopt":
         pytest.importorskip("cvxopt")
     d = small_chapter
-    est = hb.LinearEIVSetEstimator(noise_bound=0.05, method="moment", solver=solver,
+    est = hb.LinearEIVSetEstimator(output_bound=0.05, method="moment", solver=solver,
                                    solver_options=options, on_failure=on_failure)
     try:
         est.fit(d["xc"], d["ex"].prbs.y, input_bound=d["dx"])
@@ -273,7 +273,7 @@ def test_inexact_solver_never_too_tight(small_chapter, solver, options, on_failu
                                     {"max_nodes": 1, "tol": 1e-9}])
 def test_limited_exact_search_stays_outer(small_chapter, limits):
     d = small_chapter
-    est = hb.LinearEIVSetEstimator(noise_bound=0.05, method="exact", **limits).fit(
+    est = hb.LinearEIVSetEstimator(output_bound=0.05, method="exact", **limits).fit(
         d["xc"], d["ex"].prbs.y, input_bound=d["dx"])
     _assert_outer(est.bounds_, np.vstack([d["witnesses"], d["ex"].theta_true]),
                   f"exact {limits}")
@@ -283,11 +283,11 @@ def test_limited_exact_search_stays_outer(small_chapter, limits):
 
 
 # ------------------------------------------------------------------------------ infeasible data
-def _side_feasible(u, y, nb, side) -> bool:
-    """Independent check: is {(m, beta) >= 0 : |m u -+ beta - y| <= nb} non-empty?"""
+def _side_feasible(u, y, bound, side) -> bool:
+    """Independent check: is {(m, beta) >= 0 : |m u -+ beta - y| <= bound} non-empty?"""
     s = -1.0 if side == "right" else 1.0  # right: y = m u - beta; left: y = m u + beta
     A = np.column_stack([u, s * np.ones_like(u)])
-    res = linprog([0.0, 0.0], A_ub=np.vstack([A, -A]), b_ub=np.r_[y + nb, -(y - nb)],
+    res = linprog([0.0, 0.0], A_ub=np.vstack([A, -A]), b_ub=np.r_[y + bound, -(y - bound)],
                   bounds=[(0, None), (0, None)], method="highs")
     return res.status == 0
 
@@ -304,7 +304,7 @@ def test_stage1_outlier_is_named(steady05, method):
     with pytest.raises(EmptyFeasibleSetError) as info:
         hb.BacklashSetEstimator(0.05, method=method).fit(steady05.u, y)
     assert info.value.side == "left" and info.value.first_index == 17
-    assert "index 17" in str(info.value) and "noise bound" in str(info.value)
+    assert "index 17" in str(info.value) and "output bound" in str(info.value)
 
 
 @pytest.mark.parametrize("method", ["polygon", "algorithm"])
@@ -328,7 +328,7 @@ def test_stage1_wrong_noise_bound_first_index_is_minimal(steady05, method, claim
 def test_stage1_infeasible_reported_through_identifier(steady05):
     ex = chapter_example(0.05, N=40, random_state=5)
     ident = hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.005),
-                                             hb.LinearEIVSetEstimator(noise_bound=0.05,
+                                             hb.LinearEIVSetEstimator(output_bound=0.05,
                                                                       method="lp"))
     with pytest.raises(EmptyFeasibleSetError) as info:
         ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
@@ -358,7 +358,7 @@ def test_stage2_outlier_is_named(method):
     x, y, _ = _stage2_data()
     y = y.copy()
     y[25] += 5.0
-    est = hb.LinearEIVSetEstimator(noise_bound=0.05, method=method)
+    est = hb.LinearEIVSetEstimator(output_bound=0.05, method=method)
     with pytest.raises(EmptyFeasibleSetError) as info:
         est.fit(x, y)
     assert info.value.side is None and info.value.first_index == 25
@@ -373,7 +373,7 @@ def test_stage2_infeasible_first_equation(what, kw, deta):
     x, y, _ = _stage2_data(deta=0.05)
 
     def make():
-        return hb.LinearEIVSetEstimator(noise_bound=deta, method="lp", **kw)
+        return hb.LinearEIVSetEstimator(output_bound=deta, method="lp", **kw)
 
     with pytest.raises(EmptyFeasibleSetError) as info:
         make().fit(x, y)
@@ -386,7 +386,7 @@ def test_stage2_infeasible_reported_through_identifier():
     ex = chapter_example(0.05, N=60, random_state=2)
     ident = hb.HammersteinBacklashIdentifier(
         hb.BacklashSetEstimator(0.05),
-        hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.05, method="exact"))
+        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, method="exact"))
     with pytest.raises(EmptyFeasibleSetError) as info:
         ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     assert info.value.side is None and info.value.first_index is not None
@@ -405,7 +405,7 @@ def test_badly_scaled_data_whole_pipeline():
     for method in ("lp", "exact"):
         ident = hb.HammersteinBacklashIdentifier(
             hb.BacklashSetEstimator(0.02 * sy),
-            hb.LinearEIVSetEstimator(noise_bound=0.02 * sy, method=method),
+            hb.LinearEIVSetEstimator(output_bound=0.02 * sy, method=method),
             inner_signal="two-level")
         ident.fit(ex.prbs.u * su, ex.prbs.y * sy, steady_state=steady)
         assert ident.contains(gamma, ex.theta_true), (method, ident.bounds_)
@@ -415,7 +415,7 @@ def test_badly_scaled_data_whole_pipeline():
         # the same intervals as in the original units, rescaled (to solver accuracy)
         ref = hb.HammersteinBacklashIdentifier(
             hb.BacklashSetEstimator(0.02),
-            hb.LinearEIVSetEstimator(noise_bound=0.02, method=method),
+            hb.LinearEIVSetEstimator(output_bound=0.02, method=method),
             inner_signal="two-level").fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
         np.testing.assert_allclose(ident.theta_bounds_, ref.theta_bounds_, atol=5e-3)
 
@@ -430,7 +430,7 @@ def test_badly_scaled_stage_two(method, sx, sy):
     g = sy / sx
     scaled = theta.copy()
     scaled[2:] *= g
-    est = hb.LinearEIVSetEstimator(noise_bound=0.02 * sy, steady_state_gain=g, method=method)
+    est = hb.LinearEIVSetEstimator(output_bound=0.02 * sy, steady_state_gain=g, method=method)
     try:
         est.fit(x * sx, y * sy)
     except (EmptyFeasibleSetError, UnboundedSetError) as exc:
@@ -479,7 +479,7 @@ def test_slow_prbs_nearly_collinear_regressors(method):
     u = hb.systems.experiments.prbs(100, 1.0, hold=25, random_state=3)
     x = sys_.inner(u)
     y = sys_.simulate(u) + np.random.default_rng(3).uniform(-0.01, 0.01, 100)
-    est = hb.LinearEIVSetEstimator(noise_bound=0.01, method=method)
+    est = hb.LinearEIVSetEstimator(output_bound=0.01, method=method)
     try:
         est.fit(x, y)
     except UnboundedSetError as exc:
@@ -491,11 +491,11 @@ def test_slow_prbs_nearly_collinear_regressors(method):
 def test_long_record_n5000():
     ex = chapter_example(0.05, N=5000, random_state=1)
     ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"),
         inner_signal="two-level").fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     assert ident.contains(ex.gamma_true, ex.theta_true)
     short = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp"),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"),
         inner_signal="two-level").fit(ex.prbs.u[:500], ex.prbs.y[:500], steady_state=ex.steady)
     # more data never widen the intervals (same first samples, more constraints)
     assert np.all(ident.theta_bounds_[:, 0] >= short.theta_bounds_[:, 0] - 1e-9)
@@ -515,11 +515,11 @@ def _fitted(kind, ex):
     if kind.startswith("linear"):
         method = kind.split("-")[1]
         kw = {"relaxation_order": 1} if method == "moment" else {}
-        return hb.LinearEIVSetEstimator(noise_bound=0.05, method=method, **kw).fit(
+        return hb.LinearEIVSetEstimator(output_bound=0.05, method=method, **kw).fit(
             ex.prbs.x, ex.prbs.y)
     method = kind.split("-")[1]
     return hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method=method),
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method=method),
         inner_signal="two-level").fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
 
 
@@ -566,7 +566,7 @@ def test_fixed_random_state_reproduces_experiments():
 
 def test_parallel_and_serial_agree(chapter40):
     ex = chapter40
-    serial = hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp").fit(ex.prbs.x, ex.prbs.y)
-    par = hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp", n_jobs=2).fit(
+    serial = hb.LinearEIVSetEstimator(output_bound=0.05, method="lp").fit(ex.prbs.x, ex.prbs.y)
+    par = hb.LinearEIVSetEstimator(output_bound=0.05, method="lp", n_jobs=2).fit(
         ex.prbs.x, ex.prbs.y)
     np.testing.assert_array_equal(serial.bounds_, par.bounds_)

@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 def fitted():
     ex = hb.chapter_example(0.05, N=100, random_state=0)
     ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp"))
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"))
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     return ex, ident
 
@@ -31,7 +31,7 @@ def test_report_fraction_over_banded_samples_and_figures(fitted, tmp_path):
     ex, ident = fitted
     path = write_report(ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, tmp_path)
     text = path.read_text()
-    m = re.search(r"within band \+- noise bound: ([0-9.]+) \(over the (\d+) samples", text)
+    m = re.search(r"within band \+- output bound: ([0-9.]+) \(over the (\d+) samples", text)
     assert m, text
     # own count: the guaranteed band +- the bound contains every measurement
     lo, hi = ident.output_envelope(ex.prbs.u, ex.prbs.y)
@@ -78,7 +78,7 @@ def test_backlash_band_is_exact_over_the_vertices(fitted):
     assert np.all((llo <= ml * (u + cl) + 1e-12) & (ml * (u + cl) <= lhi + 1e-12))
     assert np.all((rlo <= mr * (u - cr) + 1e-12) & (mr * (u - cr) <= rhi + 1e-12))
     fig, ax = plt.subplots()
-    plot_backlash(bl, ex.steady.u, ex.steady.y, ax, noise_bound=0.05, u_star=ident.u_star_,
+    plot_backlash(bl, ex.steady.u, ex.steady.y, ax, output_bound=0.05, u_star=ident.u_star_,
                   inner_bounds=ident.inner_bounds_, true_backlash=ex.gamma_true)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "steady-state points" in labels and "left line band" in labels

@@ -30,7 +30,7 @@ def chapter_record(n, seed=0, d=0.05):
 
 
 def _fit(x, y, **kw):
-    est = LinearEIVSetEstimator(noise_bound=0.05, steady_state_gain=1.0, method="exact", **kw)
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="exact", **kw)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         est.fit(x, y)
@@ -76,8 +76,8 @@ def test_total_budget_shared_by_parallel_workers():
 
 def test_identifier_passes_the_budget_to_stage_2():
     ex = hb.chapter_example(0.05, N=60)
-    lin = LinearEIVSetEstimator(noise_bound=0.05, method="exact", steady_state_gain=1.0)
-    ident = hb.HammersteinBacklashIdentifier(linear=lin)
+    lin = LinearEIVSetEstimator(output_bound=0.05, method="exact", steady_state_gain=1.0)
+    ident = hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05), linear=lin)
     ident.set_params(linear__total_time_limit=0.0)
     assert clone(ident).get_params()["linear__total_time_limit"] == 0.0
     with warnings.catch_warnings():
@@ -93,7 +93,7 @@ def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
     import hammerbound.relaxations.moment.relaxation as moment_module
 
     x, y = chapter_record(15)
-    pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, gain=1.0)
+    pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, steady_state_gain=1.0)
     lp = lp_bounds(pr, check_box=False).bounds
     # no certificate for any bound (as after a solver failure)
     monkeypatch.setattr(moment_module, "verified_lower_bound", lambda *a, **k: None)
@@ -111,12 +111,13 @@ def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
 def _problem(n, dx=0.0, na=2, groups=False, gain=1.0):
     x, y = chapter_record(n)
     g = (x < 0).astype(int) if groups else None
-    return EIVProblem(y, x, dx, 0.05, na, 2, gain=gain, groups=g)
+    return EIVProblem(y, x, dx, 0.05, na, 2, steady_state_gain=gain, groups=g)
 
 
 @pytest.mark.parametrize("n,order,dx,na,groups,gain", [
     (12, 1, 0.0, 2, False, 1.0), (12, 1, 0.01, 2, False, None), (10, 2, 0.0, 2, False, 1.0),
-    (12, 1, 0.01, 1, True, 1.0)])
+    (12, 1, 0.01, 1, True, 1.0), (10, 2, 0.01, 2, True, None), (8, 3, 0.0, 1, False, 1.0),
+    (8, 3, 0.01, 1, False, None), (10, 3, 0.01, 2, True, None)])
 def test_size_estimate_matches_the_built_relaxation(n, order, dx, na, groups, gain):
     pr = _problem(n, dx, na, groups, gain)
     est = moment_size.estimate_moment_relaxation(pr, order)
@@ -129,11 +130,29 @@ def test_size_estimate_matches_the_built_relaxation(n, order, dx, na, groups, ga
 
 def test_moment_guard_refuses_with_the_estimate_and_alternatives():
     x, y = chapter_record(2000)
-    est = LinearEIVSetEstimator(noise_bound=0.05, steady_state_gain=1.0, method="moment")
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="moment")
     with pytest.raises(RelaxationTooLargeError, match="method='lp'") as ei:
         est.fit(x, y)
     msg = str(ei.value)
     assert "method='exact'" in msg and "1998 cliques" in msg and "MB" in msg
+
+
+def test_high_order_refuses_before_forming_any_monomial(monkeypatch):
+    """Issue 29.4: order 8 used to take minutes just to refuse (the moments were counted by
+    enumerating the products of the basis). The count is closed-form now: the refusal
+    forms no basis and no relaxation."""
+    from hammerbound.relaxations.moment import basis, relaxation
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("the size estimate must not build a basis or a relaxation")
+
+    monkeypatch.setattr(basis, "_sparse_basis", forbidden)
+    monkeypatch.setattr(relaxation, "MomentRelaxation", forbidden)
+    x, y = chapter_record(100)
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="moment",
+                                relaxation_order=8)
+    with pytest.raises(RelaxationTooLargeError, match="order 8"):
+        est.fit(x, y)
 
 
 def test_moment_guard_warns_between_the_budgets(monkeypatch):
@@ -152,7 +171,7 @@ def _scaled_record(scale):
     x = np.where(rng.random(n) < 0.5, 1.0, -1.0) * scale
     d = 0.05 * scale
     y = lfilter([0.0, 2.15, -1.09], [1.0, -0.76, 0.82], x) + d * rng.choice([-1.0, 1.0], n)
-    return EIVProblem(y, x, 0.0, d, 2, 2, gain=None), d
+    return EIVProblem(y, x, 0.0, d, 2, 2, steady_state_gain=None), d
 
 
 @pytest.mark.parametrize("scale", [1e-6, 1e-3, 1e3, 1e6])

@@ -38,7 +38,7 @@ def test_step_of_a_decimal_column_is_that_decimal(tmp_path, step):
     t = np.arange(u.size) * step
     d = hb.IOData.from_csv(write(tmp_path / "r.csv", ["t", "u", "y"], [t, u, y]))
     assert d.dt == step
-    est = hb.LinearEIVSetEstimator(1, 1, noise_bound=0.01, method="lp").fit(d)
+    est = hb.LinearEIVSetEstimator(1, 1, output_bound=0.01, method="lp").fit(d)
     assert est.dt_ == step and est.to_transfer_function().dt == step
     assert hb.IOData.from_frame({"t": t, "u": u, "y": y}).dt == step
 
@@ -110,8 +110,8 @@ def test_time_column_that_counts_samples_with_dt(tmp_path):
 def test_cli_eiv_reads_a_time_column_named_time(tmp_path, capsys):
     u, y = record()
     p = write(tmp_path / "r.csv", ["time", "u", "y"], [0.01 * np.arange(u.size), u, y])
-    rc = main(["eiv", str(p), "--na", "1", "--nb", "1", "--input-noise", "0",
-               "--output-noise", "0.01", "--method", "lp", "--json"])
+    rc = main(["eiv", str(p), "--na", "1", "--nb", "1", "--input-bound", "0",
+               "--output-bound", "0.01", "--method", "lp", "--json"])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["data"]["dt"] == 0.01 and out["transfer_function"]["dt"] == 0.01

@@ -55,12 +55,12 @@ def test_iodata_from_csv_time_column(tmp_path):
 def test_dt_and_names_flow_into_transfer_functions():
     x, y = _first_order()
     data = IOData(x, y, dt=0.1, input_name="force", output_name="position")
-    est = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(data)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(data)
     tf = est.to_transfer_function()
     assert tf.dt == 0.1
     assert tf.input_labels == ["force"] and tf.output_labels == ["position"]
     assert est.to_transfer_function(dt=0.5).dt == 0.5
-    plain = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(x, y)
+    plain = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(x, y)
     assert plain.to_transfer_function().dt is True          # python-control: not given
     # a HammersteinSystem built from a TF keeps its dt
     G = control.tf([0, 0.5], [1, -0.7], 0.1)
@@ -73,7 +73,7 @@ def test_dt_and_names_flow_into_transfer_functions():
 def test_identifier_dt_contains_system_and_tables():
     ex = hb.chapter_example(0.05, N=100, random_state=0)
     ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp"))
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"))
     ident.fit(IOData(ex.prbs.u, ex.prbs.y, dt=0.01), steady_state=ex.steady)
     assert ident.system_.to_transfer_function().dt == 0.01
     truth = hb.HammersteinSystem(hb.Backlash(*ex.gamma_true),
@@ -92,7 +92,7 @@ def test_identifier_dt_contains_system_and_tables():
 
 def test_to_frame_fields_and_feasible_set_repr():
     x, y = _first_order()
-    est = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(x, y)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(x, y)
     fr = est.to_frame()
     try:
         import pandas  # noqa: F401
@@ -108,7 +108,7 @@ def test_to_frame_fields_and_feasible_set_repr():
 
 def test_contains_transfer_function_and_structure_check():
     x, y = _first_order()
-    est = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="exact")
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="exact")
     est.fit(IOData(x, y, dt=0.1))
     assert est.contains(control.tf([0.5], [1, -0.7], 0.1))        # = 0.5 z^-1/(1-0.7z^-1)
     assert not est.contains(control.tf([0.6], [1, -0.7], 0.1))
@@ -133,7 +133,7 @@ def test_simulation_from_measured_initial_conditions_own_loop():
 
 def test_score_of_a_held_out_segment_starts_from_measured_outputs():
     x, y0 = _first_order(N=200, deta=0.0)
-    est = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=1e-3, method="lp").fit(
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=1e-3, method="lp").fit(
         x[:100], y0[:100])
     # the centre is close to the truth: on a mid-record noise-free segment the simulated
     # score is ~1, while a simulation from rest would pay the initial transient
@@ -152,7 +152,7 @@ def chapter():
 
 def _ident(deta=0.02):
     return hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(noise_bound=deta, method="lp"))
+        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(output_bound=deta, method="lp"))
 
 
 def test_kfold_raises_a_clear_error(chapter):
@@ -193,8 +193,8 @@ def test_sample_aligned_bounds_survive_cv(chapter):
                                                   "output_bound": np.full(90, 0.02)},
                         error_score="raise")
     assert np.all(s > 0.9)
-    # a per-sample noise_bound in the constructor cannot be split: the error says why
-    bad = hb.LinearEIVSetEstimator(na=1, nb=1, method="lp", noise_bound=np.full(90, 0.02))
+    # a per-sample output_bound in the constructor cannot be split: the error says why
+    bad = hb.LinearEIVSetEstimator(na=1, nb=1, method="lp", output_bound=np.full(90, 0.02))
     with pytest.raises(DataValidationError, match="output_bound"):
         cross_val_score(bad, x, y, cv=cv, error_score="raise")
 
@@ -202,10 +202,10 @@ def test_sample_aligned_bounds_survive_cv(chapter):
 def test_groups_renamed_input_groups():
     x, y = _first_order()
     lab = (x < 0).astype(int)
-    a = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(
+    a = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(
         x, y, input_bound=0.01, input_groups=lab)
     with pytest.warns(FutureWarning, match="input_groups"):
-        b = hb.LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="lp").fit(
+        b = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(
             x, y, input_bound=0.01, groups=lab)
     np.testing.assert_array_equal(a.bounds_, b.bounds_)
 
@@ -221,7 +221,8 @@ def test_iodata_from_frame_and_backlash_tables():
     fr = bl.to_frame()
     assert list(fr["parameter"]) == ["ml", "cl", "mr", "cr"]
     np.testing.assert_allclose(fr["upper"], bl.gamma_bounds_[:, 1])
-    assert bl.summary().splitlines()[2].startswith("ml ")
+    assert bl.summary().splitlines()[1].startswith("assumptions: output error bound")
+    assert bl.summary().splitlines()[3].startswith("ml ")
 
 
 def test_plain_array_kfold_splice_message_names_the_cause():
@@ -231,7 +232,7 @@ def test_plain_array_kfold_splice_message_names_the_cause():
 
     ex = hb.chapter_example(0.05, N=200, random_state=0)
     keep = np.r_[0:40, 80:200]  # what KFold(5)'s second training set looks like
-    est = hb.LinearEIVSetEstimator(noise_bound=0.05, method="lp", steady_state_gain=1.0)
+    est = hb.LinearEIVSetEstimator(output_bound=0.05, method="lp", steady_state_gain=1.0)
     with pytest.raises(EmptyFeasibleSetError, match="TimeSeriesSplit"):
         est.fit(ex.prbs.x[keep], ex.prbs.y[keep], input_bound=1e-9)
     # the same record, not cut, is consistent

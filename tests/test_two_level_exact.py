@@ -40,7 +40,7 @@ def _fit(seed, deta, branch_shared=True, at_bound=True):
 def test_shared_groups_only_for_few_shared_errors():
     pr, _ = make_two_level(0)
     assert shared_groups(pr) == 2
-    indep = EIVProblem(pr.y, pr.x, pr.dx, pr.deta, 2, 2, gain=1.0)
+    indep = EIVProblem(pr.y, pr.x, pr.dx, pr.deta, 2, 2, steady_state_gain=1.0)
     assert shared_groups(indep) == 0
 
 
@@ -61,7 +61,7 @@ def test_narrowed_dx_box_equals_recentred_problem(seed):
     # x - dxv with dxv in [lo, hi]  ==  (x - centre) - dxv' with dxv' in [-rad, rad]
     g = pr.groups
     moved = EIVProblem(pr.y, pr.x - centre[g], (0.5 * (hi - lo))[g], pr.deta, 2, 2,
-                       gain=1.0, groups=g)
+                       steady_state_gain=1.0, groups=g)
     ref = McCormickRelaxation(moved, box)
     full = McCormickRelaxation(pr, box)
     moved_by = 0.0

@@ -54,7 +54,7 @@ def issue_records():
 def fit(u, y, n):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return hb.LinearEIVSetEstimator(n, n, noise_bound=BOUND, method="exact").fit(
+        return hb.LinearEIVSetEstimator(n, n, output_bound=BOUND, method="exact").fit(
             hb.IOData(u, y, dt=DT), input_bound=BOUND)
 
 
@@ -129,7 +129,7 @@ def test_issue_cases_through_a_csv_file(records, tmp_path):
     assert data.dt == DT
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        est = hb.LinearEIVSetEstimator(2, 2, noise_bound=BOUND, method="exact").fit(
+        est = hb.LinearEIVSetEstimator(2, 2, output_bound=BOUND, method="exact").fit(
             data, input_bound=BOUND)
     uw = est.uncertainty_weight("multiplicative", order=2)
     assert est.dt_ == DT and uw.W.dt == DT

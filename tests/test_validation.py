@@ -56,8 +56,8 @@ def test_noise_bound_column_vector_is_accepted_like_a_vector():
     np.testing.assert_array_equal(a.gamma_bounds_, b.gamma_bounds_)
     _, x, yp = _prbs(60, 0.02)
     d = np.full(60, 0.02)
-    a = hb.LinearEIVSetEstimator(noise_bound=d, method="lp").fit(x, yp)
-    b = hb.LinearEIVSetEstimator(noise_bound=d[:, None], method="lp").fit(x, yp,
+    a = hb.LinearEIVSetEstimator(output_bound=d, method="lp").fit(x, yp)
+    b = hb.LinearEIVSetEstimator(output_bound=d[:, None], method="lp").fit(x, yp,
                                                                        input_bound=np.zeros((60, 1)))
     np.testing.assert_array_equal(a.bounds_, b.bounds_)
     assert b.contains(THETA)
@@ -66,7 +66,7 @@ def test_noise_bound_column_vector_is_accepted_like_a_vector():
 @pytest.mark.parametrize("bad", [True, np.bool_(True), "0.05", np.array([True] * 24)])
 def test_boolean_and_text_noise_bounds_are_refused(bad):
     u, y = _steady(0.02)
-    with pytest.raises(ParameterValidationError, match="noise_bound"):
+    with pytest.raises(ParameterValidationError, match="output_bound"):
         hb.BacklashSetEstimator(bad).fit(u, y)
 
 
@@ -107,8 +107,8 @@ def test_well_posed_on_data_must_be_a_boolean(flag):
 def test_steady_state_gain_true_is_refused_numpy_gain_accepted():
     _, x, y = _prbs(60, 0.02)
     with pytest.raises(ParameterValidationError, match="True is not taken as 1"):
-        hb.LinearEIVSetEstimator(steady_state_gain=True, noise_bound=0.02, method="lp").fit(x, y)
-    est = hb.LinearEIVSetEstimator(steady_state_gain=np.float64(1.0), noise_bound=0.02,
+        hb.LinearEIVSetEstimator(steady_state_gain=True, output_bound=0.02, method="lp").fit(x, y)
+    est = hb.LinearEIVSetEstimator(steady_state_gain=np.float64(1.0), output_bound=0.02,
                                    method="lp").fit(x, y)
     assert est.contains(THETA)
 
@@ -123,7 +123,7 @@ def test_every_contains_refuses_nan_parameters():
         with pytest.raises(DataValidationError, match="NaN"):
             hb.FeasibleSet.contains(fs, [0.25, np.nan])  # the orthotope test too
     _, x, yp = _prbs(60, 0.02)
-    s2 = hb.LinearEIVSetEstimator(noise_bound=0.02, method="lp").fit(x, yp)
+    s2 = hb.LinearEIVSetEstimator(output_bound=0.02, method="lp").fit(x, yp)
     assert s2.contains(THETA)
     with pytest.raises(DataValidationError, match="a2"):
         s2.contains([-0.76, np.nan, 2.15, -1.09])
@@ -134,15 +134,15 @@ def test_every_contains_refuses_nan_parameters():
 def test_all_zero_output_with_prbs_input_is_refused():
     u, x, _ = _prbs(60, 0.02)
     with pytest.raises(DataValidationError, match="no information about the dynamics"):
-        hb.LinearEIVSetEstimator(noise_bound=0.02, method="lp").fit(x, np.zeros(60))
+        hb.LinearEIVSetEstimator(output_bound=0.02, method="lp").fit(x, np.zeros(60))
     us, ys = _steady(0.02)
     ident = hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.02),
-                                             hb.LinearEIVSetEstimator(noise_bound=0.02,
+                                             hb.LinearEIVSetEstimator(output_bound=0.02,
                                                                       method="lp"))
     with pytest.raises(DataValidationError, match="no information about the dynamics"):
         ident.fit(u, np.zeros(60), steady_state=(us, ys))
     with pytest.raises(DataValidationError, match="identically zero"):
-        hb.LinearEIVSetEstimator(noise_bound=0.02, method="lp").fit(np.zeros(60), x)
+        hb.LinearEIVSetEstimator(output_bound=0.02, method="lp").fit(np.zeros(60), x)
 
 
 # ------------------------------------------------------------------ scale (issue 20)
@@ -154,10 +154,13 @@ def test_extreme_scales_get_a_scale_error_in_both_stages(s):
     assert isinstance(ei.value, DataValidationError)
     _, x, yp = _prbs(60, 0.02)
     with pytest.raises(DataScaleError, match="leaves theta unchanged"):
-        hb.LinearEIVSetEstimator(noise_bound=0.02 * s, method="lp").fit(x * s, yp * s)
+        hb.LinearEIVSetEstimator(output_bound=0.02 * s, method="lp").fit(x * s, yp * s)
     up, _, _ = _prbs(60, 0.02)
     with pytest.raises(DataScaleError):
-        hb.HammersteinBacklashIdentifier().fit(up * s, yp * s, steady_state=(u * s, y * s))
+        hb.HammersteinBacklashIdentifier(
+            hb.BacklashSetEstimator(0.02 * s),
+            hb.LinearEIVSetEstimator(output_bound=0.02 * s, method="lp")).fit(
+                up * s, yp * s, steady_state=(u * s, y * s))
     from hammerbound.discrepancy import diagnose
 
     with pytest.raises(DataScaleError):
@@ -176,11 +179,11 @@ def test_the_edges_of_the_range_are_accepted_and_sound(top):
     assert _gamma_in(est, s, s)
     _, x, yp = _prbs(80, 0.02)
     s = top / pick(np.abs(x).max(), np.abs(yp).max())
-    est = hb.LinearEIVSetEstimator(noise_bound=0.02 * s, method="lp").fit(x * s, yp * s)
+    est = hb.LinearEIVSetEstimator(output_bound=0.02 * s, method="lp").fit(x * s, yp * s)
     assert est.contains(THETA)
     out = s * (0.5 if top == SCALE_MIN else 2.0)  # just outside the range
     with pytest.raises(DataScaleError):
-        hb.LinearEIVSetEstimator(noise_bound=0.02 * out, method="lp").fit(x * out, yp * out)
+        hb.LinearEIVSetEstimator(output_bound=0.02 * out, method="lp").fit(x * out, yp * out)
 
 
 def test_slope_ratio_and_huge_bounds_are_refused():
@@ -190,8 +193,8 @@ def test_slope_ratio_and_huge_bounds_are_refused():
     # independent scales of u and y inside the range are fine (m and c map exactly)
     est = hb.BacklashSetEstimator(0.02e-3).fit(u * 10, y * 1e-3)
     assert _gamma_in(est, 10.0, 1e-3)
-    with pytest.raises(DataScaleError, match="noise_bound"):
-        check_scale("f", {"y": y}, {"noise_bound": np.full(y.size, 1e12)})
+    with pytest.raises(DataScaleError, match="output_bound"):
+        check_scale("f", {"y": y}, {"output_bound": np.full(y.size, 1e12)})
 
 
 def test_cli_identify_refuses_extreme_scale_before_the_work(tmp_path):
@@ -204,7 +207,7 @@ def test_cli_identify_refuses_extreme_scale_before_the_work(tmp_path):
                                                      zip(up * s, yp * s, strict=True)))
     r = subprocess.run(
         [sys.executable, "-m", "hammerbound", "identify", "--steady", str(tmp_path / "ss.csv"),
-         "--prbs", str(tmp_path / "pr.csv"), "--steady-noise", "2e298", "--prbs-noise", "2e298",
+         "--prbs", str(tmp_path / "pr.csv"), "--steady-output-bound", "2e298", "--output-bound", "2e298",
          "--method", "lp"],
         capture_output=True, text=True, timeout=300, cwd=ROOT)
     assert r.returncode == 2, r.stderr

@@ -147,7 +147,7 @@ def _noise_at_the_bound(seed, N, deta):
     b = b * a.sum() / b.sum()  # unit static gain (22.8)
     x = np.where(rng.random(N) < 0.5, 0.5, -0.5)
     y = lfilter(b, a, x) + deta * rng.choice([-1.0, 1.0], N)
-    return EIVProblem(y, x, 0.0, deta, na=2, nb=2, b0=False, gain=1.0), \
+    return EIVProblem(y, x, 0.0, deta, na=2, nb=2, steady_state_gain=1.0), \
         np.concatenate([a[1:], b[1:]])
 
 

@@ -338,7 +338,7 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
 def _stage2_fit(i, deta, xc, y, dx, groups, kw):
     """Stage-2 fit ``i`` of :func:`reproduce_chapter` (maybe in a worker process):
     ``(i, bounds, seconds, certified)``."""
-    lin = LinearEIVSetEstimator(noise_bound=deta, **kw)
+    lin = LinearEIVSetEstimator(output_bound=deta, **kw)
     t0 = time.perf_counter()
     lin.fit(xc, y, input_bound=dx, input_groups=groups)
     return i, lin.bounds_, time.perf_counter() - t0, all(b.certified for b in lin.bound_info_)
@@ -445,7 +445,7 @@ def fit_example(delta_eta=0.05, N=100, seed=0, method="exact", *, inner_signal="
     ex = chapter_example(delta_eta, N=N, random_state=seed)
     ident = HammersteinBacklashIdentifier(
         BacklashSetEstimator(delta_eta),
-        LinearEIVSetEstimator(noise_bound=delta_eta, method=method,
+        LinearEIVSetEstimator(output_bound=delta_eta, method=method,
                               relaxation_order=relaxation_order, solver=solver, n_jobs=n_jobs),
         inner_signal=inner_signal)
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..systems.experiments import snr_db
+from ..tables import bound_text
 from .paths import check_output_dir
 
 __all__ = ["REPORT_FILES", "write_report", "interval_table"]
@@ -50,8 +51,8 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     OutputPathError
         ``outdir`` is a file, its parent is missing or it is not writable.
 
-    The report lists the experiment (sizes, noise bounds, SNR of the PRBS output against
-    the noise bound), the backlash feasible sets (vertices, orthotope, figure), the
+    The report lists the experiment (sizes, output error bounds, SNR of the PRBS output against
+    the bound), the backlash feasible sets (vertices, orthotope, figure), the
     inner-signal bounds, the linear-block intervals with per-bound solver information,
     and the guaranteed one-step output envelope against the data.
     """
@@ -67,15 +68,14 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     out.mkdir(exist_ok=True)
     bl, lin = ident.backlash_, ident.linear_
     lines = [f"# {title}", ""]
-    ob = getattr(ident, "output_bound_", None)
-    deta = np.broadcast_to(np.asarray(lin.noise_bound if ob is None else ob, float),
-                           np.shape(prbs_y))
+    deta = lin.problem_.output_bound
     lines += ["## Experiment", "",
-              f"- steady-state points: {np.size(steady_u)} (noise bound {bl.noise_bound!r})",
+              f"- steady-state points: {np.size(steady_u)} (output error bound "
+              f"{bound_text(bl.output_bound_)})",
               f"- PRBS samples: N = {np.size(prbs_u)}, level u* = {ident.u_star_:g} "
               f"(admissible range for Result 1: ({bl.admissible_prbs_range()[0]:.4g}, "
               f"{bl.admissible_prbs_range()[1]:.4g}))",
-              f"- PRBS output noise bound {lin.noise_bound!r}; SNR of the measured output "
+              f"- PRBS output error bound {bound_text(deta)}; SNR of the measured output "
               f"against the bound (22.39): {snr_db(np.asarray(prbs_y) - 0, deta):.1f} dB",
               f"- stage 2: method `{lin.method}`"
               + (f", relaxation order {lin.relaxation_order}, solver {lin.solver}"
@@ -91,7 +91,7 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     fig.savefig(out / "backlash_sets.png", dpi=120)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    plot_backlash(bl, steady_u, steady_y, ax, noise_bound=bl.noise_bound,
+    plot_backlash(bl, steady_u, steady_y, ax, output_bound=bl.output_bound_,
                   u_star=ident.u_star_, inner_bounds=ident.inner_bounds_,
                   true_backlash=gamma_true)
     ax.set_title("backlash characteristic and its guaranteed band")
@@ -143,10 +143,11 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
               "### Output envelope", "",
               "Every noise-free output consistent with the intervals and the past data lies "
               "in the one-step band; measurements may deviate from it by at most the noise "
-              f"bound. Fraction of measurements within band +- noise bound: {inside:.3f} "
+              f"bound. Fraction of measurements within band +- output bound: {inside:.3f} "
               f"(over the {int(banded.sum())} samples that have a band; the first "
               f"{int((~banded).sum())} start the recursion).",
               "", "![envelope](envelope.png)", ""]
     path = out / "report.md"
     path.write_text("\n".join(lines))
     return path
+

@@ -9,11 +9,26 @@ import numpy as np
 
 from ..exceptions import DataValidationError
 
-__all__ = ["csv_header", "example_data_path", "load_chapter_tables", "read_columns",
-           "read_io_csv"]
+__all__ = ["PYTHON_NAMES", "csv_header", "example_data_path", "load_chapter_tables",
+           "read_columns", "read_io_csv"]
+
+#: How the messages of the readers name their settings (the interface in use): the
+#: Python keywords by default; the command line passes its flags instead (``{"u":
+#: "--u-col NAME", ...}``). Keys: ``u``, ``y`` (the column names), ``t`` (the time
+#: column), ``no_t`` (no time column), ``auto_t`` (find it by name), ``dt``, ``delimiter``.
+PYTHON_NAMES = {"u": "u='<name>'", "y": "y='<name>'", "t": "t='<name>'", "no_t": "t=None",
+                "auto_t": "t='auto'", "dt": "dt=<sampling time>",
+                "delimiter": "delimiter=';'"}
 
 
-def read_columns(path, columns) -> dict[str, np.ndarray]:
+def _names(argument_names, **python):
+    """The spellings of the settings in messages: ``argument_names`` over ``python``
+    over :data:`PYTHON_NAMES`."""
+    return {**PYTHON_NAMES, **python, **(argument_names or {})}
+
+
+def read_columns(path, columns, *, delimiter=",", argument_names=None
+                 ) -> dict[str, np.ndarray]:
     """Read named numeric columns from a CSV file with a header row.
 
     Parameters
@@ -21,6 +36,10 @@ def read_columns(path, columns) -> dict[str, np.ndarray]:
     path : str or Path
     columns : sequence of str
         Header names to read.
+    delimiter : str, default ","
+        Field separator (e.g. ``";"``, ``"\\t"``).
+    argument_names : dict, optional
+        How messages name the settings (see :data:`PYTHON_NAMES`).
 
     Returns
     -------
@@ -45,8 +64,9 @@ def read_columns(path, columns) -> dict[str, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise DataValidationError(f"{path}: no such file; check the path.")
+    names = _names(argument_names, u="columns=[...]", y="columns=[...]")
     try:
-        return _read_columns(path, columns)
+        return _read_columns(path, columns, _delimiter(delimiter, names), names)
     except UnicodeDecodeError as exc:
         raise DataValidationError(
             f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
@@ -54,14 +74,23 @@ def read_columns(path, columns) -> dict[str, np.ndarray]:
         ) from None
 
 
-def csv_header(path) -> list[str]:
+def _delimiter(delimiter, names) -> str:
+    if not isinstance(delimiter, str) or len(delimiter) != 1:
+        raise DataValidationError(
+            f"the delimiter must be one character (a comma, a semicolon, a tab...), e.g. "
+            f"{names['delimiter']}; got {delimiter!r}.")
+    return delimiter
+
+
+def csv_header(path, *, delimiter=",") -> list[str]:
     """The header row (column names) of a CSV file."""
     path = Path(path)
     if not path.is_file():
         raise DataValidationError(f"{path}: no such file; check the path.")
+    delimiter = _delimiter(delimiter, PYTHON_NAMES)
     try:
         with path.open(newline="") as fh:
-            row = next(csv.reader(fh), None)
+            row = next(csv.reader(fh, delimiter=delimiter), None)
     except UnicodeDecodeError as exc:
         raise DataValidationError(
             f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
@@ -84,9 +113,9 @@ def example_data_path(name: str = "eiv_first_order_2017.csv") -> Path:
     return path
 
 
-def _read_columns(path, columns):
+def _read_columns(path, columns, delimiter, names):
     with path.open(newline="") as fh:
-        reader = csv.reader(fh)
+        reader = csv.reader(fh, delimiter=delimiter)
         try:
             header = [h.strip() for h in next(reader)]
         except StopIteration:
@@ -94,9 +123,13 @@ def _read_columns(path, columns):
                                       f"with columns {list(columns)}.") from None
         missing = [c for c in columns if c not in header]
         if missing:
+            how = sorted({names["u"], names["y"]})
+            other = "" if len(header) > 1 or delimiter != "," else (
+                f" (one column only: if the fields are separated by another character, "
+                f"pass {names['delimiter']})")
             raise DataValidationError(
-                f"{path}: missing column(s) {missing}; the header has {header}. Rename the "
-                "columns or pass the right names (see --help)."
+                f"{path}: missing column(s) {missing}; the header has {header}{other}. "
+                f"Rename the columns or pass the right names ({', '.join(how)})."
             )
         idx = [header.index(c) for c in columns]
         out = {c: [] for c in columns}
@@ -139,7 +172,7 @@ def load_chapter_tables(path=None) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
-def _column_index(spec, header, ncols, which, default, path):
+def _column_index(spec, header, ncols, which, default, path, names):
     """Position of column ``spec`` (a header name or a 0-based index)."""
     spec = str(spec).strip()
     cols = None if header is None else [h.strip() for h in header]
@@ -157,24 +190,27 @@ def _column_index(spec, header, ncols, which, default, path):
     else:
         raise DataValidationError(
             f"column {spec!r} (the {which} column) not found in the header of {path}; columns "
-            f"are {cols}. Rename it or pass --{which}-column NAME."
+            f"are {cols}. Rename it or pass {names[which]}."
         )
     if j >= ncols:
         found = f"{ncols} column(s)" + ("" if cols is None else f" {cols}")
+        hint = "" if ncols > 1 else f" If the fields are separated by another character, pass " \
+            f"{names['delimiter']}."
         raise DataValidationError(
             f"{path} needs an input and an output column (u,y) but the {which} column "
-            f"(index {j}) is missing: found {found}."
+            f"(index {j}) is missing: found {found}.{hint}"
         )
     return j
 
 
-def read_io_csv(path, u_column="u", y_column="y", delimiter=","):
+def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_names=None):
     """Read an input/output record from a CSV file.
 
     The file may start with a header line naming the columns (then ``u_column`` and
     ``y_column`` are looked up by name, case-insensitively); without a header the
     columns are taken by 0-based index (default: the first two columns are ``u, y``).
-    Blank lines and lines starting with ``#`` are ignored.
+    Blank lines and lines starting with ``#`` are ignored. ``argument_names``: how
+    messages name the settings (see :data:`PYTHON_NAMES`).
 
     Returns
     -------
@@ -186,6 +222,9 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=","):
         Unreadable file, missing column, non-numeric or incomplete rows (the message lists
         the offending line numbers), fewer than two columns.
     """
+    names = _names(argument_names, u="u_column='<name or index>'",
+                   y="y_column='<name or index>'")
+    delimiter = _delimiter(delimiter, names)
     try:
         with open(path, newline="") as fh:
             rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh, delimiter=delimiter))]
@@ -207,12 +246,12 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=","):
     if not all(numeric(f) for f in rows[0][1]):
         header, rows = rows[0][1], rows[1:]
     ncols = len(header) if header is not None else len(rows[0][1])
-    ju = _column_index(u_column, header, ncols, "u", 0, path)
-    jy = _column_index(y_column, header, ncols, "y", 1, path)
+    ju = _column_index(u_column, header, ncols, "u", 0, path, names)
+    jy = _column_index(y_column, header, ncols, "y", 1, path, names)
     if ju == jy:
         raise DataValidationError(
             f"the u and y columns of {path} are the same column (index {ju}); pass "
-            "--u-column / --y-column."
+            f"{names['u']} and {names['y']}."
         )
     if not rows:
         raise DataValidationError(f"{path} has a header but no data rows.")

@@ -17,6 +17,7 @@ import numbers
 import numpy as np
 
 from ..exceptions import DataValidationError, DataWarning, ParameterValidationError
+from .csv_reader import PYTHON_NAMES
 from .timebase import find_time_column, time_unit_of, uniform_step
 from .validation import as_signal
 
@@ -105,7 +106,8 @@ class IOData:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_csv(cls, path, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
+    def from_csv(cls, path, *, u="u", y="y", t="auto", dt=None, delimiter=",",
+                 argument_names=None, **names) -> IOData:
         """Read the columns ``u`` and ``y`` (header names) of a CSV file.
 
         ``t`` names the time column; ``"auto"`` (default) takes the one column with a usual
@@ -116,22 +118,27 @@ class IOData:
         the two must agree, except for a column that counts samples (0, 1, 2, ...: steps of
         exactly 1), which is then read as sample numbers in units of ``dt``. With
         ``t="auto"``, no time column found, no ``dt`` and columns left unused, a
-        :class:`~hammerbound.exceptions.DataWarning` names them. Other keywords: the names
-        and units of :class:`IOData` (names default to the column names).
+        :class:`~hammerbound.exceptions.DataWarning` names them. ``delimiter``: the field
+        separator (default ``","``). ``argument_names``: how messages name these settings
+        (default the keywords above; see
+        :data:`hammerbound.data.csv_reader.PYTHON_NAMES`). Other keywords: the names and
+        units of :class:`IOData` (names default to the column names).
         """
-        from .csv_reader import csv_header, read_columns
+        from .csv_reader import _names, csv_header, read_columns
 
-        header = csv_header(path)
-        t = cls._time_column(header, t, (u, y), str(path), dt)
-        data = read_columns(path, [u, y] + ([t] if t else []))
-        return cls._build(data[u], data[y], data.get(t), t, dt, str(path), u, y, names)
+        spell = _names(argument_names)
+        header = csv_header(path, delimiter=delimiter)
+        t = cls._time_column(header, t, (u, y), str(path), dt, spell)
+        data = read_columns(path, [u, y] + ([t] if t else []), delimiter=delimiter,
+                            argument_names=spell)
+        return cls._build(data[u], data[y], data.get(t), t, dt, str(path), u, y, names, spell)
 
     @classmethod
     def from_frame(cls, frame, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
         """Build from a pandas DataFrame (or any mapping of columns): columns ``u``, ``y``
         and a time column ``t`` (same rules as :meth:`from_csv`)."""
         cols = [str(c) for c in frame]
-        t = cls._time_column(cols, t, (str(u), str(y)), "the frame", dt)
+        t = cls._time_column(cols, t, (str(u), str(y)), "the frame", dt, PYTHON_NAMES)
         try:
             uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
             tt = None if t is None else np.asarray(frame[t], dtype=float)
@@ -141,7 +148,7 @@ class IOData:
         return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names)
 
     @staticmethod
-    def _time_column(columns, t, used, where, dt):
+    def _time_column(columns, t, used, where, dt, spell):
         """The time column's name (or None) for ``t`` = a name, None or "auto"."""
         if t is None or t == "":
             return None
@@ -149,23 +156,24 @@ class IOData:
             if str(t) not in columns:
                 raise DataValidationError(
                     f"{where}: no time column {t!r}; the columns are {list(columns)}. Pass "
-                    "t='<name>', t='auto' (recognise t, time, 't [s]'...) or t=None (none).")
+                    f"{spell['t']}, {spell['auto_t']} (recognise t, time, 't [s]'...) or "
+                    f"{spell['no_t']} (none).")
             return t
         found = find_time_column(columns, exclude=used, where=where)
         unused = [c for c in columns if c not in used]
-        if found is None and dt is None and unused:
+        if found is None and dt is None and unused and all(c in columns for c in used):
             import warnings
 
             warnings.warn(
                 f"{where}: no time column recognised (looked for t, time, timestamp, also "
                 f"with a unit as in 't [s]'), so the sampling time is not known and "
                 f"frequencies will be in rad/sample; the columns {unused} are not used. Pass "
-                "t='<name>' if one of them is the time, or dt=<sampling time>, or t=None to "
-                "read without a time base.", DataWarning, stacklevel=3)
+                f"{spell['t']} if one of them is the time, or {spell['dt']}, or "
+                f"{spell['no_t']} to read without a time base.", DataWarning, stacklevel=3)
         return found
 
     @classmethod
-    def _build(cls, u, y, tt, t, dt, where, uname, yname, names):
+    def _build(cls, u, y, tt, t, dt, where, uname, yname, names, spell=None):
         dt = _check_dt(dt)
         t0 = 0.0
         if tt is not None:
@@ -179,7 +187,8 @@ class IOData:
             else:
                 raise DataValidationError(
                     f"{where}: the time column {t!r} has step {step:g} but dt={dt:g} was "
-                    f"given; drop one of them (or pass t=None to ignore the column).")
+                    f"given; drop one of them (or pass {(spell or PYTHON_NAMES)['no_t']} to "
+                    "ignore the column).")
         names.setdefault("input_name", uname)
         names.setdefault("output_name", yname)
         return cls(u, y, dt, t0=t0, **names)

@@ -7,7 +7,7 @@ everywhere:
 
 * **signals** (``u``, ``y``, ``X``): real numbers of shape ``(N,)`` or ``(N, 1)``;
   sparse, ragged, text, complex, empty and non-finite inputs are refused;
-* **per-sample bounds** (noise bounds, input bounds): a scalar, shape ``(N,)`` or
+* **per-sample bounds** (output and input error bounds): a scalar, shape ``(N,)`` or
   ``(N, 1)``; booleans and text are refused (``True`` is not the number 1 here);
 * **scalar settings** (a PRBS level, a margin, a steady-state gain): real numbers only;
   booleans and text, even numeric text such as ``"1.0"``, are refused;
@@ -138,7 +138,7 @@ def as_bound(name: str, value, n: int, *, allow_zero: bool = False,
             raise sign_error(f"{name} must be finite and >= 0; got min {arr.min():g}.")
     elif np.any(arr <= 0):
         raise sign_error(
-            f"{name} must be > 0 (a bounded-error method needs a positive noise bound; a bound "
+            f"{name} must be > 0 (a bounded-error method needs a positive error bound; a bound "
             f"of 0 makes the set degenerate - use the smallest bound you can guarantee); got "
             f"min {arr.min():g}."
         )
@@ -298,7 +298,7 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
     :mod:`hammerbound.tolerances`; and the a priori boxes (``|b_j| <= 1e4``, the big-M box
     ``1e6 max|y| / min|u|`` of stage 1) are fixed numbers. When the data's magnitudes are
     near or below those absolute tolerances, or products with the boxes exhaust the
-    ``~16`` significant digits, the solvers stop resolving the noise bound and the
+    ``~16`` significant digits, the solvers stop resolving the error bound and the
     decisions "empty" / "unbounded" become statements about rounding, not about the data.
 
     *Measured* (chapter example, ``N = 60``, every signal and bound scaled by ``10^k``).
@@ -319,7 +319,7 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
     keeps a factor of at least 10 from every measured failure, contains the range
     ``1e-6 .. 1e6`` over which the extremal-noise tests run, and is far wider than any
     physical unit choice needs. Data outside it are refused with the fix: divide the
-    signals *and* the noise bounds by a common factor ``s`` (a power of ten) so that the
+    signals *and* the error bounds by a common factor ``s`` (a power of ten) so that the
     largest magnitudes are near 1. In stage 1 the slopes are then unchanged and the
     dead-zone widths ``c_l``, ``c_r`` are divided by ``s`` (multiply them back); in stage 2
     scaling the input, the output and both bounds by the same factor leaves ``theta``
@@ -346,7 +346,7 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
         raise DataScaleError(
             f"{where}: the data are outside the range of magnitudes [{SCALE_MIN:g}, "
             f"{SCALE_MAX:g}] for which the bounds can be certified ({'; '.join(found)}). "
-            "Rescale: divide the signals and the noise bounds by a common factor s (a "
+            "Rescale: divide the signals and the error bounds by a common factor s (a "
             f"power of ten, here e.g. s = {factor:g}) so that their largest magnitudes are "
             f"near 1{hint}."
         )
@@ -358,6 +358,6 @@ def check_scale(where: str, signals: dict, bounds: dict | None = None, *,
                 raise DataScaleError(
                     f"{where}: max |{num}| / max |{den}| = {ratio:.3g} is below {SLOPE_MIN:g}, "
                     "so the slopes are too small to be certified in double precision. "
-                    f"Rescale: multiply {num} and the noise bound by a power of ten s (the "
+                    f"Rescale: multiply {num} and the error bound by a power of ten s (the "
                     f"slopes are multiplied by s; divide their bounds by s afterwards)."
                 )

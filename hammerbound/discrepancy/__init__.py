@@ -3,7 +3,7 @@
 Workflow (see ``docs/discrepancy.md``)
 -------------------------------------
 1. **Locate.** The model is simulated on the measured input and compared with the data.
-   The *gap* of a model class is the smallest noise bound under which the data are
+   The *gap* of a model class is the smallest output bound under which the data are
    consistent with it (a Chebyshev / minimax fit)::
 
        gap = min_theta max_{t >= skip} |y_t - yhat_t(theta)|
@@ -11,7 +11,7 @@ Workflow (see ``docs/discrepancy.md``)
    where ``theta`` are the parameters the model is allowed to change ("parameter
    uncertainty": the numerator ``B`` of the linear block, or an output gain for a
    black-box model; see ``refit``). The data are consistent with the model class under
-   the noise bound ``Delta`` iff ``gap <= Delta`` - in floating point, iff every scored
+   the output bound ``Delta`` iff ``gap <= Delta`` - in floating point, iff every scored
    residual satisfies ``|y_t - yhat_t| <= Delta + 1e-9 (|y_t| + |yhat_t| + Delta)`` (the
    outward tolerance of :mod:`hammerbound.tolerances`; the same rule counts the samples
    "outside"). Samples whose best-fit residual lies outside that band are flagged and

@@ -52,18 +52,18 @@ def max_effects_param(value):
     return v
 
 
-def unpack(u, y, noise_bound, func="diagnose"):
+def unpack(u, y, output_bound, func="diagnose"):
     """``(u, y, data)`` from ``(u, y)`` arrays or from an :class:`~hammerbound.IOData`
     passed as ``u`` (``data``; None for arrays), with a typed error for every other mix."""
-    call = f"{func}(model, data, noise_bound=...)"
+    call = f"{func}(model, data, output_bound=...)"
     if isinstance(y, IOData):
         raise DataValidationError(
             f"y is an IOData; pass it in place of u (it holds both signals): {call}."
         )
     if isinstance(u, IOData):
         if y is not None:
-            what = ("a number: the noise bound goes by keyword" if np.ndim(y) == 0
-                    and noise_bound is None else "given too, but the IOData holds the output")
+            what = ("a number: the output bound goes by keyword" if np.ndim(y) == 0
+                    and output_bound is None else "given too, but the IOData holds the output")
             raise DataValidationError(
                 f"u is an IOData and y is {what}; call {call} without y."
             )
@@ -77,7 +77,7 @@ def unpack(u, y, noise_bound, func="diagnose"):
         return u.u, u.y, u
     if y is None:
         raise DataValidationError(
-            f"y (the measured output) is missing: call {func}(model, u, y, noise_bound=...) "
+            f"y (the measured output) is missing: call {func}(model, u, y, output_bound=...) "
             f"with arrays, or {call} with an IOData holding u and y."
         )
     return u, y, None
@@ -99,28 +99,28 @@ def _with_dt(s, data):
     return s
 
 
-def validate(model, u, y, noise_bound, refit, skip, func="diagnose"):
-    """Checked ``(structure, u, y, noise_bound, refit_flag, skip, data)``; ``u`` may be an
+def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
+    """Checked ``(structure, u, y, output_bound, refit_flag, skip, data)``; ``u`` may be an
     :class:`~hammerbound.IOData` (``data``, then ``y`` is None; its ``dt`` goes to the
     structure)."""
-    u, y, data = unpack(u, y, noise_bound, func)
+    u, y, data = unpack(u, y, output_bound, func)
     u = as_signal("u", u)
     y = as_signal("y", y)
     if u.size != y.size:
         raise DataValidationError(
             f"u has {u.size} samples but y has {y.size}; pass aligned input/output records."
         )
-    if noise_bound is None:
+    if output_bound is None:
         raise ParameterValidationError(
-            "noise_bound is required (the bound |eta_t| <= noise_bound that every verdict "
-            f"rests on; no default): e.g. {func}(model, u, y, noise_bound=0.05)."
+            "output_bound is required (the bound |eta_t| <= output_bound that every verdict "
+            f"rests on; no default): e.g. {func}(model, u, y, output_bound=0.05)."
         )
-    nb = as_real("noise_bound", noise_bound,
-                 want="noise_bound must be a single positive number (the bound "
-                      "|eta_t| <= noise_bound), e.g. noise_bound=0.05")
-    if nb <= 0:
+    bound = as_real("output_bound", output_bound,
+                 want="output_bound must be a single positive number (the bound "
+                      "|eta_t| <= output_bound), e.g. output_bound=0.05")
+    if bound <= 0:
         raise ParameterValidationError(
-            f"noise_bound must be a finite number > 0; got {noise_bound!r}."
+            f"output_bound must be a finite number > 0; got {output_bound!r}."
         )
     if refit not in ("linear", "none"):
         raise ParameterValidationError(
@@ -138,9 +138,9 @@ def validate(model, u, y, noise_bound, refit, skip, func="diagnose"):
             "cannot be compared with data that were not excited - record data with a "
             "varying input."
         )
-    check_scale(func, {"u": u, "y": y}, {"noise_bound": nb})
+    check_scale(func, {"u": u, "y": y}, {"output_bound": bound})
     s = _with_dt(as_structure(model), data)
-    return s, u, y, nb, refit == "linear", skip, data
+    return s, u, y, bound, refit == "linear", skip, data
 
 
 def candidate_names(candidates):

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .._compat import DEPRECATED, renamed_value
 from . import effects as _effects
 from .checks import candidate_names, int_param, max_effects_param, positive, validate
 from .effects import CANDIDATES, Context
@@ -24,7 +25,7 @@ def diagnose(
     model,
     u,
     y=None,
-    noise_bound: float | None = None,
+    output_bound: float | None = None,
     *,
     candidates=None,
     refit: str = "linear",
@@ -36,6 +37,7 @@ def diagnose(
     min_improvement: float = 1.1,
     max_effects: int = 2,
     progress: bool = False,
+    noise_bound=DEPRECATED,
 ) -> DiagnosisReport:
     """Locate, name and add the effect a simulation model is missing.
 
@@ -50,12 +52,13 @@ def diagnose(
         Measured input and output, same length; the data are assumed to start from rest
         (zero initial state) unless the first ``skip`` samples are excluded. Or an
         :class:`~hammerbound.IOData` in place of ``u`` (and no ``y``):
-        ``diagnose(model, data, noise_bound=0.02)``; its ``dt`` becomes the refined
+        ``diagnose(model, data, output_bound=0.02)``; its ``dt`` becomes the refined
         model's sampling time (it must agree with a model's own), its signal names and
         units label the figure.
-    noise_bound : float
-        Known bound ``|eta_t| <= noise_bound`` of the output error (22.5). Required (no
-        default: every verdict rests on it).
+    output_bound : float
+        Known bound ``|eta_t| <= output_bound`` of the output error (22.5). Required (no
+        default: every verdict rests on it). ``noise_bound`` is its deprecated name
+        (removed in 0.3.0).
     candidates : sequence of str, optional
         Names from :data:`CANDIDATES` to try (default: :func:`default_candidates`, the
         one-parameter effects; ``"all"``: every registered candidate, including the
@@ -105,7 +108,7 @@ def diagnose(
         returning the wrong number of samples; ``y`` missing, or given with an IOData; a
         non-contiguous IOData.
     ParameterValidationError
-        Missing or non-positive noise bound, unknown candidate, ``max_effects`` outside
+        Missing or non-positive output bound, unknown candidate, ``max_effects`` outside
         1..3, continuous-time or unstable transfer function, a model whose ``dt``
         differs from the IOData's, unsupported model type.
 
@@ -116,10 +119,12 @@ def diagnose(
     >>> G = control.tf([0, 0.5], [1, -0.5], True)
     >>> u = np.repeat(np.random.default_rng(0).uniform(-1, 1, 40), 8)
     >>> y = control.forced_response(G, U=u).outputs + 0.3
-    >>> diagnose(G, u, y, noise_bound=0.01).effect
+    >>> diagnose(G, u, y, output_bound=0.01).effect
     'offset'
     """
-    s, u, y, nb, do_refit, skip, data = validate(model, u, y, noise_bound, refit, skip)
+    output_bound = renamed_value("diagnose", "output_bound", output_bound, "noise_bound",
+                                 noise_bound)
+    s, u, y, bound, do_refit, skip, data = validate(model, u, y, output_bound, refit, skip)
     names = candidate_names(candidates)
     max_delay = int_param("max_delay", max_delay, 1)
     max_delay = min(max_delay, u.size - skip - 2)
@@ -130,13 +135,13 @@ def diagnose(
     max_effects = max_effects_param(max_effects)
     bar = SearchProgress(progress)
     try:
-        return _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size,
+        return _diagnose(s, u, y, bound, do_refit, skip, data, names, max_delay, grid_size,
                          window, coef_box, min_improvement, max_effects, bar)
     finally:
         bar.close()
 
 
-def _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size, window,
+def _diagnose(s, u, y, bound, do_refit, skip, data, names, max_delay, grid_size, window,
               coef_box, min_improvement, max_effects, bar):
     """:func:`diagnose` on checked arguments (``bar``: a :class:`SearchProgress`)."""
     t0 = time.perf_counter()
@@ -145,13 +150,13 @@ def _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size, wi
     existing = tuple((_effects.get(n), tuple(th)) for n, th, _ in s.effect_params) \
         if s.origin is not None else ()
     ctx = Context(u_max=float(np.max(np.abs(u))), y_max=float(np.max(np.abs(y))),
-                  n=int(u.size), max_delay=max_delay, noise_bound=nb)
-    pb = Problem(origin, u, y, nb, do_refit, skip, coef_box, grid_size, ctx, on_lp=bar.lp)
+                  n=int(u.size), max_delay=max_delay, output_bound=bound)
+    pb = Problem(origin, u, y, bound, do_refit, skip, coef_box, grid_size, ctx, on_lp=bar.lp)
     old = tuple(e for e, _ in existing)
     cost = [0, 0]  # LPs solved, combinations fitted
 
     def ok(cf):
-        return not np.any(outside(y, cf.prediction, nb, skip))
+        return not np.any(outside(y, cf.prediction, bound, skip))
 
     def fit(effs, **kw):
         label = "+".join(e.name for e in effs[len(old):]) or "the model's own effects"
@@ -170,22 +175,22 @@ def _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size, wi
         d_before, combo_before = before.design, tuple(zip(old, before.thetas, strict=True))
     else:
         combo_before = ()
-        d_before = design(origin, u, do_refit, (), y, nb)
+        d_before = design(origin, u, do_refit, (), y, bound)
     disagreement, base_fit, nominal, tagged = locate_design(
-        s, d_before, u, y, nb, skip, window, max_delay, coef_box
+        s, d_before, u, y, bound, skip, window, max_delay, coef_box
     )
     gap_before = base_fit.error
-    consistent_before = not np.any(outside(y, base_fit.prediction, nb, skip))
+    consistent_before = not np.any(outside(y, base_fit.prediction, bound, skip))
     base_model = rebuild(origin, do_refit, combo_before, d_before, base_fit)
 
     def frac(pred):
-        return float(np.mean(outside(y, pred, nb, skip)[skip:]))
+        return float(np.mean(outside(y, pred, bound, skip)[skip:]))
 
     def removed(err):
-        """Fraction of the gap excess (gap_before - noise_bound) that a fit removes."""
-        if gap_before <= nb:
+        """Fraction of the gap excess (gap_before - output_bound) that a fit removes."""
+        if gap_before <= bound:
             return 0.0
-        return float(np.clip((gap_before - err) / (gap_before - nb), 0.0, 1.0))
+        return float(np.clip((gap_before - err) / (gap_before - bound), 0.0, 1.0))
 
     # step 2: refit every candidate (also when the model is already consistent, so that
     # the report always carries the evidence for each of them)
@@ -233,7 +238,7 @@ def _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size, wi
         ref = pool[0][1] if pool else gap_before
         pool += [p for p in many if p[1] * min_improvement <= ref]
         closest = tuple(pool)
-    msg = _message(nb, gap_before, consistent_before, chosen, added, fits, combo_fits,
+    msg = _message(bound, gap_before, consistent_before, chosen, added, fits, combo_fits,
                    closest, removed, min_improvement, old)
     keep = set(added) if added else (
         {c.name for c in fits if c.consistent} if consistent_before else
@@ -243,9 +248,9 @@ def _diagnose(s, u, y, nb, do_refit, skip, data, names, max_delay, grid_size, wi
         effect=effect,
         gap_before=gap_before,
         gap_after=gap_after,
-        noise_bound=nb,
+        output_bound=bound,
         consistent_before=consistent_before,
-        consistent_after=not np.any(outside(y, pred_after, nb, skip)),
+        consistent_after=not np.any(outside(y, pred_after, bound, skip)),
         fraction_outside_before=disagreement.fraction_outside,
         fraction_outside_after=frac(pred_after),
         refined_model=refined,
@@ -378,12 +383,12 @@ def _num(v):
     return f"{v:.4g}"
 
 
-def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, closest,
+def _message(bound, gap_before, consistent_before, chosen, added, fits, combos, closest,
              removed, min_improvement, old):
     if consistent_before:
         msg = (
             f"No missing effect: the model (after refitting its parameters) reproduces the "
-            f"data within the noise bound (gap {gap_before:.4g} <= {nb:.4g}), so the data "
+            f"data within the output bound (gap {gap_before:.4g} <= {bound:.4g}), so the data "
             f"give no evidence for any candidate."
         )
         better = sorted((c for c in fits if c.minimax_error * min_improvement <= gap_before),
@@ -391,7 +396,7 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
         if better:
             c = better[0]
             msg += (
-                f" An effect whose size is below the noise bound can neither be confirmed nor "
+                f" An effect whose size is below the output bound can neither be confirmed nor "
                 f"excluded: e.g. {c.name} ({c.param_name} = {_num(c.value)}) would lower the "
                 f"error to {c.minimax_error:.4g}, which is not required by the data."
             )
@@ -401,8 +406,8 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
                  for e, (_, v) in zip(chosen.effects, chosen.model.effects, strict=True)]
         what = " + ".join(parts)
         if len(added) == 1 and not old:
-            msg = (f"Missing effect: {what}; with it the data are consistent with the noise "
-                   f"bound (gap {gap_before:.4g} -> {chosen.error:.4g} <= {nb:.4g}).")
+            msg = (f"Missing effect: {what}; with it the data are consistent with the output "
+                   f"bound (gap {gap_before:.4g} -> {chosen.error:.4g} <= {bound:.4g}).")
             others = [c for c in fits if c.consistent and c.name != added[0]]
             if others:
                 msg += (" Also consistent, with a larger error or more parameters: "
@@ -410,8 +415,8 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
                         + "; the data do not exclude them.")
         else:
             msg = (f"Missing effects, fitted jointly: {what}; with them the data are "
-                   f"consistent with the noise bound (gap {gap_before:.4g} -> "
-                   f"{chosen.error:.4g} <= {nb:.4g}).")
+                   f"consistent with the output bound (gap {gap_before:.4g} -> "
+                   f"{chosen.error:.4g} <= {bound:.4g}).")
             if len(added) > 1:
                 best = min(fits, key=lambda c: c.minimax_error)
                 msg += (f" No single candidate is consistent (best: {best.name}, "
@@ -421,7 +426,7 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
     tried = "single candidate" + (f" nor combination of up to {k} candidates (fitted "
                                   f"jointly)" if combos else "")
     msg = (f"None of the candidates explains the data: the model is inconsistent with the "
-           f"data (gap {gap_before:.4g} > {nb:.4g}) and no {tried} makes it consistent.")
+           f"data (gap {gap_before:.4g} > {bound:.4g}) and no {tried} makes it consistent.")
     if closest:
         msg += " Closest: " + "; ".join(
             f"{n} (error {e:.4g}, removes {100 * removed(e):.0f}% of the gap above the bound)"
@@ -429,6 +434,6 @@ def _message(nb, gap_before, consistent_before, chosen, added, fits, combos, clo
     else:
         msg += (f" No candidate shrinks the gap by the factor min_improvement = "
                 f"{min_improvement:g}.")
-    msg += (" Check the noise bound, or the missing effect is not in the candidate "
+    msg += (" Check the output bound, or the missing effect is not in the candidate "
             "library.")
     return msg

@@ -2,7 +2,7 @@
 
 For a fixed value of every searched effect parameter, the augmented model class is linear
 in the refitted coefficients (the numerator ``B`` or a black-box gain, plus the effects'
-linear columns such as an offset), so its smallest consistent noise bound is the linear
+linear columns such as an offset), so its smallest consistent output bound is the linear
 program ``min_z max_{t>=skip} |y_t - f_t - (Phi z)_t|`` solved by :func:`minimax`.
 """
 
@@ -24,24 +24,24 @@ _LP_OPTIONS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_toleranc
 
 
 # ------------------------------------------------------------------ consistency rule
-def outside(y, pred, nb, skip) -> np.ndarray:
+def outside(y, pred, bound, skip) -> np.ndarray:
     """Scored samples outside the noise band, relaxed outward by the tolerance policy.
 
-    Sample ``t >= skip`` is *inside* when ``|y_t - yhat_t| <= nb + feasibility_tol(y_t,
-    yhat_t, nb)``, i.e. within ``1e-9 (|y_t| + |yhat_t| + nb)`` of the band: the rounding
+    Sample ``t >= skip`` is *inside* when ``|y_t - yhat_t| <= bound + feasibility_tol(y_t,
+    yhat_t, bound)``, i.e. within ``1e-9 (|y_t| + |yhat_t| + bound)`` of the band: the rounding
     of the residual itself is far below that, so a model whose error is exactly the noise
     bound is consistent. The same rule decides ``consistent_*`` and every "% outside".
     """
-    out = np.abs(y - pred) > nb + feasibility_tol(y, pred, nb)
+    out = np.abs(y - pred) > bound + feasibility_tol(y, pred, bound)
     out[:skip] = False
     return out
 
 
-def certified_above(lower, y, gap, nb, skip) -> bool:
+def certified_above(lower, y, gap, bound, skip) -> bool:
     """Whether a certified lower bound of the gap exceeds the relaxed band of every sample."""
     ymax = float(np.max(np.abs(y[skip:]))) if y.size > skip else 0.0
     # |yhat_t| <= |y_t| + gap, so every sample's relaxed band is below this
-    return lower > nb + feasibility_tol(2.0 * ymax + gap, nb)
+    return lower > bound + feasibility_tol(2.0 * ymax + gap, bound)
 
 
 # ------------------------------------------------------------------ the LP
@@ -194,10 +194,10 @@ def _overrides(e, hook) -> bool:
     return getattr(type(e), hook) is not getattr(_effects.Effect, hook)
 
 
-def design(s: RefinedModel, u, refit: bool, combo=(), y=None, nb=None) -> Design:
+def design(s: RefinedModel, u, refit: bool, combo=(), y=None, bound=None) -> Design:
     """The model class of origin ``s`` with the effects ``combo`` = ((Effect, theta), ...).
 
-    ``y`` and the noise bound ``nb`` decide the one-sided samples of output maps
+    ``y`` and the output bound ``bound`` decide the one-sided samples of output maps
     (:meth:`~.effects.Effect.one_sided`).
 
     Order: ``s.input_ops``, the effects' input maps (in order), the original backlash, the
@@ -266,7 +266,7 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None, nb=None) -> Design
         if y is not None:
             sides = np.zeros(n, int)
             for e, th in outs:
-                sd = e.one_sided(y, th, nb)
+                sd = e.one_sided(y, th, bound)
                 if sd is not None:
                     sides = np.where(sides == 0, np.asarray(sd, int), sides)
     return Design(f, Phi, n_model, tuple(slices), sides, post, num, den)

@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.signal import lfilter
 
+from .._compat import DEPRECATED, renamed_value
 from .checks import int_param, validate
 from .fitting import Design, certified_above, design, fit_design, outside
 from .report import ConditionEvidence, Disagreement
@@ -69,14 +70,14 @@ def _best_lag(y, yh, max_lag):
     return best
 
 
-def locate(model, u, y=None, noise_bound=None, *, refit: str = "linear", skip: int = 0,
-           window: int = 5, max_lag: int = 10) -> Disagreement:
+def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: int = 0,
+           window: int = 5, max_lag: int = 10, noise_bound=DEPRECATED) -> Disagreement:
     """Step 1: where and by how much does the model disagree with the data?
 
     Parameters
     ----------
-    model, u, y, noise_bound, refit, skip
-        As in :func:`diagnose`.
+    model, u, y, output_bound, refit, skip
+        As in :func:`diagnose` (``noise_bound``: the deprecated name of ``output_bound``).
     window : int
         Samples after an input change / reversal counted as "after" it.
     max_lag : int
@@ -86,7 +87,10 @@ def locate(model, u, y=None, noise_bound=None, *, refit: str = "linear", skip: i
     -------
     Disagreement
     """
-    s, u, y, nb, do_refit, skip, _ = validate(model, u, y, noise_bound, refit, skip, "locate")
+    output_bound = renamed_value("locate", "output_bound", output_bound, "noise_bound",
+                                 noise_bound)
+    s, u, y, bound, do_refit, skip, _ = validate(model, u, y, output_bound, refit, skip,
+                                                 "locate")
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin
@@ -95,31 +99,31 @@ def locate(model, u, y=None, noise_bound=None, *, refit: str = "linear", skip: i
         from . import effects as _effects
 
         combo = tuple((_effects.get(n), th) for n, th, _ in s.effect_params)
-    d = design(origin, u, do_refit, combo, y, nb)
-    dis, fit, _, tagged = locate_design(s, d, u, y, nb, skip, window, max_lag)
-    return replace(dis, hints=check_hints(origin, combo, u, y, nb, do_refit, skip, max_lag,
+    d = design(origin, u, do_refit, combo, y, bound)
+    dis, fit, _, tagged = locate_design(s, d, u, y, bound, skip, window, max_lag)
+    return replace(dis, hints=check_hints(origin, combo, u, y, bound, do_refit, skip, max_lag,
                                           fit.error, tagged))
 
 
-def check_hints(origin, combo, u, y, nb, refit, skip, max_delay, gap, tagged):
+def check_hints(origin, combo, u, y, bound, refit, skip, max_delay, gap, tagged):
     """Keep a hint that points to a candidate only if that candidate scores: among the
     candidates the hints point to, the consistent ones when there are any, else those
-    removing at least half of the gap above the noise bound."""
+    removing at least half of the gap above the output bound."""
     from . import effects as _effects
     from .effects import Context
     from .search import Problem, fit_combination
 
     tags = {t for t, _ in tagged if t is not None and t in _effects.REGISTRY}
-    if not tags or gap <= nb:
+    if not tags or gap <= bound:
         return tuple(text for t, text in tagged if t is None)
     ctx = Context(float(np.max(np.abs(u))), float(np.max(np.abs(y))), int(u.size),
-                  max(1, min(max_delay, u.size - skip - 2)), nb)
-    pb = Problem(origin, u, y, nb, refit, skip, 1e3, 24, ctx)
+                  max(1, min(max_delay, u.size - skip - 2)), bound)
+    pb = Problem(origin, u, y, bound, refit, skip, 1e3, 24, ctx)
     old = tuple(e for e, _ in combo)
     cfs = {t: fit_combination(pb, (*old, _effects.get(t))) for t in tags}
     errs = {t: cf.error for t, cf in cfs.items()}
-    ok = {t for t, cf in cfs.items() if not np.any(outside(y, cf.prediction, nb, skip))}
-    keep = ok or {t for t, e in errs.items() if (gap - e) >= 0.5 * (gap - nb)}
+    ok = {t for t, cf in cfs.items() if not np.any(outside(y, cf.prediction, bound, skip))}
+    keep = ok or {t for t, e in errs.items() if (gap - e) >= 0.5 * (gap - bound)}
     return tuple(text for t, text in tagged if t is None or t in keep)
 
 
@@ -158,13 +162,13 @@ def _direction_correlation(s, u, y, f, Phi, skip):
     return _corr(r[skip:], direction[skip:])
 
 
-def locate_design(s, d: Design, u, y, nb, skip, window, max_lag, coef_box=1e3):
+def locate_design(s, d: Design, u, y, bound, skip, window, max_lag, coef_box=1e3):
     """Localisation for the model class ``d`` (``s``: the model as given).
 
     Returns ``(Disagreement, Fit, nominal prediction)``.
     """
     nominal = s.predict(u)
-    fit = fit_design(y, d, skip, coef_box, nb)
+    fit = fit_design(y, d, skip, coef_box, bound)
     f, Phi = d.f, d.Phi
     resid = y - fit.prediction
     nres = y - nominal
@@ -176,7 +180,7 @@ def locate_design(s, d: Design, u, y, nb, skip, window, max_lag, coef_box=1e3):
     else:
         lres = y - f
     scored = np.arange(y.size) >= skip
-    flagged = outside(y, y - lres, nb, skip)
+    flagged = outside(y, y - lres, bound, skip)
     # where are the *largest* disagreements? (top quintile of the out-of-band samples)
     worst = flagged.copy()
     if np.any(flagged):
@@ -186,15 +190,15 @@ def locate_design(s, d: Design, u, y, nb, skip, window, max_lag, coef_box=1e3):
     dc = _direction_correlation(s, u, y, f, Phi, skip)
     lag = _best_lag(y[skip:], nominal[skip:], max_lag)
     hints = []  # (candidate the hint points to, or None for a plain observation; text)
-    out_fit = outside(y, fit.prediction, nb, skip)
+    out_fit = outside(y, fit.prediction, bound, skip)
     if not np.any(out_fit):
-        hints.append((None, "the data are consistent with the model class under the noise "
+        hints.append((None, "the data are consistent with the model class under the output "
                             "bound"))
     else:
-        if certified_above(fit.lower, y, fit.error, nb, skip):
+        if certified_above(fit.lower, y, fit.error, bound, skip):
             hints.append((None,
                 f"certified: no refit of the model's parameters brings the error below "
-                f"{fit.lower:.4g} > noise bound {nb:.4g}"
+                f"{fit.lower:.4g} > output bound {bound:.4g}"
             ))
         for c in conds:
             if np.isfinite(c.enrichment) and c.enrichment >= 1.5 and c.share_of_violations > 0.2:
@@ -218,7 +222,7 @@ def locate_design(s, d: Design, u, y, nb, skip, window, max_lag, coef_box=1e3):
         fraction_outside=float(np.mean(out_fit[skip:])),
         ls_fraction_outside=float(np.mean(flagged[skip:])),
         nominal_gap=float(np.max(np.abs(nres[skip:]))),
-        nominal_fraction_outside=float(np.mean(outside(y, nominal, nb, skip)[skip:])),
+        nominal_fraction_outside=float(np.mean(outside(y, nominal, bound, skip)[skip:])),
         indices=np.flatnonzero(flagged),
         residual=resid,
         ls_residual=lres,

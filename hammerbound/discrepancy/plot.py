@@ -28,7 +28,7 @@ def plot_report(self, path=None, *, max_samples=None):
     fig.suptitle(
         f"Discrepancy diagnosis - missing effect: {self.effect_label};  "
         f"gap {self.gap_before:.3g} -> "
-        f"{self.gap_after:.3g}  (noise bound {self.noise_bound:.3g})",
+        f"{self.gap_after:.3g}  (output bound {self.output_bound:.3g})",
         fontsize=11,
     )
     ax = axes[0]
@@ -45,9 +45,9 @@ def plot_report(self, path=None, *, max_samples=None):
     ax = axes[2]
     rb = (self.y - self.prediction_before)[sl]
     ra = (self.y - self.prediction_after)[sl]
-    nb = self.noise_bound
-    ax.axhspan(-nb, nb, color="tab:green", alpha=0.2, lw=0,
-               label=f"noise band +-{nb:.3g}")
+    bound = self.output_bound
+    ax.axhspan(-bound, bound, color="tab:green", alpha=0.2, lw=0,
+               label=f"noise band +-{bound:.3g}")
     ax.plot(t, rb, color="tab:red", lw=0.8,
             label=f"before: gap {self.gap_before:.3g}, "
                   f"{100 * self.fraction_outside_before:.0f}% outside")
@@ -56,7 +56,7 @@ def plot_report(self, path=None, *, max_samples=None):
                   f"{100 * self.fraction_outside_after:.0f}% outside")
     if self.skip:
         ax.axvspan(0, min(self.skip, n), color="0.85", label="not scored (skip)")
-    lim = 1.15 * max(np.max(np.abs(rb)), np.max(np.abs(ra)), nb)
+    lim = 1.15 * max(np.max(np.abs(rb)), np.max(np.abs(ra)), bound)
     ax.set_ylim(-lim, 1.6 * lim)  # head-room for the legend
     ax.set_ylabel("residual y - yhat\n(minimax refit)")
     ax.set_xlabel("sample t")
@@ -79,10 +79,10 @@ def plot_report(self, path=None, *, max_samples=None):
                         va="bottom", fontsize=8,
                         bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1})
         ax.set_yscale("log")
-        lo = min(errs.min(), nb) / 2
+        lo = min(errs.min(), bound) / 2
         hi = max(errs.max(), self.gap_before) * 3
         ax.set_ylim(lo, hi)
-    ax.axhline(nb, color="tab:green", ls="--", label="noise bound")
+    ax.axhline(bound, color="tab:green", ls="--", label="output bound")
     ax.axhline(self.gap_before, color="tab:red", ls=":", label="gap before")
     ax.set_ylabel("minimax error\nof candidate")
     ax.set_title("candidate evidence (blue: chosen, green: also consistent, "

@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._compat import warn_renamed
+
 if TYPE_CHECKING:
     from .model import RefinedModel
 
@@ -30,15 +32,15 @@ class CandidateFit:
         Fitted parameter value (the one with the smallest minimax error).
     minimax_error : float
         Achieved ``max_t |y_t - yhat_t|`` of the refitted augmented model: the smallest
-        noise bound under which the data are consistent with it (up to the search).
+        output bound under which the data are consistent with it (up to the search).
     lower_bound : float
         Rigorous lower bound of the minimax error *at* ``value`` (for ``offset`` and
         ``delay`` - searched exhaustively - a bound over the whole candidate class).
     consistent : bool
-        ``minimax_error <= noise_bound`` (every residual within the noise band, relaxed
-        outward by the tolerance policy: ``1e-9 (|y_t| + |yhat_t| + noise_bound)``).
+        ``minimax_error <= output_bound`` (every residual within the noise band, relaxed
+        outward by the tolerance policy: ``1e-9 (|y_t| + |yhat_t| + output_bound)``).
     fraction_outside : float
-        Fraction of samples whose residual exceeds the noise bound after the refit.
+        Fraction of samples whose residual exceeds the output bound after the refit.
     improvement : float
         ``gap_before / minimax_error`` (``> 1`` means the candidate shrinks the gap).
     exhaustive : bool
@@ -47,8 +49,8 @@ class CandidateFit:
     n_evaluations : int
         Number of minimax LPs solved for this candidate.
     gap_fraction_removed : float
-        ``(gap_before - minimax_error) / (gap_before - noise_bound)`` clipped to [0, 1]:
-        the share of the gap above the noise bound that the candidate removes (0 when the
+        ``(gap_before - minimax_error) / (gap_before - output_bound)`` clipped to [0, 1]:
+        the share of the gap above the output bound that the candidate removes (0 when the
         model is already consistent).
     """
 
@@ -83,7 +85,7 @@ class CombinationFit:
         Achieved ``max_t |y_t - yhat_t|`` of the jointly refitted model.
     consistent : bool
     gap_fraction_removed : float
-        ``(gap_before - minimax_error) / (gap_before - noise_bound)`` clipped to [0, 1].
+        ``(gap_before - minimax_error) / (gap_before - output_bound)`` clipped to [0, 1].
     n_evaluations : int
         Minimax LPs solved for this combination.
     seconds : float
@@ -136,17 +138,17 @@ class Disagreement:
     Attributes
     ----------
     gap : float
-        Smallest noise bound making the data consistent with the original model class
+        Smallest output bound making the data consistent with the original model class
         (minimax over the refittable parameters, see ``refit``).
     gap_lower : float
-        Rigorous lower bound of ``gap`` (weak duality); ``gap_lower > noise_bound``
+        Rigorous lower bound of ``gap`` (weak duality); ``gap_lower > output_bound``
         certifies that the model class is inconsistent with the data.
     fraction_outside : float
-        Fraction of samples whose minimax-refit residual exceeds the noise bound (the
+        Fraction of samples whose minimax-refit residual exceeds the output bound (the
         minimax fit spreads the error evenly, so this is often close to 1 when
-        ``gap > noise_bound``).
+        ``gap > output_bound``).
     ls_fraction_outside : float
-        Fraction of samples whose *least-squares* refit residual exceeds the noise bound;
+        Fraction of samples whose *least-squares* refit residual exceeds the output bound;
         these samples (``indices``) are used to locate the disagreement.
     nominal_gap : float
         ``max |y - model(u)|`` of the model as given (no refit).
@@ -201,7 +203,7 @@ class DiagnosisReport:
     ----------
     effect : str or None
         Name of the missing effect, or of the combination (``"backlash+delay"``), that
-        makes the data consistent with the noise bound; ``None`` when the model is
+        makes the data consistent with the output bound; ``None`` when the model is
         already consistent, and when **none of the candidates explains the data** (then
         see ``closest``). Never the name of something that leaves the data inconsistent.
     effects_added : tuple of str
@@ -211,8 +213,8 @@ class DiagnosisReport:
         with the smallest error among those shrinking the gap by ``min_improvement``.
         Listed for information only; none of them is consistent.
     closest_gap_removed : tuple of float
-        For each of ``closest``: the fraction of the gap above the noise bound it
-        removes, ``(gap_before - error) / (gap_before - noise_bound)``.
+        For each of ``closest``: the fraction of the gap above the output bound it
+        removes, ``(gap_before - error) / (gap_before - output_bound)``.
     closest_minimax_error : tuple of float
         For each of ``closest``: its achieved minimax error.
     combinations : tuple of CombinationFit
@@ -224,14 +226,14 @@ class DiagnosisReport:
     n_combinations : int
         Candidate classes (single effects and combinations) fitted.
     gap_before, gap_after : float
-        Minimax error (smallest consistent noise bound) of the original and refined
+        Minimax error (smallest consistent output bound) of the original and refined
         model classes. ``gap_after == gap_before`` when ``effect is None``. When an
-        effect is named, ``gap_after <= noise_bound`` unless no candidate is consistent
+        effect is named, ``gap_after <= output_bound`` unless no candidate is consistent
         (then ``consistent_after`` is False and the message says so).
-    noise_bound : float
+    output_bound : float
     consistent_before, consistent_after : bool
-        ``gap <= noise_bound`` before / after, up to the outward tolerance
-        ``1e-9 (|y_t| + |yhat_t| + noise_bound)`` per sample (hammerbound.tolerances).
+        ``gap <= output_bound`` before / after, up to the outward tolerance
+        ``1e-9 (|y_t| + |yhat_t| + output_bound)`` per sample (hammerbound.tolerances).
     fraction_outside_before, fraction_outside_after : float
         Fraction of samples outside the noise band before / after (same tolerance).
     refined_model : RefinedModel
@@ -252,7 +254,7 @@ class DiagnosisReport:
     effect: str | None
     gap_before: float
     gap_after: float
-    noise_bound: float
+    output_bound: float
     consistent_before: bool
     consistent_after: bool
     fraction_outside_before: float
@@ -276,6 +278,12 @@ class DiagnosisReport:
     n_fits: int = 0
     n_combinations: int = 0
     data: object = field(repr=False, default=None)
+
+    @property
+    def noise_bound(self) -> float:
+        """Deprecated name of :attr:`output_bound` (removed in 0.3.0)."""
+        warn_renamed("DiagnosisReport.noise_bound", "DiagnosisReport.output_bound")
+        return self.output_bound
 
     @property
     def effect_label(self) -> str:
@@ -313,7 +321,7 @@ class DiagnosisReport:
         """Multi-line human-readable summary (gaps, locations, candidate table)."""
         d = self.disagreement
         lines = [
-            f"noise bound              : {self.noise_bound:.6g}",
+            f"output bound             : {self.output_bound:.6g}",
             f"nominal model max |error|: {d.nominal_gap:.6g} "
             f"({100 * d.nominal_fraction_outside:.1f}% of samples outside the band)",
             f"gap before (refit)       : {self.gap_before:.6g} "
@@ -360,7 +368,7 @@ class DiagnosisReport:
             "combinations": [c.__dict__ for c in self.combinations],
             "search_cost": {"seconds": self.search_seconds, "n_fits": self.n_fits,
                             "n_classes": self.n_combinations},
-            "noise_bound": self.noise_bound,
+            "output_bound": self.output_bound,
             "gap_before": self.gap_before,
             "gap_before_certified_lower": d.gap_lower,
             "gap_after": self.gap_after,
@@ -388,8 +396,8 @@ class DiagnosisReport:
 
         Panels: (1) the input; (2) data, the model as given and the refined model;
         (3) the minimax residual before (original class, refitted) and after adding the
-        effect, with the noise band ``+-noise_bound`` - the gap is the largest excursion;
-        (4) the minimax error of every candidate against the noise bound and the gap
+        effect, with the noise band ``+-output_bound`` - the gap is the largest excursion;
+        (4) the minimax error of every candidate against the output bound and the gap
         before (log scale).
 
         Parameters

@@ -5,7 +5,7 @@ for each value of it the model's refitted coefficients and the effects' linear
 coefficients come from one minimax LP (:func:`.fitting.minimax`). Integer parameters are
 enumerated; continuous ones are searched on a grid (1-D: bounded Brent; several: a
 coarse product grid plus the given starting points, then Nelder-Mead) and refined down
-to the rounding level when the error ends just above the noise bound.
+to the rounding level when the error ends just above the output bound.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ class Problem:
     origin: RefinedModel
     u: np.ndarray
     y: np.ndarray
-    nb: float
+    bound: float
     refit: bool
     skip: int
     coef_box: float
@@ -91,8 +91,8 @@ class _Objective:
         if key not in self.cache:
             pb = self.pb
             combo = tuple(zip(self.effects, self.split(key), strict=True))
-            d = design(pb.origin, pb.u, pb.refit, combo, pb.y, pb.nb)
-            target = pb.nb if pb.refine_to_bound else None
+            d = design(pb.origin, pb.u, pb.refit, combo, pb.y, pb.bound)
+            target = pb.bound if pb.refine_to_bound else None
             self.cache[key] = (fit_design(pb.y, d, pb.skip, pb.coef_box, target, fast=True), d)
             _tick(pb)
         return self.cache[key][0].error
@@ -131,7 +131,7 @@ def _golden(g, a, b, xtol, max_iter=90, stop=None):
 def _search_1d(g, p, grid_size, target, starts=(), coarse=False):
     """Grid search then bounded Brent refinement of a 1-D minimax error ``g``.
 
-    When the error found lies just above ``target`` (the noise bound: within 1 %), a final
+    When the error found lies just above ``target`` (the output bound: within 1 %), a final
     golden-section refinement brings it to the rounding level of the fit, so that data
     whose noise sits exactly at the bound are recognised as consistent.
     """
@@ -276,7 +276,7 @@ def fit_combination(pb: Problem, effects, *, starts=None, int_choices=None,
     full_enum = int_choices is None or all(
         int_choices.get((flat[n][0], flat[n][1])) is None for n in int_idx)
     flat_starts = [tuple(v for th in s for v in th) for s in (starts or ())]
-    target = pb.nb if pb.refine_to_bound else None
+    target = pb.bound if pb.refine_to_bound else None
     for ivals in itertools.product(*int_vals):
         base = [0.0] * len(flat)
         for n, v in zip(int_idx, ivals, strict=True):
@@ -335,14 +335,14 @@ def _pin_leading(pb: Problem, combo, d: Design, fit: Fit):
     origin, n = pb.origin, 0
     if not (pb.refit and origin.base is None and any(e.pins_leading for e, _ in combo)):
         return origin, d, fit, n
-    while np.isfinite(fit.error) and not np.any(outside(pb.y, fit.prediction, pb.nb, pb.skip)) \
+    while np.isfinite(fit.error) and not np.any(outside(pb.y, fit.prediction, pb.bound, pb.skip)) \
             and origin._j0 + 1 < origin.B.size:  # keep one free coefficient
         pinned = replace(origin, b_free_from=origin._j0 + 1)
-        d2 = design(pinned, pb.u, pb.refit, combo, pb.y, pb.nb)
-        fit2 = fit_design(pb.y, d2, pb.skip, pb.coef_box, pb.nb)
+        d2 = design(pinned, pb.u, pb.refit, combo, pb.y, pb.bound)
+        fit2 = fit_design(pb.y, d2, pb.skip, pb.coef_box, pb.bound)
         n += 1
         _tick(pb)
-        if np.any(outside(pb.y, fit2.prediction, pb.nb, pb.skip)):
+        if np.any(outside(pb.y, fit2.prediction, pb.bound, pb.skip)):
             break
         origin, d, fit = pinned, d2, fit2
     return origin, d, fit, n

@@ -26,6 +26,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.validation import check_is_fitted
 
+from .._compat import is_given
 from ..data.validation import as_signal, as_theta, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..stage1.estimator import BacklashSetEstimator
@@ -52,6 +53,52 @@ def _central_system(backlash, A, B, dt=None):
             RuntimeWarning, stacklevel=3,
         )
         return HammersteinSystem._unchecked(backlash, (A, B), dt=dt)
+
+
+def _stage_estimator(value, cls, name, example):
+    """A clone of the stage estimator ``value`` (an instance of ``cls``), or a typed error
+    that says what to pass (a class, a string, another estimator)."""
+    if isinstance(value, cls):
+        return clone(value)
+    if isinstance(value, type) and issubclass(value, cls):
+        got = f"the class {cls.__name__} itself"
+    elif isinstance(value, str):
+        got = f"the string {value!r}"
+    else:
+        got = f"a {type(value).__name__}"
+    raise ParameterValidationError(
+        f"{name} must be a {cls.__name__} instance; got {got}. Pass e.g. {name}={example} "
+        f"(its options, such as method=..., go to the {cls.__name__}).")
+
+
+def _no_bound(est) -> bool:
+    """Whether a stage estimator was given no output bound (under either name)."""
+    return est.output_bound is None and not is_given(est.noise_bound)
+
+
+def _check_bounds(bl, lin, output_bound, steady):
+    """Refuse, before any work, a missing output bound (the guarantee rests on it): the
+    record's (stage-2 estimator or ``fit(output_bound=)``), and the steady-state one when
+    steady-state data are given."""
+    if steady and _no_bound(bl):
+        raise ParameterValidationError(
+            "HammersteinBacklashIdentifier: the stage-1 estimator has no output_bound. The "
+            "steady-state data rest on the bound of their output errors, which has no "
+            "default: pass backlash=BacklashSetEstimator(output_bound=0.05) (your sensor's "
+            "error bound).")
+    if output_bound is None and _no_bound(lin):
+        raise ParameterValidationError(
+            "HammersteinBacklashIdentifier: the stage-2 estimator has no output_bound. The "
+            "record's output errors must be bounded (the guarantee rests on it; no "
+            "default): pass linear=LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05) (or "
+            "fit(..., output_bound=...)).")
+
+
+def _steady_bound(bl):
+    from .._compat import renamed_value
+
+    return renamed_value("BacklashSetEstimator", "output_bound", bl.output_bound,
+                         "noise_bound", bl.noise_bound, stacklevel=5)
 
 
 PROCEDURES = ("auto", "two-stage", "one-record")
@@ -147,15 +194,12 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if self.procedure not in PROCEDURES:
             raise ParameterValidationError(
                 f"procedure must be one of {PROCEDURES}; got {self.procedure!r}.")
-        for name, cls in (("backlash", BacklashSetEstimator), ("linear", LinearEIVSetEstimator)):
-            v = getattr(self, name)
-            if v is not None and not isinstance(v, cls):
-                what = "the class itself" if v is cls else f"{type(v).__name__} {v!r}"
-                raise ParameterValidationError(
-                    f"{name} must be a {cls.__name__} instance (or None); got {what}. "
-                    f"Pass e.g. {name}={cls.__name__}(...).")
-        bl = BacklashSetEstimator() if self.backlash is None else clone(self.backlash)
-        lin = LinearEIVSetEstimator() if self.linear is None else clone(self.linear)
+        bl = BacklashSetEstimator() if self.backlash is None else _stage_estimator(
+            self.backlash, BacklashSetEstimator, "backlash",
+            "BacklashSetEstimator(output_bound=0.05)")
+        lin = LinearEIVSetEstimator() if self.linear is None else _stage_estimator(
+            self.linear, LinearEIVSetEstimator, "linear",
+            "LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05)")
         g = lin.steady_state_gain
         if g is None:
             lin.set_params(steady_state_gain=1.0)  # (22.8), explicitly on the clone
@@ -232,6 +276,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         bl, lin = self._estimators()
         data = self._record(X, y)
         self.procedure_ = self._choose(data.u, steady_state)
+        _check_bounds(bl, lin, output_bound, steady_state is not None)
         if self.procedure_ == "two-stage":
             self._fit_two_stage(bl, lin, data, steady_state, output_bound)
         else:
@@ -254,11 +299,14 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.gamma_bounds_ = bl.gamma_bounds_
         self.theta_bounds_ = lin.bounds_
         self.bound_info_ = tuple(lin.bound_info_)
+        from ..tables import bound_text
+
         self.assumptions_ = (
-            f"steady-state output errors |eta| <= {bl.noise_bound}",
+            f"steady-state output errors |eta| <= {bound_text(bl.output_bound_)}",
             "u > 0 steady states on the right line, u < 0 on the left (square waves)",
-            "PRBS output errors |eta_t| <= "
-            + (f"{lin.noise_bound}" if output_bound is None else "the per-fit output_bound"),
+            f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",
+            f"inner signal within the stage-1 bounds |dx_t| <= "
+            f"{bound_text(lin.problem_.input_bound)}",
             "linear block of unit steady-state gain (22.8)",
         )
         ml, cl, mr, cr = bl.gamma_center_
@@ -271,7 +319,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
 
         steady = None if steady_state is None else steady_pair(steady_state)
         f = fit_one_record(lin, data, gamma_box=self.gamma_box, steady=steady,
-                           steady_bound=None if steady is None else bl.noise_bound,
+                           steady_bound=None if steady is None else _steady_bound(bl),
                            output_bound=output_bound)
         self.one_record_ = f
         pool = [i.extra.get("witness") for i in f.result.infos]
@@ -317,7 +365,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         """Text summary: the procedure and its settings, the interval table (and, for one
         record, the assumptions the bounds rest on)."""
         check_is_fitted(self, "bounds_")
-        from ..tables import interval_text
+        from ..tables import bound_text, interval_text
 
         lin = self.linear_
         pr = lin.problem_
@@ -329,7 +377,12 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             return table + "\nassumptions:\n" + "\n".join(f"  - {a}" for a in self.assumptions_)
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
-                f"{self.inner_signal}, N = {pr.N}, dt = {dt}")
+                f"{self.inner_signal}, N = {pr.N}, dt = {dt}\n"
+                f"assumptions: output error bounds |eta| <= "
+                f"{bound_text(self.backlash_.output_bound_)} (steady state), "
+                f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "
+                f"bounds |dx_t| <= {bound_text(pr.input_bound)}; unit steady-state gain of "
+                "the linear block (22.8)")
         return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     @property

@@ -47,11 +47,6 @@ class OneRecordFit:
     seconds: float
 
 
-def _output_bound(lin):
-    v = getattr(lin, "output_bound", None)
-    return lin.noise_bound if v is None else v
-
-
 def _gamma_prior(gamma_box, u, y, deta) -> GammaPrior:
     if gamma_box is None:
         return GammaPrior(default_gamma_box(u, y, deta), user_given=False)
@@ -120,7 +115,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
             f"the one-record identification supports method='exact' (tight intervals) or "
             f"'lp' (the relaxation's bounds); got method={lin.method!r} on the stage-2 "
             "estimator.")
-    ob = _output_bound(lin) if output_bound is None else output_bound
+    ob = lin._output_bound(data.N, output_bound)
     prior = _gamma_prior(gamma_box, data.u, data.y, ob)
     problem = _problem(lin, data, prior, steady, steady_bound, ob)
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)

@@ -72,7 +72,7 @@ class CertifiedSamples:
         The samples, columns in :attr:`param_names` order.
     param_names : tuple of str
     eta : ndarray (n, N)
-        Witness output errors (``|eta| <= noise_bound``) for each sample.
+        Witness output errors (``|eta| <= output_bound``) for each sample.
     dx : ndarray (n, K)
         Witness input errors, one per input-error group (``|dx| <= input_bound``).
     max_violation : ndarray (n,)

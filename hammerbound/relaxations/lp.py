@@ -228,8 +228,9 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
         t = int(problem.equation_times[k - 1])
         raise EmptyFeasibleSetError(
             f"no theta explains the data within the error bounds: the LP outer set of (22.34) "
-            f"becomes empty at equation t = {t} (0-based sample index). Check the noise bound "
-            f"deta, the inner-signal bound dx and the model orders near that sample.",
+            f"becomes empty at equation t = {t} (0-based sample index). Check the output error "
+            f"bound (output_bound), the input error bound (input_bound; from stage 1: the "
+            f"inner-signal bound) and the model orders near that sample.",
             first_index=t)
     lo = np.min([r["lo"] for _, r in feas], axis=0)
     hi = np.max([r["hi"] for _, r in feas], axis=0)

@@ -4,22 +4,24 @@ Every stage-2 method (polytopic LP, sparse moment relaxation, exact branch-and-b
 works on one :class:`EIVProblem`. Conventions (0-based samples ``t = 0 .. N-1``):
 
 * parameters ``theta = [a_1 .. a_na, b_j for j in b_lags]``; the input delay ``nk`` (the
-  first lag of ``B``, MATLAB's ``nk``) defaults to ``0`` if ``b0`` else ``1``. ``nb`` counts
+  first lag of ``B``, MATLAB's ``nk``) defaults to ``1``. ``nb`` counts
   the chapter's coefficients ``b_1 .. b_nb``: ``nk = 1`` gives lags ``1 .. nb`` (the
-  chapter), ``nk = 0`` adds the direct term (lags ``0 .. nb``, as ``b0=True``) and
+  chapter), ``nk = 0`` adds the direct term (lags ``0 .. nb``) and
   ``nk > 1`` delays them (lags ``nk .. nk + nb - 1``, MATLAB's ``[na nb nk]``);
 * for every ``t`` in :attr:`EIVProblem.equation_times` (``t >= n0 = max(na, last lag)``)::
 
       (y_t - eta_t) + sum_i a_i (y_{t-i} - eta_{t-i})
           = sum_j b_j (x_t-j - dx_var[g(t-j)])                 (22.34)
 
-  with ``|eta_t| <= deta_t`` and ``|dx_var[k]| <= dx_group[k]``;
+  with ``|eta_t| <= deta_t`` (``output_bound``) and ``|dx_var[k]| <= dx_group[k]`` (the
+  ``input_bound`` of the group's samples);
 * ``g`` is the *input group* map: sample ``t`` uses input-error variable ``groups[t]``.
   Independent per-sample errors (the chapter) use ``groups = arange(N)``. The two-level
   inner signal (Result 1: a PRBS through the backlash takes exactly two unknown values)
   uses ``groups[t] = 0`` where ``u_t = +u*`` and ``1`` where ``u_t = -u*``: every sample at a
   level shares *one* unknown value;
-* optional steady-state gain equality (22.8): ``sum_j b_j = gain * (1 + sum_i a_i)``;
+* optional steady-state gain equality (22.8): ``sum_j b_j = g * (1 + sum_i a_i)`` with
+  ``g = steady_state_gain``;
 * an a priori box ``theta_box`` (p x 2) that every method may use; the feasible set is
   defined *inside* that box. Default: ``|a_i| <= binom(na, i)`` (which every asymptotically
   stable A(q^-1) satisfies, assumption A1) and ``|b_j| <= b_bound``.
@@ -41,6 +43,12 @@ from ..data.validation import as_bound, as_signal
 from ..exceptions import DataValidationError, ParameterValidationError
 
 DEFAULT_B_BOUND = 1.0e4
+
+
+def _deprecated(old: str, new: str) -> None:
+    from .._compat import warn_renamed
+
+    warn_renamed(old, new, stacklevel=3)
 
 
 def _as_1d(name, v, n=None, *, positive=False, nonneg=False):
@@ -74,34 +82,108 @@ def default_theta_box(na: int, nb: int, b0: bool, b_bound: float = DEFAULT_B_BOU
     return np.asarray(rows, dtype=float).reshape(-1, 2)
 
 
-@dataclass(frozen=True)
+_RENAMED = {"dx": "input_bound", "deta": "output_bound", "gain": "steady_state_gain"}
+
+
+@dataclass(frozen=True, init=False)
 class EIVProblem:
-    """Data and structure of the EIV feasible set (22.34). See the module docstring."""
+    """Data and structure of the EIV feasible set (22.34). See the module docstring.
+
+    Parameters
+    ----------
+    y, x : array of shape (N,)
+        Measured output and central input ``x^c``.
+    input_bound : float or array of shape (N,)
+        ``|x_t - x^c_t| <= input_bound_t`` (``Delta x``, 22.31); 0: exact input.
+    output_bound : float or array of shape (N,)
+        ``|eta_t| <= output_bound_t`` (``Delta eta``, 22.5), > 0.
+    na, nb : int
+        Orders of ``A`` and ``B`` (``nb`` counts the chapter's ``b_1 .. b_nb``).
+    nk : int, default 1
+        Input delay: first lag of ``B`` (0 adds the direct term ``b_0``).
+    steady_state_gain : float or None, default None
+        ``B(1) / A(1) = steady_state_gain`` (22.8) as an equality; None: no gain
+        constraint (the stage-2 estimators always pass it explicitly).
+    groups, theta_box
+        Input-error groups and a priori box (see the module docstring).
+
+    The chapter's notation is kept as read-only aliases for the relaxations:
+    ``deta`` (= ``output_bound``), ``dx`` (= ``input_bound``), ``gain``
+    (= ``steady_state_gain``) and ``b0`` (``nk == 0``). The keywords ``dx=``, ``deta=``,
+    ``gain=`` and ``b0=`` are deprecated (removed in 0.3.0).
+    """
 
     y: np.ndarray
     x: np.ndarray
-    dx: np.ndarray
-    deta: np.ndarray
+    input_bound: np.ndarray
+    output_bound: np.ndarray
     na: int
     nb: int
-    b0: bool = False
-    gain: float | None = 1.0
-    groups: np.ndarray | None = None
-    theta_box: np.ndarray | None = None
-    nk: int | None = None
-    # derived (filled in __post_init__)
+    nk: int
+    steady_state_gain: float | None
+    groups: np.ndarray
+    theta_box: np.ndarray
+    # derived
     n_groups: int = field(init=False)
     dx_group: np.ndarray = field(init=False)
 
-    def __post_init__(self):
-        y = _as_1d("y", self.y)
+    def __init__(self, y, x, input_bound=None, output_bound=None, na=None, nb=None,
+                 b0=None, steady_state_gain=None, groups=None, theta_box=None, nk=None,
+                 **old):
+        new = {"input_bound": input_bound, "output_bound": output_bound,
+               "steady_state_gain": steady_state_gain}
+        for key, val in old.items():
+            if key not in _RENAMED:
+                raise TypeError(f"EIVProblem() got an unexpected keyword argument {key!r}")
+            _deprecated(f"EIVProblem({key}=...)", f"{_RENAMED[key]}=...")
+            if new[_RENAMED[key]] is not None:
+                raise ParameterValidationError(
+                    f"EIVProblem got both {key}= and {_RENAMED[key]}= (the same bound); pass "
+                    f"only {_RENAMED[key]}=.")
+            new[_RENAMED[key]] = val
+        if b0 is not None:
+            _deprecated("EIVProblem(b0=...)", "nk=0 (direct term) or nk=1")
+        for name in ("input_bound", "output_bound"):
+            if new[name] is None:
+                raise ParameterValidationError(
+                    f"EIVProblem needs {name} (the bound every interval rests on; no default): "
+                    f"e.g. EIVProblem(y, x, input_bound=0.0, output_bound=0.05, na=2, nb=2).")
+        if na is None or nb is None:
+            raise ParameterValidationError("EIVProblem needs the orders na and nb.")
+        self._setup(y, x, new["input_bound"], new["output_bound"], na, nb, bool(b0), nk,
+                    new["steady_state_gain"], groups, theta_box)
+
+    # chapter notation (22.34), read-only: the relaxations' internals use it
+    @property
+    def deta(self) -> np.ndarray:
+        """``Delta eta_t``: same as :attr:`output_bound`."""
+        return self.output_bound
+
+    @property
+    def dx(self) -> np.ndarray:
+        """``Delta x_t``: same as :attr:`input_bound`."""
+        return self.input_bound
+
+    @property
+    def gain(self) -> float | None:
+        """Same as :attr:`steady_state_gain`."""
+        return self.steady_state_gain
+
+    @property
+    def b0(self) -> bool:
+        """Whether ``B`` has the direct term ``b_0`` (``nk == 0``)."""
+        return self.nk == 0
+
+    def _setup(self, y, x, dx, deta, na, nb, b0, nk, gain, groups, theta_box):
+        y = _as_1d("y", y)
         n = y.shape[0]
-        x = _as_1d("x", self.x, n)
-        dx = _as_1d("dx (input bound)", self.dx, n, nonneg=True)
-        deta = _as_1d("deta (noise bound)", self.deta, n, positive=True)
-        na, nb = int(self.na), int(self.nb)
-        nk = (0 if self.b0 else 1) if self.nk is None else int(self.nk)
-        if self.nk is not None and self.b0 and nk != 0:
+        x = _as_1d("x", x, n)
+        dx = _as_1d("input_bound", dx, n, nonneg=True)
+        deta = _as_1d("output_bound", deta, n, positive=True)
+        na, nb = int(na), int(nb)
+        nk_given = nk
+        nk = (0 if b0 else 1) if nk is None else int(nk)
+        if nk_given is not None and b0 and nk != 0:
             raise ParameterValidationError(
                 f"b0=True means nk=0 (a direct term); got nk={nk}. Pass only nk."
             )
@@ -117,10 +199,10 @@ class EIVProblem:
                 f"need more than max(na, last input lag) = {n0} samples to write one "
                 f"equation; got {n}."
             )
-        if self.groups is None:
+        if groups is None:
             groups = np.arange(n)
         else:
-            groups = np.asarray(self.groups)
+            groups = np.asarray(groups)
             if groups.shape != (n,) or not np.issubdtype(groups.dtype, np.integer):
                 raise DataValidationError("groups must be an integer array of shape (N,).")
             if groups.min() < 0:
@@ -136,14 +218,14 @@ class EIVProblem:
             np.abs(dx_group[groups] - dx) > 1e-12 * (1 + dx)
         ):
             raise DataValidationError(
-                "samples that share an input-error group must have equal x and dx."
+                "samples that share an input-error group must have equal x and input_bound."
             )
         p = na + lags.size
         try:
             box = (
                 default_theta_box(na, nb, nk == 0, nk=nk)
-                if self.theta_box is None
-                else np.asarray(self.theta_box, dtype=float)
+                if theta_box is None
+                else np.asarray(theta_box, dtype=float)
             )
         except (TypeError, ValueError):
             box = np.full((0,), np.nan)  # reported below
@@ -151,19 +233,15 @@ class EIVProblem:
             raise ParameterValidationError(
                 f"theta_box must be a finite array of shape ({p}, 2) with lower <= upper."
             )
-        if self.gain is not None and (not np.isfinite(self.gain) or self.gain == 0):
+        if gain is not None and (not np.isfinite(gain) or gain == 0):
             raise ParameterValidationError(
-                "gain must be a finite non-zero number (assumption A2) or None."
+                "steady_state_gain must be a finite non-zero number (assumption A2) or None."
             )
-        for name, val in (("y", y), ("x", x), ("dx", dx), ("deta", deta), ("groups", groups)):
+        for name, val in (("y", y), ("x", x), ("input_bound", dx), ("output_bound", deta),
+                          ("groups", groups), ("na", na), ("nb", nb), ("nk", nk),
+                          ("steady_state_gain", None if gain is None else float(gain)),
+                          ("theta_box", box), ("n_groups", k), ("dx_group", dx_group)):
             object.__setattr__(self, name, val)
-        object.__setattr__(self, "na", na)
-        object.__setattr__(self, "nb", nb)
-        object.__setattr__(self, "nk", nk)
-        object.__setattr__(self, "b0", nk == 0)
-        object.__setattr__(self, "theta_box", box)
-        object.__setattr__(self, "n_groups", k)
-        object.__setattr__(self, "dx_group", dx_group)
 
     # ---- structure -------------------------------------------------------------------
     @property
@@ -222,8 +300,9 @@ class EIVProblem:
     def with_theta_box(self, box) -> EIVProblem:
         """Copy of the problem with another a priori box."""
         return EIVProblem(
-            self.y, self.x, self.dx, self.deta, self.na, self.nb, self.b0, self.gain,
-            self.groups, np.asarray(box, dtype=float), self.nk,
+            self.y, self.x, self.input_bound, self.output_bound, self.na, self.nb,
+            steady_state_gain=self.steady_state_gain, groups=self.groups,
+            theta_box=np.asarray(box, dtype=float), nk=self.nk,
         )
 
     def simulate_noise_free(self, theta) -> np.ndarray:
@@ -287,7 +366,7 @@ def outward_problem(problem: EIVProblem, box) -> EIVProblem:
     deta = problem.deta.copy()
     cur = problem.eta_index()[:, 0]
     deta[cur] = deta[cur] + tau
-    return dataclasses.replace(problem, deta=deta)
+    return dataclasses.replace(problem, output_bound=deta)
 
 
 def check_theta(problem: EIVProblem, theta, tol: float | None = None, *,

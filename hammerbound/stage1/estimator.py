@@ -12,6 +12,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
+from .._compat import DEPRECATED, renamed_value
 from ..data.validation import as_bound, as_flag, as_real, check_scale
 from ..exceptions import (
     DataValidationError,
@@ -35,8 +36,11 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
 
     Parameters
     ----------
-    noise_bound : float or array-like of shape (n_samples,)
-        Bound ``Delta eta`` on the output error (22.5); scalar or one per sample, > 0.
+    output_bound : float or array-like of shape (n_samples,), required
+        Bound ``|eta| <= output_bound`` (``Delta eta``, 22.5) on the errors of the measured
+        steady-state outputs; scalar or one per sample, > 0. The guarantee rests on it, so
+        it has no default: ``None`` (the constructor default, for scikit-learn) makes
+        :meth:`fit` raise :class:`~hammerbound.exceptions.ParameterValidationError`.
     method : {"polygon", "algorithm"}, default="polygon"
         ``"polygon"``: exact half-plane intersection in ``(m, beta = m c)`` coordinates,
         O(M log M). ``"algorithm"``: the chapter's Algorithm 22.1 (O(M^2)), same set.
@@ -47,6 +51,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         ``u* <= min(U_R, U_L)`` before the crossing of its lines. Without it, Result 1 is
         checked against the crossing of *every* parameter in the feasible sets, which is
         far more conservative when ``m_l`` and ``m_r`` are uncertain (large noise).
+    noise_bound : deprecated
+        Old name of ``output_bound`` (removed in 0.3.0).
 
     Attributes
     ----------
@@ -56,6 +62,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         Tight intervals (22.24) of ``[m_l, c_l, m_r, c_r]``.
     gamma_center_, gamma_radius_ : ndarray of shape (4,)
         Central estimate and uncertainty bound (22.23).
+    output_bound_ : ndarray of shape (n_samples,)
+        The output error bound of every steady-state sample the sets rest on.
     n_features_in_ : int
         Always 1.
 
@@ -66,10 +74,12 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     steady-state gain of the linear block is one (22.8).
     """
 
-    def __init__(self, noise_bound=0.05, *, method="polygon", well_posed_on_data=True):
-        self.noise_bound = noise_bound
+    def __init__(self, output_bound=None, *, method="polygon", well_posed_on_data=True,
+                 noise_bound=DEPRECATED):
+        self.output_bound = output_bound
         self.method = method
         self.well_posed_on_data = well_posed_on_data
+        self.noise_bound = noise_bound
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
@@ -107,17 +117,25 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
         X = X[:, 0].astype(float)
         y = np.asarray(y, dtype=float)
-        nb = as_bound("noise_bound", self.noise_bound, X.shape[0],
-                      shape_error=ParameterValidationError)
+        bound = renamed_value("BacklashSetEstimator", "output_bound", self.output_bound,
+                              "noise_bound", self.noise_bound, stacklevel=4)
+        if bound is None:
+            raise ParameterValidationError(
+                "BacklashSetEstimator: output_bound is not set. The backlash bounds rest on "
+                "the bound |eta| <= output_bound of the steady-state output errors (22.5), "
+                "so it has no default: pass BacklashSetEstimator(output_bound=0.05) (your "
+                "sensor's error bound; the first argument).")
+        deta = as_bound("output_bound", bound, X.shape[0],
+                        shape_error=ParameterValidationError)
         if np.any(X == 0):
             raise DataValidationError(
                 f"X[{int(np.flatnonzero(X == 0)[0])}] = 0: steady-state inputs must be non-zero "
                 "(positive for the right line, negative for the left line)."
             )
-        check_scale("BacklashSetEstimator.fit", {"y": y, "X": X}, {"noise_bound": nb},
+        check_scale("BacklashSetEstimator.fit", {"y": y, "X": X}, {"output_bound": deta},
                     slope=("y", "X"),
                     hint=" (the slopes m are unchanged; multiply the bounds on c_l, c_r by s)")
-        return X, y, nb
+        return X, y, deta
 
     # ------------------------------------------------------------------ fit
     def fit(self, X, y):
@@ -134,21 +152,22 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         -------
         self
         """
-        X, y, nb = self._validate(X, y)
+        X, y, deta = self._validate(X, y)
         self.n_features_in_ = 1
         sets = {}
         for side in _SIDES:
             mask = X > 0 if side == "right" else X < 0
             idx = np.flatnonzero(mask)
-            sets[side] = self._fit_side(side, X[idx], y[idx], nb[idx], idx)
+            sets[side] = self._fit_side(side, X[idx], y[idx], deta[idx], idx)
         self.left_, self.right_ = sets["left"], sets["right"]
+        self.output_bound_ = deta
         self.input_range_ = (float(X.min()), float(X.max()))
         self.gamma_bounds_ = np.vstack([self.left_.orthotope, self.right_.orthotope])
         self.gamma_center_ = self.gamma_bounds_.mean(axis=1)
         self.gamma_radius_ = 0.5 * (self.gamma_bounds_[:, 1] - self.gamma_bounds_[:, 0])
         return self
 
-    def _fit_side(self, side, u, y, nb, idx):
+    def _fit_side(self, side, u, y, deta, idx):
         sigma = -1.0 if side == "right" else 1.0
         if np.unique(u).size < 2:
             raise NotEnoughAmplitudesError(
@@ -158,7 +177,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
         # the measured slabs relaxed outward by the tolerance policy, in centred and scaled
         # coordinates; "empty" only with an exact certificate (docs/tolerances.md)
-        problem = SideProblem(side, u, y, nb, idx)
+        problem = SideProblem(side, u, y, deta, idx)
         res = problem.solve(self.method)
         if res is None:
             raise self._empty_error(side, problem)
@@ -183,8 +202,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         which = ", ".join(cert[0]) if cert is not None else "?"
         return EmptyFeasibleSetError(
             f"no backlash parameters (m, c) > 0 explain the {side}-side steady-state data within "
-            f"the noise bound: the set becomes empty at measurement index {k}. Check that "
-            "sample, the noise bound (too small?) and that the data are at steady state. "
+            f"the output bound: the set becomes empty at measurement index {k}. Check that "
+            "sample, output_bound (too small?) and that the data are at steady state. "
             f"(Certified in exact arithmetic by the constraints {which}, with the tolerance "
             "of docs/tolerances.md.)",
             side=side, first_index=k,
@@ -312,11 +331,14 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     def summary(self) -> str:
         """Text summary: the exact feasible sets and the tight intervals (22.24)."""
         check_is_fitted(self, "left_")
-        from ..tables import interval_text
+        from ..tables import bound_text, interval_text
 
         head = (f"BacklashSetEstimator: exact feasible sets, left {len(self.left_.vertices)} "
                 f"and right {len(self.right_.vertices)} vertices, inputs in "
-                f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]")
+                f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]\n"
+                f"assumptions: output error bound |eta| <= {bound_text(self.output_bound_)}; "
+                "the steady-state samples are at steady state; unit steady-state gain of the "
+                "linear block (22.8)")
         return interval_text(("ml", "cl", "mr", "cr"), self.gamma_bounds_, title=head)
 
     # ------------------------------------------------------------------ model set (issue 16)
@@ -388,7 +410,7 @@ def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons) -> PolygonFeasible
     if not np.all(np.isfinite(c)):
         raise UnboundedSetError(
             f"the {side} feasible set touches m = 0, so c is unbounded; add square waves with "
-            "larger amplitudes or reduce the noise bound."
+            "larger amplitudes or reduce output_bound if justified."
         )
     orth = np.array([[m.min(), m.max()], [c.min(), c.max()]])
     names = ("ml", "cl") if side == "left" else ("mr", "cr")

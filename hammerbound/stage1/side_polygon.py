@@ -80,26 +80,26 @@ class SideProblem:
     Parameters
     ----------
     side : {"left", "right"}
-    u, y, nb, idx : ndarray
-        Amplitudes (with the side's sign), outputs, noise bounds and caller's indices.
+    u, y, deta, idx : ndarray
+        Amplitudes (with the side's sign), outputs, output error bounds and caller's indices.
     """
 
-    def __init__(self, side, u, y, nb, idx):
+    def __init__(self, side, u, y, deta, idx):
         self.side = side
         self.sigma = -1.0 if side == "right" else 1.0
-        self.u, self.y, self.nb, self.idx = u, y, nb, np.asarray(idx)
+        self.u, self.y, self.deta, self.idx = u, y, deta, np.asarray(idx)
         umin, umax = float(u.min()), float(u.max())
         ymin, ymax = float(y.min()), float(y.max())
         iL, iR = int(np.argmin(u)), int(np.argmax(u))
         self.u0 = 0.5 * umin + 0.5 * umax
         self.su = _pow2(0.5 * umax - 0.5 * umin)
         self.y0 = 0.5 * ymin + 0.5 * ymax
-        self.sy = _pow2(max(0.5 * ymax - 0.5 * ymin, float(nb.max())))
+        self.sy = _pow2(max(0.5 * ymax - 0.5 * ymin, float(deta.max())))
         # a priori bounds over the set: it lies in the parallelogram of the two slabs of the
         # extreme amplitudes, so |m| <= m_ref and |beta| <= |y_L| + Delta_L + m_ref |u_L|
-        self.m_ref = (abs(y[iR] - y[iL]) + nb[iR] + nb[iL]) / (umax - umin)
-        self.beta_ref = abs(y[iL]) + nb[iL] + self.m_ref * abs(u[iL])
-        self.tol = feasibility_tol(y, self.y0, nb, self.m_ref * u, self.m_ref * self.u0,
+        self.m_ref = (abs(y[iR] - y[iL]) + deta[iR] + deta[iL]) / (umax - umin)
+        self.beta_ref = abs(y[iL]) + deta[iL] + self.m_ref * abs(u[iL])
+        self.tol = feasibility_tol(y, self.y0, deta, self.m_ref * u, self.m_ref * self.u0,
                                    self.beta_ref, rtol=ARITHMETIC_RTOL)
         self.t = (u - self.u0) / self.su
 
@@ -108,7 +108,7 @@ class SideProblem:
         """Relaxed bounds ``lo <= m u + sigma beta <= hi`` and their scaled images."""
         cache = self.__dict__.setdefault("_bounds", {})
         if factor not in cache:
-            d = self.nb + factor * self.tol
+            d = self.deta + factor * self.tol
             hi, lo = self.y + d, self.y - d
             cache[factor] = (hi, lo, (hi - self.y0) / self.sy, (lo - self.y0) / self.sy)
         return cache[factor]
@@ -295,7 +295,7 @@ class SideProblem:
                     else (Fraction(0), Fraction(-1), Fraction(0)))
         k = int(local[r // 2])
         u, s = Fraction(float(self.u[k])), Fraction(self.sigma)
-        room = Fraction(float(self.nb[k])) + Fraction(float(factor * self.tol[k]))
+        room = Fraction(float(self.deta[k])) + Fraction(float(factor * self.tol[k]))
         y = Fraction(float(self.y[k]))
         if r % 2 == 0:
             return (u, s, y + room)

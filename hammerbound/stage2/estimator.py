@@ -26,12 +26,11 @@ interval):
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
-from ..data.validation import as_bound, as_real, as_signal, check_excited, check_scale
+from .._compat import DEPRECATED, is_given, renamed_value
+from ..data.validation import as_bound, as_signal, check_excited, check_scale
 from ..exceptions import (
     DataValidationError,
     EmptyFeasibleSetError,
@@ -41,11 +40,12 @@ from ..exceptions import (
 from ..modelset.estimator import ModelSetMixin
 from ..relaxations.problem import EIVProblem
 from ..stage1.feasible_set import FeasibleSet
+from ..tables import bound_text
 from .linear_model import LinearModelMixin
+from .orders import check_orders
+from .params import METHODS, check_params
 
 __all__ = ["LinearEIVSetEstimator", "METHODS"]
-
-METHODS = ("moment", "lp", "exact")
 
 
 class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, BaseEstimator):
@@ -56,17 +56,18 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     na, nb : int, default 2
         Orders of ``A`` (``1 + a_1 q^-1 + ... + a_na q^-na``) and ``B`` (``nb``
         coefficients ``b_1 .. b_nb`` as in the chapter, plus ``b_0`` when ``nk = 0``).
-    nk : int or None, default None
+    nk : int, default 1
         Input delay (first lag of ``B``, MATLAB's ``nk`` in ``[na nb nk]``): ``nk = 1`` is
         the chapter's ``B = b_1 q^-1 + ... + b_nb q^-nb``; ``nk = 0`` adds the direct term
-        ``b_0`` (same as ``b0=True``); ``nk > 1`` delays further, ``B = b_nk q^-nk + ... +
-        b_{nk+nb-1} q^-(nk+nb-1)``. ``None``: ``0`` if ``b0`` else ``1``. (MATLAB's
-        ``[na nb nk]`` maps unchanged for ``nk >= 1``; MATLAB's ``nk = 0`` with ``nb``
-        coefficients is ``nb - 1`` here.)
-    b0 : bool, default False
-        Whether ``B`` has a direct term ``b_0``; shorthand for ``nk=0``.
-    noise_bound : float or array of shape (N,), default 0.05
-        Output error bound ``deta`` (22.5).
+        ``b_0``; ``nk > 1`` delays further, ``B = b_nk q^-nk + ... +
+        b_{nk+nb-1} q^-(nk+nb-1)``. (MATLAB's ``[na nb nk]`` maps unchanged for
+        ``nk >= 1``; MATLAB's ``nk = 0`` with ``nb`` coefficients is ``nb - 1`` here.)
+    output_bound : float or array of shape (N,), required
+        Bound ``|eta_t| <= output_bound`` on the output errors (``Delta eta``, 22.5), > 0.
+        The guarantee rests on it, so it has no default: ``None`` (the constructor
+        default, for scikit-learn) makes :meth:`fit` raise
+        :class:`~hammerbound.exceptions.ParameterValidationError` unless ``fit`` gets
+        ``output_bound=``. Too small a bound gives an empty set, too large a wide one.
     steady_state_gain : float or None, default None
         Imposes ``B(1) / A(1) = steady_state_gain`` (22.8) as a linear equality. ``None``
         (default): a plain EIV problem, no gain constraint. Inside
@@ -118,6 +119,15 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         The ``2 p`` bound problems run in parallel (joblib).
     progress : bool, default False
         Progress bars during long exact searches.
+    noise_bound, b0 : deprecated
+        Old names of ``output_bound`` and of ``nk=0`` (removed in 0.3.0).
+
+    Notes
+    -----
+    Every method starts from the polytopic LP over the ``2^p`` sign orthants of ``theta``
+    (``p`` parameters), and the data must give enough equations to bound them: ``fit``
+    refuses at once, before any LP, orders with ``p > 12`` or fewer equations than
+    parameters (:mod:`hammerbound.stage2.orders`).
 
     Attributes
     ----------
@@ -139,6 +149,9 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         The raw result of the method.
     problem_ : EIVProblem
         The problem (22.34) that was bounded.
+    output_bound_ : ndarray of shape (N,)
+        The output error bound of every sample the intervals rest on (the constructor's
+        or the one given to ``fit``).
     box_limited_ : tuple of str
         Interval ends set by the a priori box rather than by the data (e.g. ``"a2 upper"``
         when only stability, A1, bounds ``a_2``). They are still guaranteed under A1.
@@ -162,22 +175,21 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     >>> rng = np.random.default_rng(0)
     >>> x = np.where(rng.random(80) < 0.5, 1.0, -1.0)
     >>> y = lfilter([0, 0.5], [1, -0.5], x) + rng.uniform(-0.02, 0.02, 80)
-    >>> est = LinearEIVSetEstimator(na=1, nb=1, noise_bound=0.02, method="exact")
+    >>> est = LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="exact")
     >>> est.fit(x, y, input_bound=0.0).contains([-0.5, 0.5])
     True
     """
 
-    def __init__(self, na=2, nb=2, *, nk=None, b0=False, noise_bound=0.05,
-                 steady_state_gain=None,
+    def __init__(self, na=2, nb=2, *, nk=1, output_bound=None, steady_state_gain=None,
                  method="moment", relaxation_order=1, relaxation_basis="sparse",
                  solver="clarabel", solver_options=None, theta_box=None, tol=1e-4,
                  max_nodes=20000, time_limit=600.0,
-                 total_time_limit=None, on_failure="raise", n_jobs=1, progress=False):
+                 total_time_limit=None, on_failure="raise", n_jobs=1, progress=False,
+                 noise_bound=DEPRECATED, b0=DEPRECATED):
         self.na = na
         self.nb = nb
         self.nk = nk
-        self.b0 = b0
-        self.noise_bound = noise_bound
+        self.output_bound = output_bound
         self.steady_state_gain = steady_state_gain
         self.method = method
         self.relaxation_order = relaxation_order
@@ -192,78 +204,31 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         self.on_failure = on_failure
         self.n_jobs = n_jobs
         self.progress = progress
+        self.noise_bound = noise_bound
+        self.b0 = b0
 
     # ------------------------------------------------------------------ validation
     def _check_params(self):
-        for name in ("na", "nb"):
-            v = getattr(self, name)
-            if not isinstance(v, numbers.Integral) or isinstance(v, bool) or v < 0:
-                raise ParameterValidationError(f"{name} must be an integer >= 0; got {v!r}.")
-        if not isinstance(self.b0, (bool, np.bool_)):
-            raise ParameterValidationError(f"b0 must be True or False; got {self.b0!r}.")
-        nk = self.nk
-        if nk is not None and (not isinstance(nk, numbers.Integral) or isinstance(nk, bool)
-                               or nk < 0):
-            raise ParameterValidationError(
-                f"nk (input delay) must be an integer >= 0 or None; got {nk!r}.")
-        if nk is not None and self.b0 and nk != 0:
-            raise ParameterValidationError(
-                f"b0=True means a direct term (nk=0) but nk={nk}: pass only nk.")
-        mn = self.max_nodes
-        if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
-            raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
-        tl = self.time_limit
-        if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
-            raise ParameterValidationError(
-                f"time_limit must be a number of seconds >= 0; got {tl!r}."
-            )
-        ttl = self.total_time_limit
-        if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
-                                or not ttl >= 0):
-            raise ParameterValidationError(
-                f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
-            )
-        if self.nb == 0 and self._nk() != 0:
-            raise ParameterValidationError(
-                "B has no coefficient: use nb >= 1 or b0=True."
-            )
-        if self.method not in METHODS:
-            raise ParameterValidationError(
-                f"method must be one of {METHODS}; got {self.method!r}."
-            )
-        r = self.relaxation_order
-        if not isinstance(r, numbers.Integral) or isinstance(r, bool) or r < 1:
-            raise ParameterValidationError(
-                f"relaxation_order must be an integer >= 1 (the chapter uses 2); got {r!r}."
-            )
-        if self.on_failure not in ("box", "raise"):
-            raise ParameterValidationError(
-                f"on_failure must be 'box' or 'raise'; got {self.on_failure!r}."
-            )
-        if self.relaxation_basis not in ("sparse", "full"):
-            raise ParameterValidationError(
-                f"relaxation_basis must be 'sparse' or 'full'; got {self.relaxation_basis!r}."
-            )
-        as_real("steady_state_gain", self.steady_state_gain, nonzero=True, or_none=True,
-                example="1.0")
-        if not (isinstance(self.tol, numbers.Real) and self.tol > 0):
-            raise ParameterValidationError(f"tol must be > 0; got {self.tol!r}.")
-        if not (isinstance(self.n_jobs, numbers.Integral) and (self.n_jobs >= 1 or self.n_jobs == -1)):
-            raise ParameterValidationError(f"n_jobs must be a positive integer or -1; got {self.n_jobs!r}.")
-        if self.solver_options is not None and not isinstance(self.solver_options, dict):
-            from ..exceptions import SolverOptionError
+        check_params(self)
 
-            raise SolverOptionError(
-                f"solver_options must be a dict of native solver options or None; got "
-                f"{type(self.solver_options).__name__}."
-            )
+    def _constructor_output_bound(self, stacklevel=6):
+        """The constructor's ``output_bound`` (or the deprecated ``noise_bound``)."""
+        return renamed_value("LinearEIVSetEstimator", "output_bound", self.output_bound,
+                             "noise_bound", self.noise_bound, stacklevel=stacklevel)
 
     def _output_bound(self, n, output_bound=None):
-        """``deta`` of shape (n,): the fit-time ``output_bound`` or the ``noise_bound``."""
+        """``deta`` of shape (n,): the fit-time ``output_bound`` or the constructor's."""
         if output_bound is not None:
             return as_bound("output_bound", output_bound, n)
+        bound = self._constructor_output_bound()
+        if bound is None:
+            raise ParameterValidationError(
+                "LinearEIVSetEstimator: output_bound is not set. The guaranteed intervals "
+                "rest on the bound |eta_t| <= output_bound of the output errors (22.5), so "
+                "it has no default: pass LinearEIVSetEstimator(output_bound=0.05, ...) (your "
+                "sensor's error bound) or fit(..., output_bound=...).")
         try:
-            return as_bound("noise_bound", self.noise_bound, n)
+            return as_bound("output_bound", bound, n)
         except DataValidationError as exc:
             raise DataValidationError(
                 f"{exc} In cross-validation pass per-sample bounds to fit (output_bound=..., "
@@ -278,55 +243,53 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 f"X and y must have the same number of samples; got {x.size} and {yy.size}."
             )
         n = x.size
+        check_orders(self.na, self.nb, self._nk(), n)  # at once, before any LP
         deta = self._output_bound(n, output_bound)
         dx = as_bound("input_bound", input_bound, n, allow_zero=True)
         check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
         check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
-                    {"noise_bound": deta, "input_bound": dx},
+                    {"output_bound": deta, "input_bound": dx},
                     hint=" (scaling X, y and both bounds by the same factor leaves theta "
                          "unchanged)")
-        last = int(self._lags()[-1])
-        n0 = max(self.na, last)
-        if n <= n0 + 1:
-            what = "max(na, nb)" if last == self.nb else "max(na, nk + nb - 1)"
-            raise DataValidationError(
-                f"need more than {what} + 1 = {n0 + 1} samples; got {n}."
-            )
         return EIVProblem(yy, x, dx, deta, na=self.na, nb=self.nb, nk=self._nk(),
-                          gain=self.steady_state_gain, groups=groups,
+                          steady_state_gain=self.steady_state_gain, groups=groups,
                           theta_box=self.theta_box)
 
     def _nk(self) -> int:
-        """The input delay: ``nk``, or ``0``/``1`` from ``b0``."""
-        return int(self.nk) if self.nk is not None else (0 if self.b0 else 1)
+        """The input delay ``nk`` (``0`` with the deprecated ``b0=True``)."""
+        if is_given(self.b0) and self.b0:
+            return 0
+        return 1 if self.nk is None else int(self.nk)
 
     def _lags(self) -> np.ndarray:
         from ..relaxations.problem import b_lags_of
 
         return b_lags_of(self.nb, self._nk())
 
+    def _assumption_list(self, problem) -> list[str]:
+        """The assumptions that shaped the feasible set, one phrase each."""
+        g = self.steady_state_gain
+        gain = ("no steady-state gain constraint" if g is None else
+                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8)")
+        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
+               if self.theta_box is None else "user theta_box")
+        dx = bound_text(problem.input_bound)
+        shared = ("" if problem.n_groups == problem.N else
+                  f", shared by {problem.n_groups} sample groups")
+        exact = " (exact input)" if not np.any(problem.input_bound) else ""
+        return [f"output error bound |eta_t| <= {bound_text(problem.output_bound)}",
+                f"input error bound |dx_t| <= {dx}{exact}{shared}", gain, box]
+
     def _assumptions(self, problem) -> str:
         """One sentence naming every assumption that shaped the feasible set."""
         lags = problem.b_lags
         b_terms = " + ".join(f"b{j}" + (f" q^-{j}" if j else "") for j in lags)
         a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
-        g = self.steady_state_gain
-        gain = ("no steady-state gain constraint" if g is None else
-                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8; pass "
-                "steady_state_gain=None for a plain EIV problem)")
-
-        def rng(v):
-            lo, hi = float(np.min(v)), float(np.max(v))
-            return f"{lo:g}" if lo == hi else f"{lo:g}..{hi:g} (per sample)"
-
-        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
-               if self.theta_box is None else "user theta_box")
-        shared = ("" if problem.n_groups == problem.N else
-                  f"; input errors shared by {problem.n_groups} sample groups")
+        items = self._assumption_list(problem)
+        if self.steady_state_gain is not None:
+            items[2] = items[2][:-1] + "; pass steady_state_gain=None for a plain EIV problem)"
         return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
-                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); {gain}; output error "
-                f"bound |eta_t| <= {rng(problem.deta)}; input error bound |dx_t| <= "
-                f"{rng(problem.dx)}{shared}; {box}.")
+                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
 
     def _box_hint(self, problem) -> str:
         """A hint for badly scaled data, whose true b_j may lie outside the default box."""
@@ -361,7 +324,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 raise UnboundedSetError(
                     "the data do not bound " + ", ".join(bad) + ": the bound reached the "
                     "default box |b_j| <= 1e4. Supply more (or more exciting) data, a "
-                    "smaller noise bound if justified, or a theta_box with prior knowledge."
+                    "smaller output_bound if justified, or a theta_box with prior knowledge."
                 )
 
     @staticmethod
@@ -401,8 +364,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
             levels of a PRBS inner signal under Result 1: label ``u < 0``). Default:
             independent per-sample errors, as in the chapter.
         output_bound : float or array of shape (N,), optional
-            Per-sample output error bound for this fit, overriding ``noise_bound``. Pass
-            sample-aligned bounds here (not as ``noise_bound``) in cross-validation:
+            Per-sample output error bound for this fit, overriding the constructor's
+            ``output_bound``. Pass sample-aligned bounds here in cross-validation:
             scikit-learn splits fit arguments together with the samples.
         groups : deprecated
             Old name of ``input_groups`` (it collided with scikit-learn's CV ``groups``).
@@ -536,6 +499,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         self.signal_units_ = ("", "") if data is None else (data.input_unit, data.output_unit)
         self.time_unit_ = "" if data is None else data.time_unit
         self.n_samples_ = problem.N
+        self.output_bound_ = problem.output_bound
         return self
 
     def __sklearn_tags__(self):

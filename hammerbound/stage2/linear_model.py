@@ -71,6 +71,7 @@ class LinearModelMixin:
                            getattr(self, "signal_units_", ("", "")))
         if sig:
             head += f"\nsignals: {sig}"
+        head += "\nassumptions: " + "; ".join(self._assumption_list(pr))
         return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
 
     # ------------------------------------------------------------------ model

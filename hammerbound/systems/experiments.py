@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.utils import check_random_state
 
+from .._compat import DEPRECATED, renamed_value, warn_renamed
 from ..data.validation import as_bound, as_real
 from ..exceptions import DataValidationError, ParameterValidationError
 from .models import Backlash, HammersteinSystem
@@ -35,7 +36,7 @@ __all__ = [
     "uniform_noise",
 ]
 
-#: The six output-noise bounds of Tables 22.1-22.3.
+#: The six output error bounds (delta_eta) of Tables 22.1-22.3.
 CHAPTER_NOISE_LEVELS = (0.005, 0.02, 0.05, 0.15, 0.2, 0.3)
 
 #: Backlash of section 22.5: m_l = 0.25, c_l = 0.0628, m_r = 0.26, c_r = 0.0489.
@@ -78,7 +79,7 @@ def _check_system(system):
 
 def uniform_noise(n: int, bound, random_state=None) -> np.ndarray:
     """Bounded noise ``eta ~ U[-bound, +bound]`` (section 22.5)."""
-    bound = as_bound("noise bound", bound, n, allow_zero=True)
+    bound = as_bound("bound", bound, n, allow_zero=True)
     return _rng(random_state).uniform(-1.0, 1.0, n) * bound
 
 
@@ -112,8 +113,14 @@ class SteadyStateData:
     y: np.ndarray
     w: np.ndarray
     eta: np.ndarray
-    noise_bound: np.ndarray
+    output_bound: np.ndarray
     settle: int
+
+    @property
+    def noise_bound(self):
+        """Deprecated name of :attr:`output_bound` (removed in 0.3.0)."""
+        warn_renamed("SteadyStateData.noise_bound", "SteadyStateData.output_bound")
+        return self.output_bound
 
     @property
     def snr_db(self) -> float:
@@ -130,8 +137,14 @@ class PRBSData:
     w: np.ndarray
     x: np.ndarray
     eta: np.ndarray
-    noise_bound: np.ndarray
+    output_bound: np.ndarray
     u_star: float
+
+    @property
+    def noise_bound(self):
+        """Deprecated name of :attr:`output_bound` (removed in 0.3.0)."""
+        warn_renamed("PRBSData.noise_bound", "PRBSData.output_bound")
+        return self.output_bound
 
     @property
     def snr_db(self) -> float:
@@ -140,16 +153,18 @@ class PRBSData:
 
 
 def square_wave_experiment(
-    system: HammersteinSystem, amplitudes, noise_bound, *, settle: int | None = None,
-    random_state=None,
+    system: HammersteinSystem, amplitudes, output_bound=None, *, settle: int | None = None,
+    random_state=None, noise_bound=DEPRECATED,
 ) -> SteadyStateData:
     """Apply square waves of the given amplitudes and sample their steady state.
 
     For every amplitude ``U_k`` the input is ``+U_k`` for ``settle`` samples then ``-U_k`` for
     ``settle`` samples; the *dynamic* system is simulated and the last sample of each
-    half-wave is measured with bounded noise. Returns ``2 M`` samples (right then left
-    for each amplitude).
+    half-wave is measured with noise uniform in ``+-output_bound`` (scalar or one per
+    sample, >= 0). Returns ``2 M`` samples (right then left for each amplitude).
+    ``noise_bound`` is the deprecated name of ``output_bound`` (removed in 0.3.0).
     """
+    output_bound = _bound("square_wave_experiment", output_bound, noise_bound)
     _check_system(system)
     try:
         amps = np.asarray(amplitudes, dtype=float)
@@ -170,10 +185,10 @@ def square_wave_experiment(
     idx = np.arange(1, 2 * amps.size + 1) * settle - 1
     u = u_full[idx]
     w = w_full[idx]
-    nb = as_bound("noise_bound", noise_bound, u.size, allow_zero=True,
-                  shape_error=ParameterValidationError)
-    eta = uniform_noise(u.size, nb, random_state)
-    return SteadyStateData(u, w + eta, w, eta, nb, settle)
+    deta = as_bound("output_bound", output_bound, u.size, allow_zero=True,
+                    shape_error=ParameterValidationError)
+    eta = uniform_noise(u.size, deta, random_state)
+    return SteadyStateData(u, w + eta, w, eta, deta, settle)
 
 
 def prbs(n: int, u_star: float, *, hold: int = 1, random_state=None) -> np.ndarray:
@@ -192,19 +207,21 @@ def prbs(n: int, u_star: float, *, hold: int = 1, random_state=None) -> np.ndarr
 
 
 def prbs_experiment(
-    system: HammersteinSystem, n: int, u_star: float, noise_bound, *, hold: int = 1,
-    random_state=None,
+    system: HammersteinSystem, n: int, u_star: float, output_bound=None, *, hold: int = 1,
+    random_state=None, noise_bound=DEPRECATED,
 ) -> PRBSData:
-    """PRBS experiment from rest with bounded output noise (section 22.4)."""
+    """PRBS experiment from rest with output noise uniform in ``+-output_bound`` (section
+    22.4). ``noise_bound`` is the deprecated name of ``output_bound`` (removed in 0.3.0)."""
+    output_bound = _bound("prbs_experiment", output_bound, noise_bound)
     _check_system(system)
     rng = _rng(random_state)
     u = prbs(n, u_star, hold=hold, random_state=rng)
     x = system.inner(u)
     w = system.simulate(u)
-    nb = as_bound("noise_bound", noise_bound, u.size, allow_zero=True,
-                  shape_error=ParameterValidationError)
-    eta = uniform_noise(u.size, nb, rng)
-    return PRBSData(u, w + eta, w, x, eta, nb, float(u_star))
+    deta = as_bound("output_bound", output_bound, u.size, allow_zero=True,
+                    shape_error=ParameterValidationError)
+    eta = uniform_noise(u.size, deta, rng)
+    return PRBSData(u, w + eta, w, x, eta, deta, float(u_star))
 
 
 def chapter_system() -> HammersteinSystem:
@@ -219,7 +236,13 @@ class ChapterExample:
     system: HammersteinSystem
     steady: SteadyStateData
     prbs: PRBSData
-    noise_bound: float
+    output_bound: float
+
+    @property
+    def noise_bound(self):
+        """Deprecated name of :attr:`output_bound` (removed in 0.3.0)."""
+        warn_renamed("ChapterExample.noise_bound", "ChapterExample.output_bound")
+        return self.output_bound
 
     @property
     def gamma_true(self) -> np.ndarray:
@@ -231,13 +254,32 @@ class ChapterExample:
 
 
 def chapter_example(
-    noise_bound: float = 0.05, *, N: int = 100, amplitudes=None, u_star: float = CHAPTER_U_STAR,
-    random_state=0,
+    output_bound: float = 0.05, *, N: int = 100, amplitudes=None,
+    u_star: float = CHAPTER_U_STAR, random_state=0, noise_bound=DEPRECATED,
 ) -> ChapterExample:
-    """The simulated example of section 22.5 (M = 50 amplitudes, PRBS of length N)."""
+    """The simulated example of section 22.5 (M = 50 amplitudes, PRBS of length N).
+
+    ``output_bound`` is the chapter's ``Delta eta``: the output noise of both experiments is
+    uniform in ``+-output_bound`` (0.05 is the chapter's middle level; the simulated data
+    carry it, so nothing is assumed). ``noise_bound``: its deprecated name (removed in
+    0.3.0).
+    """
+    output_bound = renamed_value("chapter_example", "output_bound", output_bound,
+                                 "noise_bound", noise_bound, unset=0.05)
     rng = _rng(random_state)
     system = chapter_system()
     amps = CHAPTER_AMPLITUDES if amplitudes is None else amplitudes
-    steady = square_wave_experiment(system, amps, noise_bound, random_state=rng)
-    data = prbs_experiment(system, N, u_star, noise_bound, random_state=rng)
-    return ChapterExample(system, steady, data, float(noise_bound))
+    steady = square_wave_experiment(system, amps, output_bound, random_state=rng)
+    data = prbs_experiment(system, N, u_star, output_bound, random_state=rng)
+    return ChapterExample(system, steady, data, float(output_bound))
+
+
+def _bound(func, output_bound, noise_bound):
+    """``output_bound`` of an experiment (or its deprecated name); required."""
+    value = renamed_value(func, "output_bound", output_bound, "noise_bound", noise_bound,
+                          stacklevel=4)
+    if value is None:
+        raise ParameterValidationError(
+            f"{func} needs output_bound: the noise of the simulated outputs is uniform in "
+            f"+-output_bound (0 for none), e.g. output_bound=0.05.")
+    return value

@@ -14,7 +14,7 @@ An effect declares:
   they become linear-program columns and are fitted exactly, like the model's ``B``);
 * :meth:`Effect.search_space` ``(ctx) -> tuple of Param(name, lo, hi, log=False,
   integer=False)`` - ranges in absolute units, scaled with :class:`Context` (``u_max``,
-  ``y_max``, ``n``, ``max_delay``, ``noise_bound``). Integer parameters are enumerated,
+  ``y_max``, ``n``, ``max_delay``, ``output_bound``). Integer parameters are enumerated,
   continuous ones searched on a grid (:meth:`Effect.initial_grid`, overridable) and
   refined locally, jointly with the other effects' parameters in a combination;
 * the hooks it uses (the others are identities):
@@ -29,7 +29,7 @@ An effect declares:
   - :meth:`Effect.output_gain` ``(n, theta) -> (n,) array``: a time-varying gain on the
     model output (a gain drift); the LP rows are scaled by it, so the fit stays exact;
   - :meth:`Effect.transform_output` ``(yhat, theta) -> yhat`` with
-    :meth:`Effect.one_sided` ``(y, theta, noise_bound) -> array of {-1, 0, +1} or None``: a nonlinear
+    :meth:`Effect.one_sided` ``(y, theta, output_bound) -> array of {-1, 0, +1} or None``: a nonlinear
     output (sensor) map; the LP is told which samples are only bounded on one side;
 * ``default = False`` to leave it out of ``diagnose(candidates=None)`` (tried only when
   named, or with ``candidates="all"``): the library's several-parameter candidates
@@ -68,7 +68,7 @@ from types import MappingProxyType
 
 from ...exceptions import ParameterValidationError
 from .asym_backlash import AsymBacklash
-from .backlash import Backlash
+from .backlash import SymmetricBacklash
 from .base import Context, Effect, Param
 from .deadzone import Deadzone
 from .delay import Delay
@@ -123,7 +123,7 @@ CANDIDATES = MappingProxyType(_COUNTS)
 # the first six are tried by default; the rest only when named or with candidates="all"
 register(Offset())
 register(Delay())
-register(Backlash())
+register(SymmetricBacklash())
 register(Deadzone())
 register(Saturation())
 register(ExtraPole())
@@ -132,3 +132,13 @@ register(AsymBacklash())
 register(Relay())
 register(OutputSaturation())
 register(Drift())
+
+
+def __getattr__(name):
+    # renamed in 0.2.0 (one class name per concept: systems.Backlash is the chapter's)
+    if name == "Backlash":
+        from ..._compat import warn_renamed
+
+        warn_renamed("hammerbound.discrepancy.effects.Backlash", "SymmetricBacklash")
+        return SymmetricBacklash
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

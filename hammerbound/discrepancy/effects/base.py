@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._compat import warn_renamed
+
 __all__ = ["Context", "Effect", "Param"]
 
 
@@ -54,14 +56,20 @@ class Context:
         Number of samples.
     max_delay : int
         Largest extra delay the user allows.
-    noise_bound : float
+    output_bound : float
     """
 
     u_max: float
     y_max: float
     n: int
     max_delay: int
-    noise_bound: float
+    output_bound: float
+
+    @property
+    def noise_bound(self) -> float:
+        """Deprecated name of :attr:`output_bound` (removed in 0.3.0)."""
+        warn_renamed("Context.noise_bound", "Context.output_bound")
+        return self.output_bound
 
 
 class Effect:
@@ -142,11 +150,11 @@ class Effect:
         """Output after the effect (nonlinear sensor effects)."""
         return yhat
 
-    def one_sided(self, y: np.ndarray, theta: tuple, noise_bound: float) -> np.ndarray | None:
+    def one_sided(self, y: np.ndarray, theta: tuple, output_bound: float) -> np.ndarray | None:
         """For output effects that clip: ``+1`` where only ``yhat_t >= y_t - e`` is required
         before :meth:`transform_output` (the clipped sample may be exceeded), ``-1`` where
         only ``yhat_t <= y_t + e``, ``0`` elsewhere; None: two-sided everywhere.
-        ``noise_bound`` is the bound ``Delta`` of the diagnosis (a clipped reading lies
+        ``output_bound`` is the bound ``Delta`` of the diagnosis (a clipped reading lies
         within it of the limit). The achieved error is always recomputed from the full
         model, so a wrong choice here can only make the fit worse, never the reported
         error wrong."""

@@ -4,7 +4,7 @@ Distinct from input ``saturation`` (which limits what enters the linear block): 
 model output is ``clip(yhat, lo, hi)`` and a measured sample at a limit only says that the
 true output is beyond it. Such samples are fitted one-sided (``yhat >= y - e`` at the top,
 ``yhat <= y + e`` at the bottom). A sample counts as *at the limit* when it lies within
-the noise bound ``Delta`` of it (``y_t >= hi - Delta`` or ``y_t <= lo + Delta``, relaxed
+the output bound ``Delta`` of it (``y_t >= hi - Delta`` or ``y_t <= lo + Delta``, relaxed
 outward by the tolerance policy): a clipped reading is ``hi + eta_t`` with ``|eta_t| <=
 Delta``, so every clipped sample is at the limit whatever the noise, and the one-sided row
 is exact for it. For a sample with ``|y_t - hi| <= e`` the condition ``|y_t - clip(yhat_t,
@@ -45,9 +45,9 @@ class OutputSaturation(Effect):
         lo, hi = sorted(float(v) for v in theta)
         return np.clip(yhat, lo, hi)
 
-    def one_sided(self, y, theta, noise_bound):
+    def one_sided(self, y, theta, output_bound):
         lo, hi = sorted(float(v) for v in theta)
-        m = noise_bound + feasibility_tol(lo, hi, noise_bound)  # outward: relaxes the LP
+        m = output_bound + feasibility_tol(lo, hi, output_bound)  # outward: relaxes the LP
         sides = np.zeros(np.shape(y), int)
         sides[y >= hi - m] = 1
         sides[y <= lo + m] = -1  # near both limits: either row alone is a relaxation

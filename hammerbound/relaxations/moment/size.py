@@ -149,31 +149,42 @@ def _bytes(rows: int, psd: float) -> float:
 
 
 def _sparse_counts(q: int, n_extra: int, cliques, d: int):
-    """Rows and moments of ``basis="sparse"`` (see :func:`.moment._clique_constraints`)."""
-    from .basis import _sparse_basis
+    """Rows and moments of ``basis="sparse"`` (see :func:`.moment._clique_constraints`),
+    counted in closed form (no monomial is formed, so refusing is immediate at any order).
 
+    Every clique holds all ``q`` theta variables and its ``m`` noise variables. Its basis
+    (:func:`.basis._sparse_basis`, order ``d >= 2``) is ``theta^a`` with ``|a| <= d - 1``
+    and ``theta^a e`` with ``|a| <= d - 1``: side ``s = (1 + m) C(q + d - 1, d - 1)``; each
+    noise box ``1 - e^2`` is localized on the ``C(q + d - 1, d - 1)`` pure-theta monomials,
+    each equation multiplied by the ``(1 + m) C(q + 2d - 3, 2d - 3)`` monomials ``theta^a``,
+    ``theta^a e`` with ``|a| <= 2d - 3`` (products that stay inside the matrix). The
+    products of two basis monomials are ``theta^a``, ``theta^a e`` and ``theta^a e e'``
+    with ``|a| <= 2d - 2``: over all cliques, ``P - 1 + P (n_e + n_ee)`` moments with
+    ``P = C(q + 2d - 2, 2d - 2)``, ``n_e`` distinct noise variables and ``n_ee`` distinct
+    pairs ``e <= e'`` that share a clique.
+    """
+    theta_basis = comb(q + d - 1, d - 1)
+    # localizers of 1 - e^2: the pure-theta monomials of degree <= d - 1; equality
+    # multipliers: theta^a and theta^a e with |a| <= 2d - 3
+    lb = theta_basis
+    mult = comb(q + 2 * d - 3, 2 * d - 3)
     rows = q + n_extra  # scalar theta boxes, once
     psd = 0.0
-    noise_seen = set()
-    seen = set()
+    noise, pairs = set(), set()
     side_max = 0
     for cv, nh in cliques:
-        tv = [v for v in cv if v < q]
-        nv = [v for v in cv if v >= q]
-        mb = _sparse_basis(tv, nv, d)
-        s = len(mb)
+        nv = sorted(v for v in cv if v >= q)
+        s = (1 + len(nv)) * theta_basis
         side_max = max(side_max, s)
-        rows += s * (s + 1) // 2 + nh * s  # moment matrix; h times every basis monomial
+        rows += s * (s + 1) // 2 + nh * (1 + len(nv)) * mult  # moment matrix; h x mult.
         psd += _t3(s)
-        lb = len(_sparse_basis(tv, [], d - 1)) if d > 1 else 1  # (1 - e^2) x {1, theta..}
-        for v in nv:
-            if v not in noise_seen:
-                noise_seen.add(v)
-                rows += lb * (lb + 1) // 2
-                psd += _t3(lb)
-        seen.update(tuple(sorted(a + b)) for a in mb for b in mb)
-    seen.discard(())
-    return rows, len(seen), side_max, psd
+        noise.update(nv)
+        pairs.update(itertools.combinations_with_replacement(nv, 2))
+    rows += len(noise) * (lb * (lb + 1) // 2)
+    psd += len(noise) * _t3(lb)
+    p_theta = comb(q + 2 * d - 2, 2 * d - 2)
+    moments = p_theta - 1 + p_theta * (len(noise) + len(pairs))
+    return rows, moments, side_max, psd
 
 
 def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None,

@@ -1,0 +1,91 @@
+"""What the command line writes besides its results: progress lines, one-line warnings and
+errors, in the command line's own terms (flags, not Python keywords; no source paths).
+
+Library messages name the Python interface (``method='lp'``, ``total_time_limit``); the
+command translates them with :func:`to_cli` (a table of the spellings that reach it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import sys
+import time
+import warnings
+
+__all__ = ["Progress", "cli_warnings", "one_line", "print_error", "to_cli"]
+
+#: (pattern, replacement): Python spellings in library messages -> command-line spellings
+_TERMS = [
+    (r"LinearEIVSetEstimator\(na=(\d+), nb=(\d+), nk=(\d+)\)", r"--na \1 --nb \2 --nk \3"),
+    (r"method='(\w+)'", r"--method \1"),
+    (r"\brelaxation_order=(\d+)", r"--order \1"),
+    (r"\brelaxation_order\b", "--order"),
+    (r"\btotal_time_limit\b", "--total-time-limit"),
+    (r"(?<![-\w])time_limit\b", "--time-limit"),
+    (r"\bmax_nodes\b", "--max-nodes"),
+    (r"\bn_jobs\b", "--n-jobs"),
+    (r"pass steady_state_gain=None for a plain EIV problem",
+     "omit --steady-state-gain for a plain EIV problem"),
+    (r"\bsteady_state_gain=", "--steady-state-gain "),
+    (r"\bsteady_state_gain\b", "--steady-state-gain"),
+    (r"\boutput_bound=", "--output-bound "),
+    (r"\boutput_bound\b", "--output-bound"),
+    (r"\binput_bound=", "--input-bound "),
+    (r"\binput_bound\b", "--input-bound"),
+    (r" \(hammerbound\.relaxations\.moment\.size\.MOMENT_MAX_WORK\)", ""),
+    (r"\(bound_info_ gives each end's status and certified gap\)",
+     "(the status column gives each end's status; --json its details)"),
+]
+
+
+def to_cli(text: str) -> str:
+    """A library message in command-line terms, on one line."""
+    text = one_line(text)
+    for pattern, repl in _TERMS:
+        text = re.sub(pattern, repl, text)
+    return text
+
+
+def one_line(text) -> str:
+    """``text`` with every run of whitespace (newlines included) made one space."""
+    return " ".join(str(text).split())
+
+
+def print_error(command: str, exc: BaseException) -> int:
+    """``hammerbound CMD: error: Type: message`` on stderr (one line); returns 2."""
+    print(f"hammerbound {command}: error: {type(exc).__name__}: {to_cli(str(exc))}",
+          file=sys.stderr)
+    return 2
+
+
+@contextlib.contextmanager
+def cli_warnings(command: str):
+    """Within the block, every warning is one stderr line ``hammerbound CMD: warning:
+    Category: message`` in command-line terms, without the Python source line."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        out = sys.stderr if file is None else file
+        with contextlib.suppress(OSError, ValueError):
+            print(f"hammerbound {command}: warning: {category.__name__}: "
+                  f"{to_cli(str(message))}", file=out)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
+
+
+class Progress:
+    """Progress lines on stderr (stdout stays the program's tables or JSON)."""
+
+    def __init__(self, enabled, prefix="hammerbound demo"):
+        self.enabled = enabled
+        self.prefix = prefix
+        self.t0 = time.perf_counter()
+
+    def elapsed(self):
+        return time.perf_counter() - self.t0
+
+    def __call__(self, msg):
+        if self.enabled:
+            print(f"{self.prefix}: {msg}", file=sys.stderr, flush=True)

@@ -1,0 +1,127 @@
+"""``hammerbound identify``: both stages from a steady-state CSV and a PRBS CSV."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ..paths import FORCE_FLAG, add_force_option, check_output_dir
+from .options import (
+    CLI_NAMES,
+    UsageError,
+    add_bound_options,
+    add_csv_options,
+    add_model_options,
+    add_stage2_options,
+    require,
+    stage2_kwargs,
+)
+from .printing import assumption_lines, record_line, transfer_function
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(sub):
+    p = sub.add_parser(
+        "identify", help="identify backlash and linear block from CSV files",
+        description="Bound backlash and linear block from a steady-state CSV (--steady) and "
+                    "a PRBS CSV (--prbs), both with a header row naming the input and output "
+                    "columns.")
+    # the records are checked in the command, not by argparse: other ways to give the
+    # data (e.g. one record) can be added beside them
+    p.add_argument("--steady", default=None, metavar="CSV",
+                   help="CSV of steady-state points (signed input amplitudes, outputs)")
+    p.add_argument("--prbs", default=None, metavar="CSV",
+                   help="CSV of the PRBS experiment (input +-u*, output)")
+    add_bound_options(p, input_bound=False, steady=True)
+    add_model_options(p)
+    add_csv_options(p)
+    add_stage2_options(p, inner_signal=True)
+    p.add_argument("--json", action="store_true",
+                   help="write the result as JSON to stdout (and nothing else)")
+    p.add_argument("--report", default=None, metavar="DIR",
+                   help=f"write report.md + figures into DIR (its parent must exist; an "
+                        f"existing report there is kept unless {FORCE_FLAG} is given)")
+    add_force_option(p, "report files")
+    p.set_defaults(func=run)
+    return p
+
+
+def _bounds(args):
+    """``(output bound, steady-state output bound, given, assumed)``."""
+    out = require(args.output_bound, "--output-bound",
+                  "the bound on the output errors of the PRBS record that the intervals "
+                  "rest on, e.g. --output-bound 0.05")
+    given = [f"PRBS output error bound {out:g} (--output-bound)"]
+    if args.steady_output_bound is None:
+        return out, out, given, [
+            f"steady-state output error bound {out:g}, the same as --output-bound (same "
+            "sensor; pass --steady-output-bound if it differs)"]
+    given.append(f"steady-state output error bound {args.steady_output_bound:g} "
+                 "(--steady-output-bound)")
+    return out, args.steady_output_bound, given, []
+
+
+def run(args) -> int:
+    if args.steady is None or args.prbs is None:
+        raise UsageError("give both records: --steady STEADY.csv (steady-state points) and "
+                         "--prbs PRBS.csv (the PRBS experiment)")
+    return _two_records(args)
+
+
+def _two_records(args) -> int:
+    from ...data.csv_reader import read_columns
+    from ...data.iodata import IOData
+    from ...hammerstein.identifier import HammersteinBacklashIdentifier
+    from ...stage1.estimator import BacklashSetEstimator
+    from ...stage2.estimator import LinearEIVSetEstimator
+    from ..report import REPORT_FILES
+
+    output_bound, steady_bound, given, assumed = _bounds(args)
+    report_dir = (check_output_dir(args.report, REPORT_FILES, force=args.force,
+                                   option="--report") if args.report else None)
+    ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
+                      argument_names=CLI_NAMES)
+    data = IOData.from_csv(args.prbs, u=args.u_col, y=args.y_col, t=args.t_col or None,
+                           dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
+    ident = HammersteinBacklashIdentifier(
+        BacklashSetEstimator(steady_bound),
+        LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
+                              **stage2_kwargs(args)),
+        inner_signal=args.inner_signal)
+    steady = (ss[args.u_col], ss[args.y_col])
+    ident.fit(data, steady_state=steady)
+    tf_text, tf = transfer_function(ident.linear_, ident.dt_)
+    if args.json:
+        print(json.dumps(_record(args, ident, data, output_bound, steady_bound, assumed, tf),
+                         indent=2))
+    else:
+        print(f"steady-state record {args.steady}: {ss[args.u_col].size} points")
+        print("PRBS record " + record_line(args.prbs, data))
+        print("\n".join(assumption_lines(given, assumed)))
+        print(ident.summary())
+        print(tf_text)
+    if report_dir is not None:
+        from ..report import write_report
+
+        path = write_report(ident, *steady, data.u, data.y, report_dir, overwrite=args.force)
+        print(f"hammerbound identify: report written to {path}", file=sys.stderr)
+    return 0
+
+
+def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
+    from ...tables import interval_records
+
+    pr = ident.linear_.problem_
+    return {"parameters": list(ident.param_names_),
+            "lower": ident.bounds_[:, 0].tolist(), "upper": ident.bounds_[:, 1].tolist(),
+            "intervals": interval_records(ident.param_names_, ident.bounds_,
+                                          ident.to_frame()["status"]),
+            "u_star": ident.u_star_,
+            "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method,
+                      "inner_signal": args.inner_signal},
+            "data": {"steady": str(args.steady), "prbs": str(args.prbs), "N": data.N,
+                     "dt": data.dt, "input": data.input_name, "output": data.output_name,
+                     "output_bound": output_bound, "steady_output_bound": steady_bound},
+            "assumed": assumed,
+            "transfer_function": tf}

@@ -1,0 +1,143 @@
+"""Options shared by the subcommands: one flag per concept, the same in every subcommand.
+
+* error bounds: ``--output-bound`` (and ``--steady-output-bound`` for the steady-state
+  record of ``identify``), ``--input-bound``;
+* CSV records: ``--u-col``, ``--y-col``, ``--t-col``, ``--dt``, ``--delimiter``;
+* model: ``--na``, ``--nb``, ``--nk``; stage 2: ``--method``, ``--order``, ``--solver``,
+  ``--n-jobs``, ``--time-limit``, ``--total-time-limit``, ``--max-nodes``.
+
+Old spellings (``--noise-bound``, ``--output-noise``, ``--input-noise``,
+``--prbs-noise``, ``--steady-noise``, ``--u-column``, ``--y-column``, ``--gain``,
+``--noise-levels``) still work: :class:`DeprecatedFlag` says on stderr which flag
+replaces them (removed in 0.3.0).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..._compat import REMOVAL
+
+__all__ = ["CLI_NAMES", "DeprecatedFlag", "UsageError", "add_bound_options",
+           "add_csv_options", "add_model_options", "add_stage2_options", "deprecated",
+           "require"]
+
+#: how the data readers' messages name their settings on the command line
+CLI_NAMES = {"u": "--u-col NAME", "y": "--y-col NAME", "t": "--t-col NAME",
+             "no_t": "--t-col ''", "auto_t": "--t-col auto", "dt": "--dt SECONDS",
+             "delimiter": "--delimiter ';'"}
+
+
+class UsageError(Exception):
+    """A missing or contradictory option (exit status 2, like argparse's own errors)."""
+
+
+class DeprecatedFlag(argparse.Action):
+    """An old spelling: stores into the new flag's ``dest`` and says so on stderr."""
+
+    def __init__(self, option_strings, dest, new_flag, **kwargs):
+        self.new_flag = new_flag
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"{parser.prog}: {option_string} is deprecated and will be removed in "
+              f"{REMOVAL}; use {self.new_flag}", file=sys.stderr)
+        setattr(namespace, self.dest, values)
+
+
+def deprecated(p, old, new, dest, **kwargs):
+    """Accept ``old`` as a hidden spelling of ``new`` (same ``dest``)."""
+    p.add_argument(old, dest=dest, action=DeprecatedFlag, new_flag=new,
+                   help=argparse.SUPPRESS, **kwargs)
+
+
+def require(value, flag: str, why: str):
+    """``value``, or a :class:`UsageError` saying that ``flag`` is required and why."""
+    if value is None:
+        raise UsageError(f"{flag} is required: {why}")
+    return value
+
+
+def add_bound_options(p, *, input_bound=True, steady=False):
+    """``--output-bound`` (required: checked by :func:`require` in the command, so that
+    the old spellings also count) and ``--input-bound`` (default 0, printed as an
+    assumption)."""
+    p.add_argument("--output-bound", type=float, default=None, metavar="BOUND",
+                   help="bound on the output errors |eta_t| <= BOUND (required: the "
+                        "guaranteed bounds rest on it)")
+    if steady:
+        p.add_argument("--steady-output-bound", type=float, default=None, metavar="BOUND",
+                       help="bound on the output errors of the steady-state record (default: "
+                            "--output-bound, printed as an assumption)")
+        deprecated(p, "--prbs-noise", "--output-bound", "output_bound", type=float)
+        deprecated(p, "--steady-noise", "--steady-output-bound", "steady_output_bound",
+                   type=float)
+    else:
+        deprecated(p, "--noise-bound", "--output-bound", "output_bound", type=float)
+        deprecated(p, "--output-noise", "--output-bound", "output_bound", type=float)
+    if input_bound:
+        p.add_argument("--input-bound", type=float, default=None, metavar="BOUND",
+                       help="bound on the input errors |dx_t| <= BOUND (default 0: exact "
+                            "input; printed as an assumption)")
+        deprecated(p, "--input-noise", "--input-bound", "input_bound", type=float)
+
+
+def add_csv_options(p, *, time=True):
+    """Column names, time base and field separator of the CSV records."""
+    p.add_argument("--u-col", default="u", metavar="NAME",
+                   help="input column (default u)")
+    p.add_argument("--y-col", default="y", metavar="NAME",
+                   help="output column (default y)")
+    deprecated(p, "--u-column", "--u-col", "u_col")
+    deprecated(p, "--y-column", "--y-col", "y_col")
+    if time:
+        p.add_argument("--t-col", default="auto", metavar="NAME",
+                       help="time column (default auto: a column named t, time, 't [s]'... "
+                            "if there is one; '' to ignore)")
+        p.add_argument("--dt", type=float, default=None, metavar="SECONDS",
+                       help="sampling time (default: from the time column, else not given)")
+    p.add_argument("--delimiter", default=",",
+                   help="field separator of the CSV files (default ','; e.g. ';' or a tab)")
+
+
+def add_model_options(p, *, required=False):
+    """Orders of A and B and the input delay."""
+    kw = {"required": True} if required else {"default": 2}
+    p.add_argument("--na", type=int, help="order of A" + ("" if required else " (default 2)"),
+                   **kw)
+    p.add_argument("--nb", type=int,
+                   help="number of B coefficients after the direct term (b1..b_nb)"
+                        + ("" if required else " (default 2)"), **kw)
+    p.add_argument("--nk", type=int, default=1,
+                   help="input delay: 0 adds b0, 1 = chapter (default), >1 more delay")
+
+
+def add_stage2_options(p, method="moment", *, inner_signal=False):
+    """Method, relaxation, solver, parallel jobs and the exact method's stopping rules."""
+    p.add_argument("--method", default=method, choices=["lp", "moment", "exact"],
+                   help=f"stage-2 method (default {method}; exact gives the tight intervals)")
+    p.add_argument("--order", type=int, default=1, help="moment relaxation order (default 1)")
+    p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
+    if inner_signal:
+        p.add_argument("--inner-signal", default="independent",
+                       choices=["independent", "two-level"])
+    p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
+    p.add_argument("--time-limit", type=float, default=600.0,
+                   help="exact method: seconds per interval end (default 600)")
+    p.add_argument("--total-time-limit", type=float, default=None,
+                   help="exact method: seconds for the whole stage-2 fit, shared by every "
+                        "interval end and job; ends it stops report their certified LP/OBBT "
+                        "bound with status 'limit' (default: none)")
+    p.add_argument("--max-nodes", type=int, default=20000,
+                   help="exact method: nodes per interval end (default 20000)")
+    p.add_argument("--progress", action="store_true",
+                   help="progress on stderr (exact method): bars on a terminal, plain lines "
+                        "otherwise")
+
+
+def stage2_kwargs(args) -> dict:
+    """Keyword arguments of LinearEIVSetEstimator from the stage-2 options."""
+    return {"method": args.method, "relaxation_order": args.order, "solver": args.solver,
+            "n_jobs": args.n_jobs, "progress": args.progress, "time_limit": args.time_limit,
+            "total_time_limit": args.total_time_limit, "max_nodes": args.max_nodes}

@@ -1,0 +1,53 @@
+"""Text and JSON pieces that ``eiv`` and ``identify`` print alike: the record, the
+assumptions the bounds rest on, the central transfer function."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["assumption_lines", "dt_text", "poly_z", "record_line", "transfer_function"]
+
+
+def poly_z(coefs) -> str:
+    """``[0.75, -0.28]`` -> ``"0.75 z - 0.28"`` (descending powers of z)."""
+    c = np.trim_zeros(np.asarray(coefs, dtype=float), "f")
+    if c.size == 0:
+        return "0"
+    terms = []
+    for k, v in enumerate(c):
+        p = c.size - 1 - k
+        if v == 0:
+            continue
+        mag = abs(v)
+        num = "" if (mag == 1 and p > 0) else f"{mag:.4g}"
+        zp = "" if p == 0 else ("z" if p == 1 else f"z^{p}")
+        term = " ".join(t for t in (num, zp) if t)
+        sign = "-" if v < 0 else "+"
+        terms.append(term if not terms and v > 0 else f"{sign} {term}" if terms
+                     else f"-{term}")
+    return " ".join(terms)
+
+
+def dt_text(dt) -> str:
+    return "not given" if dt is None else f"{dt:g}"
+
+
+def transfer_function(linear, dt):
+    """``(text line, JSON record)`` of the central model of a fitted stage-2 estimator."""
+    tf = linear.to_transfer_function()
+    num = np.ravel(tf.num[0][0]).tolist()
+    den = np.ravel(tf.den[0][0]).tolist()
+    text = f"central model: G(z) = ({poly_z(num)}) / ({poly_z(den)}), dt = {dt_text(dt)}"
+    return text, {"num": num, "den": den, "dt": dt, "variable": "z"}
+
+
+def record_line(path, data) -> str:
+    """``data.csv: N = 60, dt = 0.1, input 'u', output 'y'``."""
+    return (f"{path}: N = {data.N}, dt = {dt_text(data.dt)}, input {data.input_name!r}, "
+            f"output {data.output_name!r}")
+
+
+def assumption_lines(given, assumed) -> list[str]:
+    """``given: ...`` and ``assumed: ...`` lines (what the bounds rest on)."""
+    out = ["given: " + "; ".join(given)] if given else []
+    return out + [f"assumed: {a}" for a in assumed]

@@ -1,0 +1,87 @@
+"""Validation of the constructor parameters of :class:`~hammerbound.LinearEIVSetEstimator`
+(scikit-learn convention: at ``fit``, not in ``__init__``)."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+
+from .._compat import is_given, warn_renamed
+from ..data.validation import as_real
+from ..exceptions import ParameterValidationError
+
+__all__ = ["METHODS", "check_params"]
+
+METHODS = ("moment", "lp", "exact")
+
+
+def check_params(est) -> None:
+    """Validate the constructor parameters of a :class:`LinearEIVSetEstimator` (at fit)."""
+    for name in ("na", "nb"):
+        v = getattr(est, name)
+        if not isinstance(v, numbers.Integral) or isinstance(v, bool) or v < 0:
+            raise ParameterValidationError(f"{name} must be an integer >= 0; got {v!r}.")
+    nk = est.nk
+    if nk is not None and (not isinstance(nk, numbers.Integral) or isinstance(nk, bool)
+                           or nk < 0):
+        raise ParameterValidationError(
+            f"nk (input delay) must be an integer >= 0; got {nk!r}.")
+    if is_given(est.b0):
+        warn_renamed("LinearEIVSetEstimator(b0=...)", "nk=0 (direct term b0) or nk=1",
+                     stacklevel=4)
+        if not isinstance(est.b0, (bool, np.bool_)):
+            raise ParameterValidationError(
+                f"b0 must be True or False (better: nk=0 for a direct term); got "
+                f"{est.b0!r}.")
+        if est.b0 and nk not in (None, 0, 1):
+            raise ParameterValidationError(
+                f"b0=True means a direct term (nk=0) but nk={nk}: pass only nk.")
+    mn = est.max_nodes
+    if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
+        raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
+    tl = est.time_limit
+    if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
+        raise ParameterValidationError(
+            f"time_limit must be a number of seconds >= 0; got {tl!r}."
+        )
+    ttl = est.total_time_limit
+    if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
+                            or not ttl >= 0):
+        raise ParameterValidationError(
+            f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
+        )
+    if est.nb == 0 and est._nk() != 0:
+        raise ParameterValidationError(
+            "B has no coefficient: use nb >= 1 or nk=0 (the direct term b0)."
+        )
+    if est.method not in METHODS:
+        raise ParameterValidationError(
+            f"method must be one of {METHODS}; got {est.method!r}."
+        )
+    r = est.relaxation_order
+    if not isinstance(r, numbers.Integral) or isinstance(r, bool) or r < 1:
+        raise ParameterValidationError(
+            f"relaxation_order must be an integer >= 1 (the chapter uses 2); got {r!r}."
+        )
+    if est.on_failure not in ("box", "raise"):
+        raise ParameterValidationError(
+            f"on_failure must be 'box' or 'raise'; got {est.on_failure!r}."
+        )
+    if est.relaxation_basis not in ("sparse", "full"):
+        raise ParameterValidationError(
+            f"relaxation_basis must be 'sparse' or 'full'; got {est.relaxation_basis!r}."
+        )
+    as_real("steady_state_gain", est.steady_state_gain, nonzero=True, or_none=True,
+            example="1.0")
+    if not (isinstance(est.tol, numbers.Real) and est.tol > 0):
+        raise ParameterValidationError(f"tol must be > 0; got {est.tol!r}.")
+    if not (isinstance(est.n_jobs, numbers.Integral) and (est.n_jobs >= 1 or est.n_jobs == -1)):
+        raise ParameterValidationError(f"n_jobs must be a positive integer or -1; got {est.n_jobs!r}.")
+    if est.solver_options is not None and not isinstance(est.solver_options, dict):
+        from ..exceptions import SolverOptionError
+
+        raise SolverOptionError(
+            f"solver_options must be a dict of native solver options or None; got "
+            f"{type(est.solver_options).__name__}."
+        )

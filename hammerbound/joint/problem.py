@@ -102,7 +102,8 @@ class RecordProblem:
 
     def eiv_problem(self, x) -> EIVProblem:
         """The stage-2 problem (22.34) with the inner signal ``x`` known exactly."""
-        return EIVProblem(self.y, x, 0.0, self.deta, self.na, self.nb, gain=self.gain,
+        return EIVProblem(self.y, x, 0.0, self.deta, self.na, self.nb,
+                          steady_state_gain=self.gain,
                           theta_box=self.box[: self.p], nk=self.nk)
 
 

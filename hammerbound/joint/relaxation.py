@@ -35,7 +35,24 @@ from ..tolerances import FEASIBILITY_RTOL
 from .modes import AMBIG, INIT, LEFT, RIGHT, InnerStructure, inner_structure, line_range
 from .problem import RecordProblem
 
-__all__ = ["JointRelaxation", "build_relaxation"]
+__all__ = ["JointRelaxation", "build_relaxation", "solve_lp"]
+
+
+def solve_lp(lp):
+    """Solve with a certified bound; an LP that HiGHS refuses to run is solved again from
+    scratch, and if it is refused again it gives no bound (``-inf``, status "failed"):
+    never a wrong one."""
+    from ..exceptions import SolverError
+    from ..solvers.highs import LPSolve
+
+    try:
+        return lp.solve()
+    except SolverError:
+        lp.h.clearSolver()
+        try:
+            return lp.solve()
+        except SolverError:
+            return LPSolve("failed", -np.inf, np.nan, None, 0)
 
 def round_down(v):
     """Outward (downward) rounding of computed data; exact zeros stay zero (rounding 0

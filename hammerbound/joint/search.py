@@ -26,7 +26,7 @@ import numpy as np
 from ..exceptions import EmptyFeasibleSetError
 from .local import restore, walk
 from .problem import RecordProblem, Witness
-from .relaxation import build_relaxation
+from .relaxation import build_relaxation, solve_lp
 
 __all__ = ["EndResult", "obbt", "search_end"]
 
@@ -55,7 +55,7 @@ def _solve(problem, box, col, sense, basis=None):
     lp.set_cost(c)
     if basis is not None and basis[0].size == lp.c.size and basis[1].size == lp.A.shape[0]:
         lp.set_basis(basis)
-    res = lp.solve()
+    res = solve_lp(lp)
     x = None if res.x is None else res.x[rel.box_cols]
     return res, x, (lp.get_basis() if res.status == "optimal" else None), rel
 
@@ -80,7 +80,7 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
                 c = np.zeros(rel.lp.c.size)
                 c[rel.box_cols[k]] = sense
                 rel.lp.set_cost(c)
-                res = rel.lp.solve()
+                res = solve_lp(rel.lp)
                 if res.status == "infeasible":
                     raise EmptyFeasibleSetError(
                         "no backlash and linear block explain the record within the bounds "
@@ -113,7 +113,7 @@ def _tighten(problem, box, cols):
             c = np.zeros(rel.lp.c.size)
             c[rel.box_cols[k]] = sense
             rel.lp.set_cost(c)
-            res = rel.lp.solve()
+            res = solve_lp(rel.lp)
             if res.status == "infeasible":
                 return None
             if sense > 0:

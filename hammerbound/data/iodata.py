@@ -231,6 +231,18 @@ class IOData:
                       t0=float(self.time[idx[0]]) if idx.size else self.t0,
                       sample_index=self.sample_index[idx], time_unit=self.time_unit)
 
+    def __array__(self, dtype=None, copy=None):
+        # numpy (and every scikit-learn transformer, through check_array) would otherwise
+        # recurse into __getitem__ and fail with "maximum number of dimension"
+        raise DataValidationError(
+            "an IOData is a record (input, output, sampling time, names), not a feature "
+            "matrix: pass it straight to a hammerbound estimator, not through a scikit-learn "
+            "transformer such as StandardScaler. The error bounds are in the units of the "
+            "signals, so scaled data need scaled bounds: to scale, build IOData(u / su, "
+            "y / sy) yourself and divide the output bound by sy and the input bound by su "
+            "(the b_j then scale by su / sy; the a_i do not change). Use data.u and data.y "
+            "for the arrays.")
+
     def is_contiguous(self) -> bool:
         """Whether the samples are consecutive in the original record."""
         return bool(np.all(np.diff(self.sample_index) == 1))

@@ -7,6 +7,7 @@
     python -m benchmarks coverage [--quick] [--dask] ...
     python -m benchmarks moment2  [--N 10 20 50 100] [--full-N 10]
     python -m benchmarks weights                # certified uncertainty weights by order
+    python -m benchmarks lric                   # the LRIC exam record (../shared/data/lric/)
     python -m benchmarks report                 # regenerate docs/benchmarks.md from results/
     python -m benchmarks all --quick            # every benchmark, then the report
 
@@ -25,6 +26,7 @@ COMMANDS = {
     "moment2": "moment_order2",
     "coverage": "coverage",
     "weights": "weights",
+    "lric": "lric",
     "report": "report",
 }
 

@@ -31,7 +31,12 @@ from .solvers import available_solvers
 from .stage1.estimator import BacklashSetEstimator, InnerSignalBounds
 from .stage1.feasible_set import FeasibleSet, PolygonFeasibleSet
 from .stage2.estimator import LinearEIVSetEstimator
-from .systems.experiments import chapter_example, prbs_experiment, square_wave_experiment
+from .systems.experiments import (
+    chapter_example,
+    eiv_example,
+    prbs_experiment,
+    square_wave_experiment,
+)
 from .systems.models import Backlash, HammersteinSystem, simulate_backlash
 
 _compat.install()
@@ -81,6 +86,7 @@ __all__ = [
     "available_solvers",
     "chapter_example",
     "check_theta",
+    "eiv_example",
     "prbs_experiment",
     "simulate_backlash",
     "square_wave_experiment",

@@ -2,12 +2,36 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import linprog
 from scipy.signal import lfilter
 
 from hammerbound.relaxations.problem import EIVProblem
+
+#: test and benchmark data that are not the project's (read in place, never copied into it)
+SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def shared_data(*parts) -> Path:
+    """Path of a file under ``../shared/data/`` (relative to the repository root); the
+    calling test is skipped, with the path in the reason, when the file is not there."""
+    path = SHARED_DATA.joinpath(*parts)
+    if not path.is_file():
+        pytest.skip(f"third-party data not found at {path} (tests read it from "
+                    "../shared/data/ beside the repository; it is not part of the package)")
+    return path
+
+
+def lric_data():
+    """``(u, y)`` of the LRIC exam record (P0li22/LRIC, 22 February 2017: 30 samples,
+    dt = 0.1, input and output errors bounded by 0.05), or skip."""
+    d = np.genfromtxt(shared_data("lric", "eiv_first_order_2017.csv"), delimiter=",",
+                      names=True)
+    return d["u"], d["y"]
+
 
 THETA_TRUE = np.array([-0.76, 0.82, 2.15, -1.09])
 A_TRUE = np.array([1.0, -0.76, 0.82])

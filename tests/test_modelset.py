@@ -12,6 +12,7 @@ import itertools
 import matplotlib
 import numpy as np
 import pytest
+from conftest import lric_data
 from scipy.optimize import linprog, minimize
 from scipy.signal import lfilter
 
@@ -116,17 +117,10 @@ def chapter_samples(chapter_fit):
 
 @pytest.fixture(scope="module")
 def lric_fit():
-    d = _lric()
-    u, y = d[:, 1], d[:, 2]
+    u, y = lric_data()          # ../shared/data/lric/ (skips when absent)
     est = hb.LinearEIVSetEstimator(1, 1, b0=True, noise_bound=0.05, steady_state_gain=None,
                                    method="exact").fit(u, y, input_bound=0.05)
     return est, u, y
-
-
-def _lric():
-    from hammerbound.data.csv_reader import example_data_path
-
-    return np.loadtxt(example_data_path(), delimiter=",", skiprows=1)
 
 
 # ----------------------------------------------------------------------------- zonotopes

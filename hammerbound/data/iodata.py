@@ -254,6 +254,29 @@ class IOData:
         return pd.DataFrame({"t": self.time, self.input_name: self.u,
                              self.output_name: self.y})
 
+    def to_csv(self, path) -> None:
+        """Write the record as a CSV file with a header row: ``t`` (``t [unit]`` with a
+        time unit; omitted when ``dt`` is not given), then the input and output columns
+        under their names, each value written so that :meth:`from_csv` reads it back
+        exactly (units of the signals are not written)."""
+        cols = [self.u, self.y]
+        header = [self.input_name, self.output_name]
+        if self.dt is not None:
+            cols.insert(0, self.time)
+            header.insert(0, f"t [{self.time_unit}]" if self.time_unit else "t")
+        if len(set(header)) < len(header) or any("," in h or '"' in h for h in header):
+            raise ParameterValidationError(
+                f"the column names {header} must be distinct and contain no comma or quote.")
+        lines = [",".join(header)]
+        for row in zip(*cols, strict=True):
+            # the shortest text that reads back to the same float; the time to 12 digits
+            vals = [repr(float(v)) for v in row]
+            if self.dt is not None:
+                vals[0] = f"{row[0]:.12g}"
+            lines.append(",".join(vals))
+        with open(path, "w", newline="") as fh:
+            fh.write("\n".join(lines) + "\n")
+
     def __repr__(self) -> str:
         def sig(name, unit):
             return repr(name) + (f" [{unit}]" if unit else "")

@@ -26,6 +26,7 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .hammerstein.identifier import HammersteinBacklashIdentifier
+from .model_selection import OrderSelectionCV
 from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
 from .stage1.estimator import BacklashSetEstimator, InnerSignalBounds
@@ -74,6 +75,7 @@ __all__ = [
     "InnerSignalBounds",
     "LinearEIVSetEstimator",
     "NotEnoughAmplitudesError",
+    "OrderSelectionCV",
     "ParameterValidationError",
     "PolygonFeasibleSet",
     "RelaxationTooLargeError",

@@ -279,6 +279,23 @@ def eiv_example(N: int = 60, *, noise_bound: float = 0.05, input_bound: float = 
     ``[-bound, bound]`` (``noise="uniform"``) or exactly ``+-bound`` with random signs
     (``noise="at_bound"``). ``ex.data.to_csv(path)`` writes it as a CSV file (columns
     ``t, u, y``) for :meth:`IOData.from_csv` and ``hammerbound eiv``.
+
+    Parameters
+    ----------
+    N : int, default 60
+        Number of samples (>= 10).
+    noise_bound, input_bound : float, default 0.05
+        Bounds of the output and input errors (> 0).
+    dt : float, default 0.1
+        Sampling time (s) of the record.
+    noise : {"uniform", "at_bound"}, default "uniform"
+        Errors uniform inside the bounds, or exactly at them with random signs.
+    random_state : int, Generator or None, default 0
+        Seed of the input levels and the errors.
+
+    Returns
+    -------
+    EIVExample
     """
     if noise not in ("uniform", "at_bound"):
         raise ParameterValidationError(f"noise must be 'uniform' or 'at_bound'; got {noise!r}.")

@@ -310,5 +310,6 @@ def unpack(X, y, *, what="X"):
         return X.u, X.y, X
     if y is None:
         raise DataValidationError(
-            f"fit needs the output y (or pass an IOData as {what}).")
+            "fit requires y to be passed, but the target y is None: pass the measured "
+            f"output y, or an IOData (input, output, dt) as {what}.")
     return X, y, None

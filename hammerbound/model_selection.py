@@ -56,6 +56,10 @@ def _structure_size(est) -> tuple[int, int]:
     p = est.get_params()
     pre = "" if "na" in p else "linear__"
     if pre + "na" not in p:
+        if "linear" in p:  # an identifier with the default (None) stage 2
+            raise ParameterValidationError(
+                "OrderSelectionCV varies the orders of the identifier's stage 2: pass it "
+                "explicitly, HammersteinBacklashIdentifier(linear=LinearEIVSetEstimator(...)).")
         _linear_part(est)  # raises: not a stage-2 estimator nor an identifier
     nk = p[pre + "nk"]
     nk = (0 if p[pre + "b0"] else 1) if nk is None else int(nk)
@@ -183,6 +187,7 @@ class OrderSelectionCV(BaseEstimator):
         parameters are split with the folds.
         """
         cv = self._check_params()
+        _structure_size(self.estimator)  # a stage-2 estimator or an identifier with one
         cands = list(ParameterGrid(self.param_grid))
         if not cands:
             raise ParameterValidationError("param_grid holds no candidate.")

@@ -312,7 +312,7 @@ def test_envelope_between_grid_frequencies(chapter_fit):
     assert np.all(ref.mag_upper_between <= up * 1.01 + 1e-12)
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_envelope_on_lric_data(lric_fit):
     est = lric_fit[0]
     S = est.sample(25, random_state=0)
@@ -382,7 +382,7 @@ def test_weight_bounds_vertices_and_samples(chapter_fit, chapter_samples, weight
     assert np.median(Wm / exact) < 1.5
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_weight_on_lric_data(lric_fit):
     est, u, y = lric_fit
     uw = est.uncertainty_weight(dt=0.1)
@@ -532,7 +532,7 @@ def test_inverse_validation(stage1):
     assert lo[0] <= -0.2 and hi[0] >= 0.3
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_identifier_delegates_and_figures(stage1, tmp_path):
     import matplotlib.pyplot as plt
 

@@ -74,6 +74,19 @@ def test_picks_the_true_order_and_never_a_falsified_one(order, noise):
     assert "<- selected" in sel.summary().splitlines()[k + 1]
 
 
+@pytest.mark.deep
+@pytest.mark.parametrize("noise", ["uniform", "at_bound"])
+@pytest.mark.parametrize("order", [1, 2])
+def test_true_order_over_seeds(order, noise):
+    """Six records per case (GridSearchCV with the LP picked a larger order on 7 of these
+    24): the selected order is the true one and contains the true system."""
+    for seed in range(6):
+        u, y, theta = record(order, seed, noise)
+        sel = select(u, y)
+        assert sel.best_params_ == TRUE_ORDER[order], (seed, sel.summary())
+        assert sel.best_estimator_.contains(theta)
+
+
 def test_issue_record_lp_cannot_falsify_but_the_whole_record_does():
     """The issue's second-order record (seed 42): na=2, nb=1 passes the LP on the whole
     record, so cross-validation may rank it first; the exact machinery certifies it empty."""
@@ -161,6 +174,8 @@ def test_parameters_are_checked():
         hb.OrderSelectionCV(est, GRID, time_limit=0).fit(u, y)
     from sklearn.linear_model import LinearRegression
 
+    with pytest.raises(ParameterValidationError, match="linear=LinearEIVSetEstimator"):
+        hb.OrderSelectionCV(hb.HammersteinBacklashIdentifier(), {"linear__na": [1]}).fit(u, y)
     with pytest.raises(ParameterValidationError, match="LinearEIVSetEstimator"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

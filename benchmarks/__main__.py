@@ -8,6 +8,7 @@
     python -m benchmarks moment2  [--N 10 20 50 100] [--full-N 10]
     python -m benchmarks weights                # certified uncertainty weights by order
     python -m benchmarks orders [--orders 2 3 4 5 6]  # LP time by model order, guard refusals
+    python -m benchmarks lric                   # the LRIC exam record (../shared/data/lric/)
     python -m benchmarks report                 # regenerate docs/benchmarks.md from results/
     python -m benchmarks all --quick            # every benchmark, then the report
 
@@ -27,6 +28,7 @@ COMMANDS = {
     "coverage": "coverage",
     "weights": "weights",
     "orders": "lp_orders",
+    "lric": "lric",
     "report": "report",
 }
 

@@ -26,7 +26,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 FIGURES = HERE.parent / "docs" / "figures"
-LRIC = Path("/work/shared/data/lric/eiv_first_order_2017.csv")
+# third-party record, read in place from ../shared/data/ beside the repository (not shipped)
+LRIC = HERE.parent.parent / "shared" / "data" / "lric" / "eiv_first_order_2017.csv"
 
 
 def own_feasible(theta, y, x, dx, deta, na, b_lags, tol=1e-8):

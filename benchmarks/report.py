@@ -650,6 +650,27 @@ def section_moment2():
     return "\n" + "\n\n".join(o.strip("\n") for o in out if o) + "\n"
 
 
+def section_lric():
+    """The third-party LRIC exam record (benchmarks/lric.py)."""
+    j = _json("lric.json")
+    if not j or not j.get("rows"):
+        return ""
+    rows = []
+    for r in j["rows"]:
+        ends = ", ".join(f"{n} [{lo:.4f}, {hi:.4f}]" for n, (lo, hi)
+                         in zip(r["params"], r["bounds"], strict=True))
+        wit = {True: "yes", False: "**no**"}.get(r.get("witnesses_feasible"), "–")
+        rows.append([r["method"], ends, ", ".join(sorted(set(r["status"]))),
+                     f"{fs(min(r['wall_s']))}–{fs(max(r['wall_s']))} s", wit, r["loadavg"]])
+    out = (f"The exam record of P0li22/LRIC (22 February 2017; `{j['data']}`, read in place, "
+           f"not shipped): N = {j['N']}, dt = {j['dt']:g}, input and output errors bounded by "
+           f"{j['bound']:g}, `na=1, nb=1, nk=0` (`python -m benchmarks lric`; wall time of "
+           f"the fit, fastest–slowest of {len(j['rows'][0]['wall_s'])}; witnesses: every "
+           "exact end's witness feasible by an independent LP):\n\n")
+    out += table(["method", "intervals", "status", "time", "witnesses", "load"], rows) + "\n\n"
+    return out + env_line(j) + "\n"
+
+
 def main(argv=None):
     replot()
     doc = [notes_section("intro"), "## Performance targets\n", section_targets(None),
@@ -661,6 +682,7 @@ def main(argv=None):
            notes_section("methods-findings"),
            "### Order-2 moment relaxation at the chapter's size\n", notes_section("moment2-intro"),
            section_moment2(), notes_section("moment2-findings"),
+           "### LRIC exam record\n", section_lric(),
            "### Exact intervals on long records\n", section_scaling(),
            notes_section("scaling-findings"),
            "## 3. Stage 1 speed\n", section_stage1(), notes_section("stage1-findings"),

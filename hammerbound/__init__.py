@@ -27,12 +27,18 @@ from .exceptions import (
     UnboundedSetError,
 )
 from .hammerstein.identifier import HammersteinBacklashIdentifier
+from .model_selection import OrderSelectionCV
 from .relaxations.problem import EIVProblem, check_theta
 from .solvers import available_solvers
 from .stage1.estimator import BacklashSetEstimator, InnerSignalBounds
 from .stage1.feasible_set import FeasibleSet, PolygonFeasibleSet
 from .stage2.estimator import LinearEIVSetEstimator
-from .systems.experiments import chapter_example, prbs_experiment, square_wave_experiment
+from .systems.experiments import (
+    chapter_example,
+    eiv_example,
+    prbs_experiment,
+    square_wave_experiment,
+)
 from .systems.models import Backlash, HammersteinSystem, simulate_backlash
 
 _compat.install()
@@ -71,6 +77,7 @@ __all__ = [
     "LinearEIVSetEstimator",
     "NotEnoughAmplitudesError",
     "NotIdentifiedWarning",
+    "OrderSelectionCV",
     "ParameterValidationError",
     "PolygonFeasibleSet",
     "RelaxationTooLargeError",
@@ -83,6 +90,7 @@ __all__ = [
     "available_solvers",
     "chapter_example",
     "check_theta",
+    "eiv_example",
     "prbs_experiment",
     "simulate_backlash",
     "square_wave_experiment",

@@ -171,14 +171,14 @@ def test_lp_extremal_noise(cases):
         _check(i, "lp")
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 @pytest.mark.parametrize("cases", _chunks(), ids=lambda r: f"{r.start}-{r.stop - 1}")
 def test_moment_extremal_noise(cases):
     for i in _selected(cases, "moment"):
         _check(i, "moment")
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 @pytest.mark.parametrize("cases", _chunks(), ids=lambda r: f"{r.start}-{r.stop - 1}")
 def test_exact_extremal_noise(cases):
     for i in _selected(cases, "exact"):

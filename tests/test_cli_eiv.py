@@ -10,15 +10,29 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import shared_data
 from scipy.signal import lfilter
 
 from hammerbound.app.cli import main
-from hammerbound.data.csv_reader import example_data_path
 
 ROOT = Path(__file__).resolve().parents[1]
 LRIC_EXACT = np.array([[-0.9217, -0.8830], [0.7195, 0.7935], [-0.3227, -0.2428]])
 LRIC_ARGS = ["--na", "1", "--nb", "1", "--nk", "0", "--input-bound", "0.05",
              "--output-bound", "0.05", "--dt", "0.1"]
+EIV_TRUTH = np.array([-0.8, 0.7, 0.2])   # a1, b0, b1 of _eiv_csv
+
+
+def _eiv_csv(tmp_path, N=40, seed=5):
+    """Own simulation: y = (0.7 + 0.2 q^-1) / (1 - 0.8 q^-1) x, dt = 0.1 (column t in
+    seconds), input and output errors exactly at +-0.05 (random signs)."""
+    rng = np.random.default_rng(seed)
+    x0 = rng.uniform(-2, 2, N)
+    w = lfilter([0.7, 0.2], [1.0, -0.8], x0)
+    u = x0 + 0.05 * np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    y = w + 0.05 * np.where(rng.random(N) < 0.5, 1.0, -1.0)
+    path = tmp_path / "eiv.csv"
+    path.write_text("t,u,y\n" + "".join(f"{0.1 * k:.1f},{float(u[k])!r},{float(y[k])!r}\n" for k in range(N)))
+    return path
 
 
 def _record(tmp_path, t=None, names=("u", "y"), N=40, seed=1):
@@ -35,7 +49,9 @@ def _record(tmp_path, t=None, names=("u", "y"), N=40, seed=1):
 
 
 def test_eiv_json_lric_exact(capsys):
-    rc = main(["eiv", str(example_data_path()), *LRIC_ARGS, "--method", "exact", "--json"])
+    """The third-party LRIC record (../shared/data/lric/), exact method."""
+    lric = shared_data("lric", "eiv_first_order_2017.csv")
+    rc = main(["eiv", str(lric), *LRIC_ARGS, "--method", "exact", "--json"])
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["parameters"] == ["a1", "b0", "b1"]
@@ -50,25 +66,27 @@ def test_eiv_json_lric_exact(capsys):
 def test_eiv_json_subprocess_stdout_is_only_json(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     proc = subprocess.run(
-        [sys.executable, "-m", "hammerbound", "eiv", str(example_data_path()),
+        [sys.executable, "-m", "hammerbound", "eiv", str(_eiv_csv(tmp_path)),
          *LRIC_ARGS, "--method", "lp", "--json"],
         capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)  # nothing but the JSON document on stdout
     assert out["parameters"] == ["a1", "b0", "b1"]
     lo, hi = np.array(out["lower"]), np.array(out["upper"])
-    # LP is an outer bound of the exact intervals
-    assert np.all(lo <= LRIC_EXACT[:, 0] + 1e-4) and np.all(hi >= LRIC_EXACT[:, 1] - 1e-4)
+    assert np.all((lo <= EIV_TRUTH) & (EIV_TRUTH <= hi))
 
 
-def test_eiv_text_output_names_and_model(capsys):
-    rc = main(["eiv", str(example_data_path()), *LRIC_ARGS, "--method", "lp"])
+def test_eiv_text_output_names_and_model(tmp_path, capsys):
+    rc = main(["eiv", str(_eiv_csv(tmp_path)), *LRIC_ARGS, "--method", "lp"])
     assert rc == 0
     out = capsys.readouterr().out
     assert "dt = 0.1" in out and "no gain constraint" in out
     for name in ("a1", "b0", "b1"):
         assert any(line.startswith(name + " ") for line in out.splitlines())
-    assert "G(z) = (" in out and "z - 0.9" in out
+    import re
+
+    pole = re.search(r"G\(z\) = \(.*\) / \(z - (0\.\d+)\)", out)
+    assert pole and abs(float(pole.group(1)) - 0.8) < 0.05   # the true pole is 0.8
 
 
 def test_eiv_time_column_gives_dt_and_columns_by_name(tmp_path, capsys):
@@ -118,9 +136,9 @@ def test_eiv_missing_column_and_gain_error(tmp_path, capsys):
     assert "EmptyFeasibleSetError" in cap.err and "B(1)/A(1) = 3" in cap.err
 
 
-def test_eiv_total_time_limit_zero_reports_lp_bounds_with_status_limit(capsys):
+def test_eiv_total_time_limit_zero_reports_lp_bounds_with_status_limit(tmp_path, capsys):
     """A spent total budget: every end keeps its certified LP bound, status 'limit'."""
-    args = ["eiv", str(example_data_path()), *LRIC_ARGS, "--json"]
+    args = ["eiv", str(_eiv_csv(tmp_path)), *LRIC_ARGS, "--json"]
     assert main([*args, "--method", "lp"]) == 0
     lp = json.loads(capsys.readouterr().out)
     rc = main([*args, "--method", "exact", "--total-time-limit", "0"])
@@ -134,7 +152,7 @@ def test_eiv_total_time_limit_zero_reports_lp_bounds_with_status_limit(capsys):
     assert ".py" not in cap.err and "warnings.warn" not in cap.err
     lo, hi = np.array(out["lower"]), np.array(out["upper"])
     assert np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
-    # never wider than the LP bound, and still around the exact intervals
+    # never wider than the LP bound, and still around the true system
     assert np.all(lo >= np.array(lp["lower"]) - 1e-12) and np.all(hi <= np.array(lp["upper"]) + 1e-12)
-    assert np.all(lo <= LRIC_EXACT[:, 0] + 2e-4) and np.all(hi >= LRIC_EXACT[:, 1] - 2e-4)
+    assert np.all((lo <= EIV_TRUTH) & (EIV_TRUTH <= hi))
     assert all("limit" in r["status"] for r in out["intervals"])

@@ -138,7 +138,7 @@ def test_identify_json_stdout_is_only_json(data, tmp_path):
     assert sorted(p.name for p in rep.iterdir()) == sorted(REPORT_FILES)
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_identify_json_exact_two_jobs_stdout_is_only_json(data):
     """The exact method builds its own highspy.Highs() objects in worker processes."""
     res = run_cli(*_identify_args(data, "--json", "--n-jobs", 2)[:-2], "--method", "exact",
@@ -226,7 +226,7 @@ def test_benchmark_output_checked_before_the_run(tmp_path):
     assert _state(target) == before
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_benchmark_output_force_overwrites(tmp_path):
     target = tmp_path / "out.json"
     target.write_text('{"previous": "results"}')

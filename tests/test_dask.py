@@ -35,7 +35,7 @@ def client():
         yield c
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_identifier_bounds_on_a_local_cluster(client):
     deta, method = 0.05, "exact"
     ex = chapter_example(deta, N=100, random_state=1)

@@ -100,7 +100,7 @@ def test_single_effect_small_named_right(effect, small, large, tol):
     assert _achieved(rep, u, y) == pytest.approx(rep.gap_after, rel=1e-9)
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 @pytest.mark.parametrize(("effect", "small", "large", "tol"), SINGLE)
 def test_single_effect_large_named_right_noise_at_bound(effect, small, large, tol):
     G, u, y = make({effect: large}, seed=2, at_bound=True)
@@ -145,7 +145,7 @@ def test_out_of_library_effect_is_not_named(tmp_path):
     plt.close(fig)
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_out_of_library_effect_with_joint_search():
     G, u, y = make({"quadratic": 0.4}, seed=4)
     rep = diagnose(G, u, y, NB)
@@ -182,7 +182,7 @@ PAIRS = [
 ]
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 @pytest.mark.parametrize(("truth", "tol"), PAIRS, ids=["+".join(p[0]) for p in PAIRS])
 def test_pairs_found_jointly_and_consistent(truth, tol):
     G, u, y = make(truth, seed=6)

@@ -18,7 +18,6 @@ import contextlib
 import io
 import re
 import shlex
-import shutil
 from pathlib import Path
 
 import matplotlib
@@ -121,7 +120,6 @@ def _run_console(body):
 def test_doc_examples_print_what_they_say(path, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "docs" / "figures").mkdir(parents=True)
-    shutil.copy(ROOT / "hammerbound" / "data" / "eiv_first_order_2017.csv", tmp_path)
     ns: dict = {"__name__": "__doc_example__"}
     for k, (kind, code, expected, line) in enumerate(doc_blocks(path.read_text())):
         where = f"{path.name}, block {k} (line {line})"

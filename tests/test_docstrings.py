@@ -13,9 +13,11 @@ from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.moment.relaxation import moment_bounds
 
-ESTIMATORS = [hb.BacklashSetEstimator, hb.LinearEIVSetEstimator, hb.HammersteinBacklashIdentifier]
+ESTIMATORS = [hb.BacklashSetEstimator, hb.LinearEIVSetEstimator, hb.HammersteinBacklashIdentifier,
+              hb.OrderSelectionCV]
 FUNCTIONS = [lp_bounds, moment_bounds, exact_bounds, diagnose,
-             hb.LinearEIVSetEstimator.fit, hb.HammersteinBacklashIdentifier.fit]
+             hb.LinearEIVSetEstimator.fit, hb.HammersteinBacklashIdentifier.fit,
+             hb.eiv_example, hb.relaxations.consistency]
 
 
 def _documented(doc: str) -> set[str]:

@@ -22,7 +22,7 @@ LAYERS = [
     {"modelset"},
     {"stage1", "stage2"},
     {"joint"},
-    {"hammerstein"},
+    {"hammerstein", "model_selection"},
     {"discrepancy"},
     {"app", "__main__"},
 ]

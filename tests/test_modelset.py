@@ -12,6 +12,7 @@ import itertools
 import matplotlib
 import numpy as np
 import pytest
+from conftest import lric_data
 from scipy.optimize import linprog, minimize
 from scipy.signal import lfilter
 
@@ -116,17 +117,10 @@ def chapter_samples(chapter_fit):
 
 @pytest.fixture(scope="module")
 def lric_fit():
-    d = _lric()
-    u, y = d[:, 1], d[:, 2]
+    u, y = lric_data()          # ../shared/data/lric/ (skips when absent)
     est = hb.LinearEIVSetEstimator(1, 1, nk=0, output_bound=0.05, steady_state_gain=None,
                                    method="exact").fit(u, y, input_bound=0.05)
     return est, u, y
-
-
-def _lric():
-    from hammerbound.data.csv_reader import example_data_path
-
-    return np.loadtxt(example_data_path(), delimiter=",", skiprows=1)
 
 
 # ----------------------------------------------------------------------------- zonotopes
@@ -319,7 +313,7 @@ def test_envelope_between_grid_frequencies(chapter_fit):
     assert np.all(ref.mag_upper_between <= up * 1.01 + 1e-12)
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_envelope_on_lric_data(lric_fit):
     est = lric_fit[0]
     S = est.sample(25, random_state=0)
@@ -389,7 +383,7 @@ def test_weight_bounds_vertices_and_samples(chapter_fit, chapter_samples, weight
     assert np.median(Wm / exact) < 1.5
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_weight_on_lric_data(lric_fit):
     est, u, y = lric_fit
     uw = est.uncertainty_weight(dt=0.1)
@@ -539,7 +533,7 @@ def test_inverse_validation(stage1):
     assert lo[0] <= -0.2 and hi[0] >= 0.3
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_identifier_delegates_and_figures(stage1, tmp_path):
     import matplotlib.pyplot as plt
 

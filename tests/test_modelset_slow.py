@@ -15,7 +15,7 @@ from test_modelset import own_feasible, play, responses
 
 import hammerbound as hb
 
-pytestmark = pytest.mark.slow
+pytestmark = pytest.mark.deep
 
 
 @pytest.fixture(scope="module")

@@ -44,7 +44,7 @@ def test_sparse_basis_structure_on_the_chapter_model():
         assert sum(v < q for v in mono) <= 2 and sum(v >= q for v in mono) <= 2, mono
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_sparse_order2_equals_exact_on_the_chapter_model():
     """Chapter model (na = nb = 2, input errors, gain equality): every certified end within
     1e-3 of the exact width, every verified feasible point inside."""
@@ -89,7 +89,7 @@ def test_full_basis_kept_and_at_least_as_tight():
 BOUNDARY_CASES = [7, 48]
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 @pytest.mark.parametrize("i", BOUNDARY_CASES)
 def test_sparse_order2_contains_the_truth_with_noise_at_the_bound(i):
     kw, theta, via_estimator = make_case(i)

@@ -1,26 +1,34 @@
 """Plain EIV problems on the user's own data (issue 14): gain default, input delay nk,
-errors naming the assumptions, the third-party LRIC data set."""
+errors naming the assumptions, the example record the package writes, and the third-party
+LRIC data set (read from ../shared/data/lric/, skipped when absent)."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from conftest import lric_data
 from scipy.optimize import linprog
 from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound import EmptyFeasibleSetError, LinearEIVSetEstimator, ParameterValidationError
 
-LRIC = Path(__file__).resolve().parents[1] / "hammerbound" / "data" / "eiv_first_order_2017.csv"
-# the exact answer (section "your own data" of the docs; exact method, tol 1e-4)
+# the exact answer on the LRIC record (exact method, tol 1e-4; benchmarks/lric.py)
 LRIC_EXACT = np.array([[-0.9217, -0.8830], [0.7195, 0.7935], [-0.3227, -0.2428]])
 
 
-def lric():
-    d = np.genfromtxt(LRIC, delimiter=",", names=True)
-    return d["u"], d["y"]
+def _direct_term(N=40, seed=5, deta=0.05, dx=0.05, at_bound=True):
+    """Own simulation: y = (0.7 + 0.2 q^-1) / (1 - 0.8 q^-1) x (gain 4.5), input and
+    output errors exactly at +-bound (random signs) or uniform inside."""
+    rng = np.random.default_rng(seed)
+    x0 = rng.uniform(-2, 2, N)
+    w = lfilter([0.7, 0.2], [1.0, -0.8], x0)
+
+    def err(b):
+        return b * (np.where(rng.random(N) < 0.5, 1.0, -1.0) if at_bound
+                    else rng.uniform(-1, 1, N))
+
+    return x0 + err(dx), w + err(deta), np.array([-0.8, 0.7, 0.2])
 
 
 def _delayed(nk, N=60, seed=3, deta=0.02, dx=0.01):
@@ -37,10 +45,10 @@ def _delayed(nk, N=60, seed=3, deta=0.02, dx=0.01):
 
 def test_plain_eiv_default_has_no_gain_constraint():
     assert LinearEIVSetEstimator().steady_state_gain is None
-    u, y = lric()
+    u, y, theta = _direct_term()
     est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, method="lp")
     est.fit(u, y, input_bound=0.05)
-    assert est.param_names_ == ("a1", "b0", "b1")
+    assert est.param_names_ == ("a1", "b0", "b1") and est.contains(theta)
     # same problem as the deprecated b0 spelling (warns, names nk=0)
     est2 = LinearEIVSetEstimator(na=1, nb=1, b0=True, output_bound=0.05, method="lp")
     with pytest.warns(FutureWarning, match="nk=0"):
@@ -49,7 +57,7 @@ def test_plain_eiv_default_has_no_gain_constraint():
 
 
 def test_gain_constraint_named_in_empty_set_error():
-    u, y = lric()
+    u, y, _ = _direct_term(at_bound=False)     # gain 4.5: B(1)/A(1) = 1 is falsified
     est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, steady_state_gain=1.0,
                                 method="lp")
     with pytest.raises(EmptyFeasibleSetError) as info:
@@ -61,7 +69,7 @@ def test_gain_constraint_named_in_empty_set_error():
 
 
 def test_lric_exact_answer_and_independent_lp_check():
-    u, y = lric()
+    u, y = lric_data()
     est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, method="exact")
     est.fit(u, y, input_bound=0.05)
     np.testing.assert_allclose(est.bounds_, LRIC_EXACT, atol=2e-4)
@@ -90,6 +98,42 @@ def _feasible_lp(u, y, theta, dx, deta):
                   b_ub=np.concatenate([rhs + 1e-7, -rhs + 1e-7]), bounds=bounds,
                   method="highs")
     return res.status == 0
+
+
+@pytest.mark.parametrize("noise", ["uniform", "at_bound"])
+def test_eiv_example_is_the_system_it_states(tmp_path, noise):
+    """The record the docs use: own recursion and error check, CSV round trip, and the
+    exact set (witnesses checked by an independent LP) contains the true system."""
+    ex = hb.eiv_example(noise=noise, random_state=1)
+    a1, b0, b1 = ex.theta
+    w = np.zeros(ex.u0.size)
+    for t in range(w.size):
+        w[t] = b0 * ex.u0[t] + (b1 * ex.u0[t - 1] - a1 * w[t - 1] if t else 0.0)
+    np.testing.assert_allclose(ex.w, w, atol=1e-12)
+    du, dy = ex.data.u - ex.u0, ex.data.y - w
+    assert np.all(np.abs(du) <= 0.05 + 1e-15) and np.all(np.abs(dy) <= 0.05 + 1e-15)
+    if noise == "at_bound":
+        np.testing.assert_allclose(np.abs(du), 0.05)
+        np.testing.assert_allclose(np.abs(dy), 0.05)
+    path = tmp_path / "example.csv"
+    ex.data.to_csv(path)
+    assert path.read_text().splitlines()[0] == "t,u,y"
+    back = hb.IOData.from_csv(path)
+    assert back.dt == 0.1 and np.array_equal(back.u, ex.data.u) and np.array_equal(back.y, ex.data.y)
+    est = LinearEIVSetEstimator(na=1, nb=1, nk=0, output_bound=0.05, method="exact")
+    est.fit(back, input_bound=0.05)
+    assert est.contains(ex.theta)
+    for info in est.bound_info_:
+        assert _feasible_lp(back.u, back.y, info.witness, 0.05, 0.05)
+    with pytest.raises(ParameterValidationError, match="noise"):
+        hb.eiv_example(noise="gaussian")
+
+
+def test_example_data_path_is_gone_with_a_pointer():
+    import hammerbound.data.csv_reader as reader
+
+    with pytest.raises(AttributeError, match="eiv_example"):
+        reader.example_data_path  # noqa: B018
 
 
 @pytest.mark.parametrize("method", ["lp", "moment", "exact"])

@@ -150,7 +150,7 @@ def test_issue19_repro_fine_scale_both_methods():
             _check_side(fs, D, g)
 
 
-@pytest.mark.slow
+@pytest.mark.deep
 def test_orthotope_matches_lp_with_1e5_amplitudes():
     rng = np.random.default_rng(2)
     u, y, D, gamma = _data(rng, 100_000, 1e-6)

@@ -237,3 +237,28 @@ def test_plain_array_kfold_splice_message_names_the_cause():
         est.fit(ex.prbs.x[keep], ex.prbs.y[keep], input_bound=1e-9)
     # the same record, not cut, is consistent
     est.fit(ex.prbs.x, ex.prbs.y, input_bound=1e-9)
+
+
+def test_scaler_in_a_pipeline_with_iodata_says_what_to_pass():
+    """Issue 29 item 5: a scikit-learn transformer cannot scale an IOData (the bounds would
+    keep their old units); the typed error says how to scale, and that recipe is right."""
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    x, y = _first_order(N=80, seed=3)
+    data = IOData(x, y, dt=0.1)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp")
+    with pytest.raises(DataValidationError, match="StandardScaler") as err:
+        make_pipeline(StandardScaler(), est).fit(data)
+    assert "output bound by sy" in str(err.value)
+    with pytest.raises(DataValidationError, match="not a feature matrix"):
+        np.asarray(data)
+    # the recipe of the message: scaled data with scaled bounds give the scaled set
+    su, sy = 2.0, 10.0
+    plain = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp").fit(
+        data, input_bound=0.01)
+    scaled = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02 / sy, method="lp").fit(
+        IOData(x / su, y / sy, dt=0.1), input_bound=0.01 / su)
+    assert plain.contains([-0.7, 0.5]) and scaled.contains([-0.7, 0.5 * su / sy])
+    np.testing.assert_allclose(scaled.bounds_[0], plain.bounds_[0], atol=1e-6)
+    np.testing.assert_allclose(scaled.bounds_[1], plain.bounds_[1] * su / sy, atol=1e-6)

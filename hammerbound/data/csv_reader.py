@@ -9,7 +9,7 @@ import numpy as np
 
 from ..exceptions import DataValidationError
 
-__all__ = ["PYTHON_NAMES", "csv_header", "example_data_path", "load_chapter_tables",
+__all__ = ["PYTHON_NAMES", "csv_header", "load_chapter_tables",
            "read_columns", "read_io_csv"]
 
 #: How the messages of the readers name their settings (the interface in use): the
@@ -100,17 +100,13 @@ def csv_header(path, *, delimiter=",") -> list[str]:
     return [h.strip() for h in row]
 
 
-def example_data_path(name: str = "eiv_first_order_2017.csv") -> Path:
-    """Path of a data set shipped with hammerbound (``hammerbound/data``).
-
-    ``eiv_first_order_2017.csv``: 30 samples (dt = 0.1) of a first-order system with input
-    and output errors bounded by 0.05, from the public course repository P0li22/LRIC
-    (Politecnico di Torino, exam of 22 February 2017); see ``README-lric.md`` beside it.
-    """
-    path = Path(__file__).resolve().parent / name
-    if not path.is_file():
-        raise DataValidationError(f"no shipped data set named {name!r}.")
-    return path
+def __getattr__(name):
+    if name == "example_data_path":
+        raise AttributeError(
+            "hammerbound.data.csv_reader.example_data_path was removed: hammerbound ships no "
+            "third-party data. For an example CSV file, write a simulated record with "
+            "hammerbound.eiv_example().data.to_csv('eiv_example.csv').")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _read_columns(path, columns, delimiter, names):

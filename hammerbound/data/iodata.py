@@ -240,6 +240,18 @@ class IOData:
                       t0=float(self.time[idx[0]]) if idx.size else self.t0,
                       sample_index=self.sample_index[idx], time_unit=self.time_unit)
 
+    def __array__(self, dtype=None, copy=None):
+        # numpy (and every scikit-learn transformer, through check_array) would otherwise
+        # recurse into __getitem__ and fail with "maximum number of dimension"
+        raise DataValidationError(
+            "an IOData is a record (input, output, sampling time, names), not a feature "
+            "matrix: pass it straight to a hammerbound estimator, not through a scikit-learn "
+            "transformer such as StandardScaler. The error bounds are in the units of the "
+            "signals, so scaled data need scaled bounds: to scale, build IOData(u / su, "
+            "y / sy) yourself and divide the output bound by sy and the input bound by su "
+            "(the b_j then scale by su / sy; the a_i do not change). Use data.u and data.y "
+            "for the arrays.")
+
     def is_contiguous(self) -> bool:
         """Whether the samples are consecutive in the original record."""
         return bool(np.all(np.diff(self.sample_index) == 1))
@@ -250,6 +262,29 @@ class IOData:
 
         return pd.DataFrame({"t": self.time, self.input_name: self.u,
                              self.output_name: self.y})
+
+    def to_csv(self, path) -> None:
+        """Write the record as a CSV file with a header row: ``t`` (``t [unit]`` with a
+        time unit; omitted when ``dt`` is not given), then the input and output columns
+        under their names, each value written so that :meth:`from_csv` reads it back
+        exactly (units of the signals are not written)."""
+        cols = [self.u, self.y]
+        header = [self.input_name, self.output_name]
+        if self.dt is not None:
+            cols.insert(0, self.time)
+            header.insert(0, f"t [{self.time_unit}]" if self.time_unit else "t")
+        if len(set(header)) < len(header) or any("," in h or '"' in h for h in header):
+            raise ParameterValidationError(
+                f"the column names {header} must be distinct and contain no comma or quote.")
+        lines = [",".join(header)]
+        for row in zip(*cols, strict=True):
+            # the shortest text that reads back to the same float; the time to 12 digits
+            vals = [repr(float(v)) for v in row]
+            if self.dt is not None:
+                vals[0] = f"{row[0]:.12g}"
+            lines.append(",".join(vals))
+        with open(path, "w", newline="") as fh:
+            fh.write("\n".join(lines) + "\n")
 
     def __repr__(self) -> str:
         def sig(name, unit):
@@ -284,5 +319,6 @@ def unpack(X, y, *, what="X"):
         return X.u, X.y, X
     if y is None:
         raise DataValidationError(
-            f"fit needs the output y (or pass an IOData as {what}).")
+            "fit requires y to be passed, but the target y is None: pass the measured "
+            f"output y, or an IOData (input, output, dt) as {what}.")
     return X, y, None

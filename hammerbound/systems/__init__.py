@@ -3,10 +3,12 @@ simulation, and the chapter's experiments (square waves, PRBS, bounded noise).""
 
 from .experiments import (
     ChapterExample,
+    EIVExample,
     PRBSData,
     SteadyStateData,
     chapter_example,
     chapter_system,
+    eiv_example,
     prbs,
     prbs_experiment,
     snr_db,
@@ -25,12 +27,14 @@ from .models import (
 __all__ = [
     "Backlash",
     "ChapterExample",
+    "EIVExample",
     "HammersteinSystem",
     "PRBSData",
     "SteadyStateData",
     "as_polynomials",
     "chapter_example",
     "chapter_system",
+    "eiv_example",
     "normalize_gain",
     "prbs",
     "prbs_experiment",

@@ -1,6 +1,7 @@
 """Experiment design and data: square waves (stage 1), PRBS (stage 2), bounded noise, SNR.
 
-The chapter's simulated example (section 22.5) is available as :func:`chapter_example`.
+The chapter's simulated example (section 22.5) is available as :func:`chapter_example`; a
+plain errors-in-variables record to try the own-data workflow on as :func:`eiv_example`.
 The chapter does not state the square-wave amplitudes nor the PRBS level u*; our
 choices and the reasons are documented on :data:`CHAPTER_AMPLITUDES` and
 :data:`CHAPTER_U_STAR`.
@@ -14,6 +15,7 @@ import numpy as np
 from sklearn.utils import check_random_state
 
 from .._compat import DEPRECATED, renamed_value, warn_renamed
+from ..data.iodata import IOData
 from ..data.validation import as_bound, as_real
 from ..exceptions import DataValidationError, ParameterValidationError
 from .models import Backlash, HammersteinSystem
@@ -24,10 +26,12 @@ __all__ = [
     "CHAPTER_NOISE_LEVELS",
     "CHAPTER_U_STAR",
     "ChapterExample",
+    "EIVExample",
     "PRBSData",
     "SteadyStateData",
     "chapter_example",
     "chapter_system",
+    "eiv_example",
     "prbs",
     "prbs_experiment",
     "settling_time",
@@ -283,3 +287,80 @@ def _bound(func, output_bound, noise_bound):
             f"{func} needs output_bound: the noise of the simulated outputs is uniform in "
             f"+-output_bound (0 for none), e.g. output_bound=0.05.")
     return value
+
+
+#: The linear system of :func:`eiv_example`: ``(b0 + b1 q^-1) / (1 + a1 q^-1)``.
+EIV_EXAMPLE_THETA = (-0.85, 0.6, -0.2)
+
+
+@dataclass(frozen=True)
+class EIVExample:
+    """A simulated errors-in-variables record (see :func:`eiv_example`).
+
+    ``data`` holds the *measured* input and output (an :class:`~hammerbound.IOData` with
+    ``dt``), ``u0`` and ``w`` the true input and noise-free output, ``theta`` the true
+    ``(a1, b0, b1)``; ``input_bound`` and ``output_bound`` bound the input and output errors.
+    """
+
+    data: IOData
+    u0: np.ndarray
+    w: np.ndarray
+    theta: np.ndarray
+    input_bound: float
+    output_bound: float
+
+
+def eiv_example(N: int = 60, *, output_bound: float = 0.05, input_bound: float = 0.05,
+                dt: float = 0.1, noise: str = "uniform", random_state=0) -> EIVExample:
+    """A first-order record with bounded errors on input *and* output, to try things on.
+
+    The system is ``G(z) = (b0 z + b1) / (z + a1)`` with ``(a1, b0, b1) =``
+    :data:`EIV_EXAMPLE_THETA` (in hammerbound's notation ``na=1, nb=1, nk=0``: a direct term
+    and one delayed input), driven by random input levels held for 3 samples, from rest.
+    Both the measured input and the measured output carry errors: uniform in
+    ``[-bound, bound]`` (``noise="uniform"``) or exactly ``+-bound`` with random signs
+    (``noise="at_bound"``). ``ex.data.to_csv(path)`` writes it as a CSV file (columns
+    ``t, u, y``) for :meth:`IOData.from_csv` and ``hammerbound eiv``.
+
+    Parameters
+    ----------
+    N : int, default 60
+        Number of samples (>= 10).
+    output_bound, input_bound : float, default 0.05
+        Bounds of the output and input errors (> 0).
+    dt : float, default 0.1
+        Sampling time (s) of the record.
+    noise : {"uniform", "at_bound"}, default "uniform"
+        Errors uniform inside the bounds, or exactly at them with random signs.
+    random_state : int, Generator or None, default 0
+        Seed of the input levels and the errors.
+
+    Returns
+    -------
+    EIVExample
+    """
+    if noise not in ("uniform", "at_bound"):
+        raise ParameterValidationError(f"noise must be 'uniform' or 'at_bound'; got {noise!r}.")
+    try:
+        N = int(N)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ParameterValidationError(f"N must be an integer >= 10; got {N!r}.") from exc
+    if N < 10:
+        raise ParameterValidationError(f"N must be an integer >= 10; got {N!r}.")
+    deta = as_real("output_bound", output_bound, positive=True, example="0.05")
+    dx = as_real("input_bound", input_bound, positive=True, example="0.05")
+    rng = _rng(random_state)
+    u0 = np.repeat(rng.uniform(-1.0, 1.0, -(-N // 3)), 3)[:N]
+    a1, b0, b1 = EIV_EXAMPLE_THETA
+    w = np.empty(N)
+    for t in range(N):  # A w = B u0 from rest
+        w[t] = b0 * u0[t] + (b1 * u0[t - 1] - a1 * w[t - 1] if t else 0.0)
+
+    def errors(bound):
+        if noise == "uniform":
+            return rng.uniform(-bound, bound, N)
+        return bound * np.where(rng.random(N) < 0.5, 1.0, -1.0)
+
+    u = u0 + errors(dx)
+    y = w + errors(deta)
+    return EIVExample(IOData(u, y, dt), u0, w, np.array(EIV_EXAMPLE_THETA), dx, deta)

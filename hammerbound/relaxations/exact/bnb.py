@@ -450,6 +450,33 @@ def _perf_deadline(deadline):
     return None if deadline is None else time.perf_counter() + (deadline - time.time())
 
 
+def verified_points(problem, box, roots, thetas, ws=None, deadline=None) -> list:
+    """The first verified-feasible points of (22.34) inside the OBBT ``box``: the OBBT LP
+    points ``thetas`` (and their mean and the box centre, on the gain plane) that pass
+    :func:`.problem.check_theta`; when none does (a thin set), Gauss-Newton steps from the
+    OBBT points (a single-point set, e.g. noise exactly at its bound), then a Nelder-Mead
+    search on the screening violation. Stops at ``deadline`` (:func:`time.time`)."""
+    p = problem.p
+
+    def time_left():
+        return deadline is None or time.time() < deadline
+
+    pool = _Pool(problem, working_set=ws is not None)
+    starts = ([np.mean(thetas, axis=0)] if thetas else []) + [box.mean(axis=1)]
+    for th in list(thetas) + [_on_gain_plane(problem, th) for th in starts]:
+        if not time_left():
+            break
+        pool.add(th)
+    if not pool.points and time_left():
+        n, kg = problem.N, problem.n_groups
+        xs = [r[1] for r in roots.values() if r[1] is not None][:2]
+        restore(pool, [(x[:p], x[p : p + n], x[p + n : p + n + kg]) for x in xs], box,
+                stop_at=_perf_deadline(deadline))
+    if not pool.points and time_left():
+        pool.seek(starts, box, deadline=deadline)
+    return pool.points
+
+
 def exact_bounds(
     problem: EIVProblem,
     tol: float = 1e-4,
@@ -528,9 +555,6 @@ def exact_bounds(
         end = time.time() + float(total_time_limit)
         deadline = end if deadline is None else min(deadline, end)
 
-    def time_left():
-        return deadline is None or time.time() < deadline
-
     if theta_box is not None:
         problem = problem.with_theta_box(theta_box)
     lp = lp_bounds(problem, check_box=False)
@@ -551,23 +575,7 @@ def exact_bounds(
         ws = initial_equations(problem, lp.bounds) if working_set else None
         box, roots, thetas, ws = _obbt(problem, lp.bounds, n_jobs=n_jobs, parallel=parallel,
                                        deadline=deadline, ws=ws)
-        pool = _Pool(problem, working_set=ws is not None)
-        starts = ([np.mean(thetas, axis=0)] if thetas else []) + [box.mean(axis=1)]
-        for th in list(thetas) + [_on_gain_plane(problem, th) for th in starts]:
-            if not time_left():
-                break
-            pool.add(th)
-        if not pool.points and time_left():
-            # no relaxation point is feasible (thin set): Gauss-Newton steps from the OBBT
-            # points first (a single-point set, e.g. noise exactly at its bound), then a
-            # Nelder-Mead search on the screening violation
-            n, kg = problem.N, problem.n_groups
-            xs = [r[1] for r in roots.values() if r[1] is not None][:2]
-            restore(pool, [(x[:p], x[p : p + n], x[p + n : p + n + kg]) for x in xs], box,
-                    stop_at=_perf_deadline(deadline))
-        if not pool.points and time_left():
-            pool.seek(starts, box, deadline=deadline)
-        pts = pool.points
+        pts = verified_points(problem, box, roots, thetas, ws, deadline)
         args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
                     deadline=deadline, ws=ws)
         if parallel is None:

@@ -235,8 +235,13 @@ def restore(pool, starts, box, *, max_lps: int = 12, stop_at: float | None = Non
         eta = np.clip(np.asarray(eta0, dtype=float), -pr.deta, pr.deta)
         dxv = np.clip(np.asarray(dx0, dtype=float), -pr.dx_group, pr.dx_group)
         for _ in range(max_lps):
-            if stop_at is not None and time.perf_counter() > stop_at:
-                return None
+            if stop_at is not None:
+                left = stop_at - time.perf_counter()
+                if left <= 0:
+                    return None
+                # HiGHS's time_limit counts the run time of all solves of the instance; a
+                # degenerate elastic LP can otherwise take minutes past stop_at
+                lin.h.setOptionValue("time_limit", lin.h.getRunTime() + max(left, 1e-3))
             out = lin.solve(th, eta, dxv, 0, 1.0, box[:, 0], box[:, 1])
             if out is None:
                 break

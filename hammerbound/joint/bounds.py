@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from ..relaxations.result import BoundInfo, IntervalResult
 from .local import restore
 from .problem import RecordProblem
-from .search import obbt, search_end
+from .search import outer_leaves, search_end
 
 __all__ = ["record_bounds"]
 
@@ -82,16 +84,18 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     """
     t0 = time.perf_counter()
     points = []
-    box = obbt(problem, deadline=deadline, on_point=points.append)
+    leaves = outer_leaves(problem, deadline=deadline, on_point=points.append)
+    box = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
+                           np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]
     if method == "lp":
         return IntervalResult(box[: problem.p + 4].copy(), _lp_infos(names, box), "lp",
                               tuple(names), time.perf_counter() - t0,
-                              {"box": box, "pool": ()})
+                              {"box": box, "leaves": tuple(leaves), "pool": ()})
     pool = _pool(problem, points)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
-    args = [(problem, box, k, s, _best_start(pool, k, s), kw) for k, s in jobs]
+    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs]
     if n_jobs == 1:
         results = [_end_job(*a) for a in args]
     else:
@@ -108,4 +112,5 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
             bounds[k, 1] = min(bounds[k, 1], b)
         infos.append(_info(names[k], s, res, bounds[k, 0 if s > 0 else 1]))
     return IntervalResult(bounds, tuple(infos), "exact", tuple(names),
-                          time.perf_counter() - t0, {"box": box, "pool": tuple(pool)})
+                          time.perf_counter() - t0,
+                          {"box": box, "leaves": tuple(leaves), "pool": tuple(pool)})

@@ -6,7 +6,7 @@ Every bound of the one-record method lies inside an a priori box of
 with every result and can be replaced by the user:
 
 * ``|b_j| <= b_bound`` (default ``1e4``, as stage 2);
-* ``m_l, m_r <= m_max`` (default ``1e3`` times the slope ``range(y) / range(u)`` the record
+* ``m_l, m_r <= m_max`` (default ``100`` times the slope ``range(y) / range(u)`` the record
   shows; with the unit gain (22.8) the backlash slopes carry the gain of the system);
 * ``c_l, c_r <= c_max`` (default the input's range: a dead band wider than every input
   move is never crossed, and nothing in the record can say how wide it is).
@@ -30,7 +30,7 @@ from .modes import line_range
 __all__ = ["GammaPrior", "default_gamma_box", "record_box", "reversal_summary", "unidentified"]
 
 DEFAULT_B_BOUND = 1.0e4
-M_FACTOR = 1.0e3
+M_FACTOR = 1.0e2
 
 
 def default_gamma_box(u, y, deta) -> np.ndarray:

@@ -28,7 +28,7 @@ from .local import restore, walk
 from .problem import RecordProblem, Witness
 from .relaxation import build_relaxation, solve_lp
 
-__all__ = ["EndResult", "obbt", "search_end"]
+__all__ = ["EndResult", "obbt", "outer_leaves", "search_end"]
 
 _SPLIT_CLIP = 0.1
 
@@ -60,10 +60,42 @@ def _solve(problem, box, col, sense, basis=None):
     return res, x, (lp.get_basis() if res.status == "optimal" else None), rel
 
 
+def _obbt_order(problem):
+    """OBBT order: the linear block's poles (set by the output's own dynamics), the first
+    inner value and the dead band (which decide the samples' branches), then the slopes
+    and the ``b_j`` (which the first ones make tight)."""
+    p, na = problem.p, problem.na
+    return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
+
+
+def _tighten_one(problem, box, k):
+    """Certified bounds of row ``k`` from one relaxation (None: certified empty); each
+    LP point goes to ``on_point``."""
+    rel = build_relaxation(problem, box)
+    out = box[k].copy()
+    points = []
+    for sense in (1.0, -1.0):
+        c = np.zeros(rel.lp.c.size)
+        c[rel.box_cols[k]] = sense
+        rel.lp.set_cost(c)
+        res = solve_lp(rel.lp)
+        if res.status == "infeasible":
+            return None, points
+        if sense > 0:
+            out[0] = max(out[0], res.bound)
+        else:
+            out[1] = min(out[1], -res.bound)
+        if res.x is not None:
+            points.append(res.x[rel.box_cols])
+    return (None if out[0] > out[1] else out), points
+
+
 def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
-         on_point=None):
+         on_point=None, rows=None):
     """Shrink the box by OBBT rounds until a round shrinks no width by more than
-    ``shrink`` (relative). Every bound is certified; ``on_point(x)`` sees each LP point.
+    ``shrink`` (relative). Sequential: the relaxation is rebuilt after each row, so what one
+    row's bounds decide (e.g. the branch of a sample) helps the next. Every bound is
+    certified; ``on_point(x)`` sees each LP point.
 
     Raises
     ------
@@ -71,30 +103,19 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
         An LP of the relaxation is certified infeasible: no parameters explain the record.
     """
     box = problem.box.copy() if box is None else np.array(box, dtype=float)
-    n = box.shape[0]
+    order = _obbt_order(problem) if rows is None else list(rows)
     for _ in range(max_rounds):
         old = box.copy()
-        rel = build_relaxation(problem, box)
-        for k in range(n):
-            for sense in (1.0, -1.0):
-                c = np.zeros(rel.lp.c.size)
-                c[rel.box_cols[k]] = sense
-                rel.lp.set_cost(c)
-                res = solve_lp(rel.lp)
-                if res.status == "infeasible":
-                    raise EmptyFeasibleSetError(
-                        "no backlash and linear block explain the record within the bounds "
-                        "(the relaxation of the one-record set is certified infeasible).")
-                if sense > 0:
-                    box[k, 0] = max(box[k, 0], res.bound)
-                else:
-                    box[k, 1] = min(box[k, 1], -res.bound)
-                if res.x is not None and on_point is not None:
-                    on_point(res.x[rel.box_cols])
-        if np.any(box[:, 0] > box[:, 1]):
-            raise EmptyFeasibleSetError(
-                "no backlash and linear block explain the record within the bounds (the "
-                "certified bounds of a parameter cross).")
+        for k in order:
+            row, points = _tighten_one(problem, box, k)
+            if row is None:
+                raise EmptyFeasibleSetError(
+                    "no backlash and linear block explain the record within the bounds "
+                    "(the relaxation of the one-record set is certified infeasible).")
+            box[k] = row
+            if on_point is not None:
+                for x in points:
+                    on_point(x)
         w_old = old[:, 1] - old[:, 0]
         w_new = box[:, 1] - box[:, 0]
         if np.all(w_old - w_new <= shrink * np.maximum(w_old, 1e-300)):
@@ -123,45 +144,66 @@ def _tighten(problem, box, cols):
     return None if np.any(box[:, 0] > box[:, 1]) else box
 
 
+def _partition(problem, prior, parts, deadline):
+    """Boxes covering the set whose dead-band widths are at most ``1/parts`` of the prior's
+    (each tightened in ``c`` by the relaxation; boxes certified empty are dropped)."""
+    p = problem.p
+    cols = (p + 1, p + 3)
+    res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
+    queue, out = [prior.copy()], []
+    while queue:
+        b = queue.pop()
+        if deadline is not None and time.time() > deadline:
+            out.append(b)
+            continue
+        try:
+            b = obbt(problem, b, max_rounds=1, rows=[*range(problem.na), p + 4, *cols])
+        except EmptyFeasibleSetError:
+            continue
+        w = np.array([b[k, 1] - b[k, 0] for k in cols])
+        if np.any(w > res):
+            j = cols[int(np.argmax(w / res))]
+            lo, hi = b.copy(), b.copy()
+            lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
+            queue.extend([hi, lo])
+        else:
+            out.append(b)
+    return out
+
+
 def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
                  on_point=None):
     """Certified boxes whose union holds the whole set.
 
-    The dead band decides which samples are ambiguous, and a wide dead band range leaves
+    The dead band decides which samples are ambiguous, and a wide dead-band range leaves
     the relaxation too weak to bound anything. So the widths of ``c_l`` and ``c_r`` are
     first brought below ``1/parts`` of their a priori range: each box's ``c`` bounds are
     tightened by the relaxation (empty boxes are dropped, certified) and the wider ``c``
-    is bisected while still too wide; then OBBT shrinks every remaining box (a leaf).
-    On the chapter's records, boxes of the wrong dead band are certified empty by their
-    first LP. Raises EmptyFeasibleSetError when every box is empty.
+    is bisected while still too wide; a few OBBT rounds then drop the boxes that are
+    empty, and OBBT to its fixed point shrinks the rest (the leaves). On the chapter's
+    records, boxes of the wrong dead band are certified empty by their first LPs.
+
+    Raises EmptyFeasibleSetError when every box is empty.
     """
     prior = problem.box if box is None else np.asarray(box, dtype=float)
-    p = problem.p
-    cols = (p + 1, p + 3)
-    res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
-    queue, leaves = [prior.copy()], []
-    while queue:
-        b = queue.pop()
-        if deadline is None or time.time() < deadline:
-            b = _tighten(problem, b, cols)
-            if b is None:
-                continue
-            w = np.array([b[k, 1] - b[k, 0] for k in cols])
-            if np.any(w > res):
-                j = cols[int(np.argmax(w / res))]
-                lo, hi = b.copy(), b.copy()
-                lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
-                queue.extend([hi, lo])
-                continue
+    leaves = []
+    for b in _partition(problem, prior, parts, deadline):
         try:
-            leaves.append(obbt(problem, b, deadline=deadline, on_point=on_point))
+            b = obbt(problem, b, deadline=deadline, max_rounds=3)
         except EmptyFeasibleSetError:
             continue
-    if not leaves:
+        leaves.append(b)
+    out = []
+    for b in leaves:
+        try:
+            out.append(obbt(problem, b, deadline=deadline, on_point=on_point))
+        except EmptyFeasibleSetError:
+            continue
+    if not out:
         raise EmptyFeasibleSetError(
             "no backlash and linear block explain the record within the bounds (the "
             "relaxation is certified infeasible on every part of the a priori box).")
-    return leaves
+    return out
 
 
 def _children(box, j, x):
@@ -253,16 +295,19 @@ def _rc_tighten(box, cols_r, bound, target):
 class _EndSearch:
     """Branch-and-bound state of one interval end (``min sense * v_k``)."""
 
-    def __init__(self, problem, box0, k, sense, start, tol, max_nodes, stop):
+    def __init__(self, problem, leaves, k, sense, start, tol, max_nodes, stop):
         self.pr, self.k, self.sense, self.tol = problem, k, sense, tol
         self.max_nodes, self.stop = max_nodes, stop
         self.inc = _Incumbent(problem, k, sense, start)
-        self.root_w = box0[:, 1] - box0[:, 0]
-        self.end0 = box0[k, 0] if sense > 0 else -box0[k, 1]
-        self.pc = _Pseudocosts(box0.shape[0])
+        hull = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
+                                np.max([b[:, 1] for b in leaves], axis=0)])
+        self.root_w = hull[:, 1] - hull[:, 0]
+        self.end0 = hull[k, 0] if sense > 0 else -hull[k, 1]
+        self.pc = _Pseudocosts(hull.shape[0])
         self.heap, self.count, self.nodes, self.searches = [], 0, 0, 1
         self.pruned = np.inf  # smallest certified bound of a node dropped for its bound
-        self.push(self.end0, box0, None, None)
+        for b in leaves:
+            self.push(b[k, 0] if sense > 0 else -b[k, 1], b, None, None)
 
     def gap_tol(self):
         v = self.inc.value
@@ -339,14 +384,17 @@ class _EndSearch:
         return max(min(heap_min, self.pruned, self.inc.value), self.end0)
 
 
-def search_end(problem: RecordProblem, box0, k, sense, start=None, *, tol=1e-4,
+def search_end(problem: RecordProblem, leaves, k, sense, start=None, *, tol=1e-4,
                max_nodes=2000, time_limit=None, deadline=None) -> EndResult:
-    """Branch-and-bound for ``min sense * v_k`` over the one-record set inside ``box0`` (a
-    certified outer box, e.g. from :func:`obbt`); ``start`` is a verified point."""
+    """Branch-and-bound for ``min sense * v_k`` over the one-record set inside the union of
+    ``leaves`` (certified boxes, e.g. from :func:`outer_leaves`, or one box); ``start`` is a
+    verified point."""
     t0 = time.time()
     stop = min(t0 + time_limit if time_limit else np.inf, deadline or np.inf)
-    srch = _EndSearch(problem, np.asarray(box0, dtype=float), k, sense, start, tol,
-                      max_nodes, stop)
+    if isinstance(leaves, np.ndarray) and leaves.ndim == 2:
+        leaves = [leaves]
+    srch = _EndSearch(problem, [np.asarray(b, dtype=float) for b in leaves], k, sense,
+                      start, tol, max_nodes, stop)
     status = srch.run()
     return EndResult(srch.outer(), srch.inc.value, srch.inc.witness, srch.nodes,
                      time.time() - t0, status)

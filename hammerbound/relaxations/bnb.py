@@ -65,12 +65,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError
-from .local import improve, restore
+from .local import improve, restore, restore_near
 from .lp import lp_bounds, raise_if_box_limited
 from .mccormick import shared_groups
 from .obbt import _limit_lp, _obbt, _relaxation, _solve
 from .points import _on_gain_plane, _Point, _Pool
-from .problem import EIVProblem
+from .problem import EIVProblem, unit_scale
 from .result import BoundInfo, IntervalResult
 from .working_set import AUTO_MIN_EQUATIONS, initial_equations
 
@@ -80,6 +80,10 @@ _SPLIT_CLIP = 0.05
 # after a line search that does not improve the incumbent, wait up to this many nodes
 _MAX_SEARCH_GAP = 16
 _MAX_SEARCH_GAP_WALKED = 1024
+# Gauss-Newton restoration next to an LP point at which the relaxation is exact (every
+# product violation below this, relative to max(1, |incumbent|)): once per this many nodes
+_EXACT_VIOLATION = 1e-9
+_RESTORE_GAP = 64
 # the SLP walk to a near-optimal incumbent (.local.improve), and its resolution (a fraction
 # of the tolerance)
 _LOCAL = True
@@ -267,8 +271,10 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     walked = inc is not None and local
     max_gap = _MAX_SEARCH_GAP_WALKED if walked else _MAX_SEARCH_GAP
     last_try, try_gap = -1, (_MAX_SEARCH_GAP if walked else 1)
+    last_restore = -_RESTORE_GAP
     nodes = 0
     iters = 0
+    refusals = []  # notes of the node LPs HiGHS refused (they kept their parent's bound)
     status = "optimal"
     root_value = np.nan
     bar = None
@@ -313,6 +319,10 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 relax.lp.set_cutoff(None)
                 res = _solve(relax, pool.screen)
                 iters += res.iterations
+            if res.refused:
+                # HiGHS refused the node LP on every attempt: the node keeps its parent's
+                # certified bound (lb_parent below) and is split without an LP point
+                refusals.append(res.note)
             if res.status == "infeasible":
                 continue
             lb = max(lb_parent, res.bound)
@@ -350,6 +360,16 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                     # another basin (or the first point): walk it down by SLP as well
                     pt = improve(pool, pt, k, sense, box0, _LOCAL_RES * tol_eff,
                                  stop_at=stop_at)
+                if pt is None and local and nodes - last_restore >= _RESTORE_GAP \
+                        and relax.violations(x, ks).max() <= _EXACT_VIOLATION * max(1.0, abs(ub)):
+                    # the relaxation is exact at the LP point, yet the point is not verified:
+                    # the set is thin there (see restore_near)
+                    last_restore = nodes
+                    pt = restore_near(pool, (th, *relax.split_eta_dx(x)), box[:p],
+                                      0.25 * tol_eff, stop_at=stop_at)
+                    if pt is not None and val(pt.theta) < ub - tol_eff:
+                        pt = improve(pool, pt, k, sense, box0, _LOCAL_RES * tol_eff,
+                                     stop_at=stop_at)
                 if due:
                     # useful: better by more than the searches' resolution
                     useful = pt is not None and val(pt.theta) < ub - 0.25 * tol_eff
@@ -412,6 +432,9 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         msg = "no verified-feasible point found: only the outer bound is certified"
     else:
         msg = f"gap {gap:.3g} <= tol after {nodes} nodes ({pool.checks} check_theta calls)"
+    if refusals:
+        msg += (f"; {len(refusals)} node LP(s) could not be solved and kept their parent's "
+                f"certified bound ({refusals[0]})")
     return _Search(bound, ub, inc, nodes, elapsed, status, msg, iters, root_value)
 
 
@@ -503,6 +526,11 @@ def exact_bounds(
 
     if theta_box is not None:
         problem = problem.with_theta_box(theta_box)
+    # the same set in theta, on data of order one (exact power-of-two scaling): HiGHS's
+    # absolute tolerances then act relatively; the witnesses' errors are scaled back below
+    scale = unit_scale(problem)
+    if scale != 1.0:
+        problem = problem.scaled(scale)
     lp = lp_bounds(problem, check_box=False)
     p = problem.p
     jobs = [(k, s) for k in range(p) for s in (1.0, -1.0)]
@@ -578,7 +606,7 @@ def exact_bounds(
             time=o.time, iterations=o.iterations,
             gap=max(float(o.value - o.bound), 0.0) if np.isfinite(o.value) else None,
             witness=None if wit is None else wit.theta.copy(), nodes=o.nodes, message=o.message,
-            extra={} if wit is None else {"eta": wit.eta, "dx": wit.dx,
+            extra={} if wit is None else {"eta": wit.eta / scale, "dx": wit.dx / scale,
                                           "value": float(wit.theta[k])},
         ))
     if check_box:

@@ -526,7 +526,7 @@ class HighsLP:
             bad = np.flatnonzero(lo > hi)
             if bad.size:
                 out.append(f"{bad.size} {what} bound(s) crossed (first: {what} {bad[0]}, "
-                           f"{lo[bad[0]]!r} > {hi[bad[0]]!r})")
+                           f"{float(lo[bad[0]]):.17g} > {float(hi[bad[0]]):.17g})")
             if np.isnan(lo).any() or np.isnan(hi).any():
                 out.append(f"NaN {what} bounds")
         if not np.all(np.isfinite(self.A.data)) or not np.all(np.isfinite(self.c)):

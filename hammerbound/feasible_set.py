@@ -421,18 +421,17 @@ def _merge_vertices(V):
     V = sorted(V, key=lambda v: v[2])
     P = np.array([v[0] for v in V])
     mag = 1.0 + float(np.max(np.abs(P)))
+    radius = mag * np.minimum(np.maximum(_VERTEX_ROUNDING, 16 * _EPS * np.array(
+        [v[2] for v in V])), _MERGE_CAP)
+    dist = np.max(np.abs(P[:, None, :] - P[None, :, :]), axis=2)
     reps: list = []
-    rep_pts = np.zeros((0, 2))
-    for (p, lines, cond), q in zip(V, P, strict=True):
-        radius = mag * min(max(_VERTEX_ROUNDING, 16 * _EPS * cond), _MERGE_CAP)
-        if rep_pts.shape[0]:
-            near = np.flatnonzero(np.max(np.abs(rep_pts - q), axis=1) <= radius)
-            if near.size:
-                reps[int(near[0])][1].update(lines)
-                continue
-        reps.append((p, set(lines), cond))
-        rep_pts = np.vstack([rep_pts, q])
-    return reps
+    for i, (p, lines, cond) in enumerate(V):
+        near = next((r for r in reps if dist[i, r[3]] <= radius[i]), None)
+        if near is not None:
+            near[1].update(lines)
+            continue
+        reps.append((p, set(lines), cond, i))
+    return [(p, lines, cond) for p, lines, cond, _ in reps]
 
 
 #: Largest merge radius (relative) of :func:`_merge_vertices`, for the worst-conditioned
@@ -564,15 +563,22 @@ def algorithm_22_1(pairs, extra=(), prune: bool = True) -> np.ndarray:
             if p is not None:
                 V.append((p, {i, j}, _cond(HL[i], HL[j])))
 
-    def filt(V, cons_list):
-        A = np.array([c.a for c in cons_list])
-        b = np.array([c.b for c in cons_list])
-        P = np.array([v[0] for v in V]) if V else np.zeros((0, 2))
+    # the constraints seen so far as arrays, filled as they come (rows of ``seen``)
+    n_all = len(seen) + 2 * (len(pairs) - 2)
+    A_seen, b_seen = np.empty((n_all, 2)), np.empty(n_all)
+    A_seen[: len(seen)] = [c.a for c in seen]
+    b_seen[: len(seen)] = [c.b for c in seen]
+
+    def filt(V, n):
+        if not V:
+            return V
+        A, b = A_seen[:n], b_seen[:n]
+        P = np.array([v[0] for v in V])
         # rounding slack only (_VERTEX_ROUNDING of the terms): the constraints are already
         # relaxed outward by the callers' tolerance
         tol = _VERTEX_ROUNDING * (np.abs(P).sum(axis=1)[:, None] * np.abs(A).sum(axis=1)
                                   + np.abs(b))
-        ok = np.all(P @ A.T - b <= tol, axis=1) if len(V) else np.zeros(0, bool)
+        ok = np.all(P @ A.T - b <= tol, axis=1)
         return _merge_vertices([v for v, k in zip(V, ok, strict=True) if k])
 
     def relabel(V, HL):
@@ -583,7 +589,8 @@ def algorithm_22_1(pairs, extra=(), prune: bool = True) -> np.ndarray:
         pos = {old: new for new, old in enumerate(used)}
         return [(p, {pos[i] for i in lines}, c) for p, lines, c in V], [HL[k] for k in used]
 
-    V = filt(V, seen)
+    n = len(seen)
+    V = filt(V, n)
     V, HL = relabel(V, HL)
     for s in range(2, len(pairs)):
         hp, hm = pairs[s]
@@ -595,8 +602,10 @@ def algorithm_22_1(pairs, extra=(), prune: bool = True) -> np.ndarray:
                 if p is not None:
                     new.append((p, {z, k}, _cond(h, HL[z])))
         HL = HL + [hp, hm]
-        seen += [hp, hm]
-        V = filt(V + new, seen)  # line 20
+        A_seen[n : n + 2] = (hp.a, hm.a)
+        b_seen[n : n + 2] = (hp.b, hm.b)
+        n += 2
+        V = filt(V + new, n)  # line 20
         V, HL = relabel(V, HL)
     if not V:
         return np.zeros((0, 2))

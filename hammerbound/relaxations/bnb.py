@@ -526,12 +526,13 @@ def exact_bounds(
 
     if theta_box is not None:
         problem = problem.with_theta_box(theta_box)
-    # the same set in theta, on data of order one (exact power-of-two scaling): HiGHS's
+    # the LP bound of the data as given (what method="lp" reports: never wider), then the
+    # same set in theta on data of order one (exact power-of-two scaling): HiGHS's
     # absolute tolerances then act relatively; the witnesses' errors are scaled back below
+    lp = lp_bounds(problem, check_box=False)
     scale = unit_scale(problem)
     if scale != 1.0:
         problem = problem.scaled(scale)
-    lp = lp_bounds(problem, check_box=False)
     p = problem.p
     jobs = [(k, s) for k in range(p) for s in (1.0, -1.0)]
     parallel = None

@@ -99,7 +99,7 @@ def widening(seeds: int, polish: bool):
     from hammerbound.relaxations import bnb
 
     if not polish:
-        bnb.polish = lambda problem, points: list(points)
+        bnb.polish = lambda problem, points, **kw: list(points)
     rows = []
     for inner in ("independent", "two-level"):
         for noise in (0.005, 0.05, 0.3):

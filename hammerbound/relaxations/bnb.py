@@ -463,6 +463,12 @@ def exact_bounds(
     (:func:`.lp.lp_bounds`) shrunk by OBBT: a node or time limit returns the best certified
     outer bound found so far (status ``"limit"``), never a wider or infinite one.
 
+    The search runs on the data multiplied by a power of two that brings them to order one
+    (:func:`.problem.unit_scale`; exact, the set in theta is the same). A node LP that HiGHS
+    refuses on every attempt (:meth:`._highs.HighsLP.solve`) keeps its parent's certified
+    bound, and the end's message says so. Each end's witness is polished a little into the
+    set (:func:`.local.polish`).
+
     Parameters
     ----------
     problem : EIVProblem

@@ -194,10 +194,9 @@ def mul_down(a, b):
     """A float ``<= a * b`` (exact): the rounded product moved outward, except that a
     product with an exact zero factor stays ``0``.
 
-    Rounding an exact ``0`` outward would give ``-1e-323`` (a subnormal): HiGHS reports
-    such bounds as "excessively small" and its scaling then works with costs of order
-    ``1e4`` and duals of order ``1e9`` -- on data of magnitude ``1e-3`` with a zero input
-    error bound the dual simplex stopped with an error ("excessive dual values").
+    A product with a zero factor (a theta box edge at 0, an input-error bound of 0) is
+    exact; rounding it outward gave ``-+1e-323`` (subnormal) bounds that HiGHS had to carry
+    as nonzero data (its log listed bounds and right-hand sides down to ``1e-323``).
     """
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)

@@ -385,7 +385,7 @@ def _box_loss(recs, u=1.0):
             continue
         hi, lo = [], []
         for k in range(len(g["ml"]["seeds"])):
-            def iv(p, k=k):
+            def iv(p, k=k, g=g):
                 return g[p]["lowers"][k], g[p]["uppers"][k]
             (ml0, ml1), (cl0, cl1), (mr0, mr1), (cr0, cr1) = iv("ml"), iv("cl"), iv("mr"), iv("cr")
             hi.append((mr1 * (u - cr0) - mr0 * (u - cr1)) / g["x(+u*)"]["widths"][k])
@@ -507,6 +507,38 @@ def section_stage1():
            f"{max(s1['max_abs_diff_polygon_vs_algorithm'].values()):.1e} at every common M.\n",
            "![stage 1 speed](figures/bench_stage1_speed.png)\n"]
     return "\n".join(out)
+
+
+def section_stage1_extremal():
+    j = _json("stage1_extremal.json")
+    if not j:
+        return ""
+    body = []
+    for r in j["rows"]:
+        ok = r["status"] == "ok"
+        body.append([r["method"], r["M_per_side"], r["noise"],
+                     fs(r["time_s"]) if ok else r["status"],
+                     f"{r['peak_rss_mb']:.0f}" if ok else "–",
+                     f"{r['n_vertices_left']}/{r['n_vertices_right']}" if ok else "–",
+                     ("yes" if r["gamma_inside"] else "**no**") if ok else "–"])
+    return "\n".join([env_line(j) + "\n", table(
+        ["method", "M per side", "noise", "fit (s)", "peak memory (MB)", "vertices L/R",
+         "γ inside"], body)]) + "\n"
+
+
+def section_witness_widening():
+    rows = []
+    for name, label in (("witness_widening_unpolished.json", "as accepted (not polished)"),
+                        ("witness_widening.json", "polished (default)")):
+        j = _json(name)
+        if j:
+            rows.append([label, j["n_witnesses"], f"{j['max']:.1e}", f"{j['median']:.1e}",
+                         j["n_above_0"], j["n_above_2e-7"]])
+    if not rows:
+        return ""
+    j = _json("witness_widening.json") or _json("witness_widening_unpolished.json")
+    return "\n".join([env_line(j) + "\n", table(
+        ["witnesses", "count", "max widening", "median", "> 0", "> 2e-7"], rows)]) + "\n"
 
 
 def section_coverage():
@@ -685,7 +717,11 @@ def main(argv=None):
            "### LRIC exam record\n", section_lric(),
            "### Exact intervals on long records\n", section_scaling(),
            notes_section("scaling-findings"),
+           "### Exact witnesses against an independent LP\n", notes_section("witness-intro"),
+           section_witness_widening(), notes_section("witness-findings"),
            "## 3. Stage 1 speed\n", section_stage1(), notes_section("stage1-findings"),
+           "### Noise exactly at the bound\n", notes_section("stage1-extremal-intro"),
+           section_stage1_extremal(), notes_section("stage1-extremal-findings"),
            "## 4. Monte Carlo coverage\n", notes_section("coverage-intro"), section_coverage(),
            notes_section("coverage-findings"),
            "## 5. Guaranteed model set (robust control)\n", section_modelset(),

@@ -117,6 +117,12 @@ def _solve_orthant(problem, signs, box):
             iters += r.iterations
             if r.status == "infeasible":
                 return None
+            if r.refused:
+                # the LP bound is the first certified bound: nothing to fall back on
+                raise SolverError(
+                    f"the LP outer bound of {problem.param_names[k]} could not be computed: "
+                    f"{r.note}. Rescaling the data (inputs and outputs of order one) "
+                    f"usually helps.")
             if sense > 0:
                 lo[k] = max(lo[k], r.bound)
                 vlo[k] = r.value

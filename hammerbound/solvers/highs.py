@@ -36,7 +36,6 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
-from ..exceptions import SolverError
 from .safe_lp import certify_infeasible
 
 EPS = np.finfo(float).eps
@@ -191,6 +190,26 @@ def round_up(v):
     return np.nextafter(np.nextafter(v, np.inf), np.inf)
 
 
+def mul_down(a, b):
+    """A float ``<= a * b`` (exact): the rounded product moved outward, except that a
+    product with an exact zero factor stays ``0``.
+
+    A product with a zero factor (a theta box edge at 0, an input-error bound of 0) is
+    exact; rounding it outward gave ``-+1e-323`` (subnormal) bounds that HiGHS had to carry
+    as nonzero data (its log listed bounds and right-hand sides down to ``1e-323``).
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return np.where((a == 0.0) | (b == 0.0), 0.0, round_down(a * b))
+
+
+def mul_up(a, b):
+    """A float ``>= a * b`` (exact); see :func:`mul_down` (exact zeros stay ``0``)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return np.where((a == 0.0) | (b == 0.0), 0.0, round_up(a * b))
+
+
 @dataclass
 class LPSolve:
     """Outcome of :meth:`HighsLP.solve`.
@@ -209,6 +228,12 @@ class LPSolve:
     iterations : int
     reduced : ndarray or None, shape (n,)
         Reduced costs behind ``bound`` (see :func:`row_dual_bound`), when optimal.
+    note : str
+        Empty, or what happened when HiGHS first refused the LP (see
+        :meth:`HighsLP.solve`): how it was solved after all, or why it was not.
+    refused : bool
+        HiGHS refused the LP on every attempt of :data:`RECOVERY` (status ``"failed"``,
+        bound ``-inf``).
     """
 
     status: str
@@ -217,6 +242,48 @@ class LPSolve:
     x: np.ndarray | None
     iterations: int = 0
     reduced: np.ndarray | None = None
+    note: str = ""
+    refused: bool = False
+
+
+#: What :meth:`HighsLP.solve` tries, in order, after HiGHS stopped with an error before a
+#: result: each attempt starts from scratch (the basis dropped), with the options shown
+#: (the scaling stays on afterwards; the others are reset).
+RECOVERY = (
+    ("from scratch with scaling", {"simplex_scale_strategy": 2}),
+    ("from scratch with the primal simplex", {"simplex_strategy": 4}),
+    ("from scratch with the interior-point method", {"solver": "ipm"}),
+)
+#: HiGHS's defaults of the options :data:`RECOVERY` changes (restored after an attempt).
+HIGHS_DEFAULTS = {"simplex_scale_strategy": 2, "simplex_strategy": 1, "solver": "choose"}
+
+_REFUSED = frozenset(getattr(highspy.HighsModelStatus, n) for n in (
+    "kNotset", "kLoadError", "kModelError", "kPresolveError", "kSolveError",
+    "kPostsolveError"))
+
+
+def refused(run, status) -> bool:
+    """Whether a ``run()`` ended without any result: an error status, or a model status
+    that says the solve did not get anywhere ("Not Set", "Solve error", ...)."""
+    return run == highspy.HighsStatus.kError or status in _REFUSED
+
+
+def _status_text(h, run, status) -> str:
+    try:
+        st = h.modelStatusToString(status)
+    except Exception:  # pragma: no cover - depends on highspy version
+        st = str(status)
+    return f"run() returned {getattr(run, 'name', run)}, model status '{st}'"
+
+
+def refusal_message(first: str, tried, defects: str = "") -> str:
+    """What happened to an LP HiGHS refused on every attempt (for messages and errors)."""
+    why = (f"the LP data are defective: {defects}" if defects else
+           "the LP data are valid (bounds ordered, all values finite); with its log on, "
+           "HiGHS names the reason, e.g. 'Dual simplex ratio test failed due to excessive "
+           "dual values' on a near-singular basis")
+    return (f"HiGHS stopped with an error before a result ({first}) on the first attempt "
+            f"and again {', '.join(tried)}; {why}")
 
 
 class HighsLP:
@@ -244,6 +311,7 @@ class HighsLP:
         self.ub = np.asarray(ub, dtype=float).copy()
         self.c = np.zeros(n) if c is None else np.asarray(c, dtype=float).copy()
         h = new_highs(options)
+        self._options = dict(options or {})
         # unscaled solves are faster on well-scaled data, but if the certified bound then
         # trails HiGHS's own value, the duals are inaccurate: scaling goes back on for good
         self._unscaled = (options or {}).get("simplex_scale_strategy") == 0
@@ -417,22 +485,78 @@ class HighsLP:
         b_ub = np.concatenate([self.ru[up], -self.rl[lo]])
         return certify_infeasible(A_ub, b_ub, A[eq], self.rl[eq], self.lb, self.ub)
 
+    def _run_highs(self):
+        """One ``run()`` of HiGHS: ``(run status, model status)`` (a seam for tests)."""
+        run = self.h.run()
+        return run, self.h.getModelStatus()
+
+    def _run(self):
+        """``run()``, and when HiGHS stops with an error before a result, the recovery
+        ladder of :data:`RECOVERY` (see :func:`refused`). Returns ``(model status, note)``;
+        the status is None when every attempt was refused, ``note`` says what happened."""
+        run, st = self._run_highs()
+        if not refused(run, st):
+            return st, ""
+        first = _status_text(self.h, run, st)
+        tried = []
+        for label, opts in RECOVERY:
+            self.h.clearSolver()  # drop the basis: the next run starts from scratch
+            for name, value in opts.items():
+                self.h.setOptionValue(name, value)
+            try:
+                run, st = self._run_highs()
+            finally:
+                for name in opts:
+                    if name != "simplex_scale_strategy":
+                        self.h.setOptionValue(name, self._options.get(name, HIGHS_DEFAULTS[name]))
+            if "simplex_scale_strategy" in opts and self._unscaled:
+                self._unscaled, self.rescaled = False, True  # scaling stays on for good
+            tried.append(label)
+            if not refused(run, st):
+                return st, (f"HiGHS stopped with an error before a result ({first}); "
+                            f"solved {label}")
+        self.h.clearSolver()
+        return None, refusal_message(first, tried, self.defects())
+
+    def defects(self) -> str:
+        """What makes the LP data invalid ("" if nothing): crossed bounds, NaN values."""
+        out = []
+        for what, lo, hi in (("row", self.rl, self.ru), ("column", self.lb, self.ub)):
+            bad = np.flatnonzero(lo > hi)
+            if bad.size:
+                out.append(f"{bad.size} {what} bound(s) crossed (first: {what} {bad[0]}, "
+                           f"{float(lo[bad[0]]):.17g} > {float(hi[bad[0]]):.17g})")
+            if np.isnan(lo).any() or np.isnan(hi).any():
+                out.append(f"NaN {what} bounds")
+        if not np.all(np.isfinite(self.A.data)) or not np.all(np.isfinite(self.c)):
+            out.append("non-finite matrix or cost values")
+        return "; ".join(out)
+
     def solve(self) -> LPSolve:
-        """Solve from the current basis and return a rigorous bound (see module docstring)."""
+        """Solve from the current basis and return a rigorous bound (see module docstring).
+
+        An LP that HiGHS refuses (``run()`` returns an error before any result, e.g. its
+        dual ratio test fails on a near-singular warm-start basis) is re-solved from
+        scratch, with the primal simplex and with the interior-point method
+        (:data:`RECOVERY`); if every attempt is refused the result is ``"failed"`` with
+        bound ``-inf`` and ``refused=True`` -- the caller keeps the bound it already has
+        (a branch-and-bound node its parent's, OBBT its box) -- and ``note`` says why.
+        """
         h = self.h
         if np.any(self.lb > self.ub):
             return LPSolve("infeasible", np.inf, np.nan, None, 0)
-        run = h.run()
-        st = h.getModelStatus()
+        st, note = self._run()
         it = int(h.getInfo().simplex_iteration_count)
+        if st is None:
+            return LPSolve("failed", -np.inf, np.nan, None, it, note=note, refused=True)
+        res = self._result(st, it)
+        res.note = note
+        return res
+
+    def _result(self, st, it) -> LPSolve:
+        """The :class:`LPSolve` of a run that ended with model status ``st``."""
+        h = self.h
         MS = highspy.HighsModelStatus
-        if run == highspy.HighsStatus.kError and st == MS.kNotset:
-            # HiGHS refused to start (no bound is lost by raising: nothing was solved)
-            raise SolverError(
-                "HiGHS refused to solve an LP (its run() returned an error before solving; "
-                "e.g. the process-wide HiGHS thread scheduler was sized differently by "
-                "another HiGHS user with a non-zero 'threads' option). Run the fit in a "
-                "fresh process or leave HiGHS's 'threads' option at its default.")
         if st == MS.kOptimal:
             sol = h.getSolution()
             y = np.asarray(sol.row_dual)

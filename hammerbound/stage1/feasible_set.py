@@ -228,18 +228,51 @@ def _round_tol(cons: Constraint, p) -> float:
     return 16 * _EPS * ((abs(a0) + abs(a1)) * (abs(float(p[0])) + abs(float(p[1]))) + abs(b))
 
 
-def _outside(cons: Constraint, p) -> bool:
-    """``p`` is outside ``cons`` beyond rounding (in doubt, keep the constraint)."""
+def _excess(cons: Constraint, p) -> float:
+    """``a . p - b`` in units of its rounding (``16 eps`` of the terms' magnitudes)."""
     a0, a1, b = float(cons.a[0]), float(cons.a[1]), float(cons.b)
     x, y = float(p[0]), float(p[1])
-    return a0 * x + a1 * y - b > 16 * _EPS * ((abs(a0) + abs(a1)) * (abs(x) + abs(y)) + abs(b))
+    return (a0 * x + a1 * y - b) / (16 * _EPS * ((abs(a0) + abs(a1)) * (abs(x) + abs(y))
+                                                  + abs(b)) or 1.0)
 
 
-def _max_violation(A, b, P) -> float:
-    """Largest violation of ``A p <= b`` over the rows of ``P``, relative to ``|a| |p| + |b|``."""
-    lhs = P @ A.T
-    scale = (np.abs(P).sum(axis=1)[:, None] * np.abs(A).sum(axis=1)) + np.abs(b)
-    return float(np.max((lhs - b) / np.where(scale > 0, scale, 1.0)))
+def _turns_left(c1: Constraint, c2: Constraint) -> bool:
+    """The boundary of ``c2`` turns left from that of ``c1`` by less than 180 degrees."""
+    return float(c1.a[0]) * float(c2.a[1]) - float(c1.a[1]) * float(c2.a[0]) > 0
+
+
+def _drop(h: Constraint, p, before: Constraint, after: Constraint) -> bool:
+    """Whether the deque of :func:`polygon_from_halfplanes` drops the line between
+    ``before`` and ``after`` whose vertex with its neighbour is ``p`` (None: parallel).
+
+    Dropped when ``p`` is outside ``h`` beyond rounding, and also when ``p`` is on ``h``'s
+    line to rounding, unless ``before`` and ``after`` would then turn by 180 degrees or
+    more (a segment or a point, whose antiparallel boundaries must stay apart). In doubt
+    the line goes: a needed line dropped by rounding only enlarges the polygon by a sliver
+    of rounding size (outward), while keeping every line of a pencil of nearly concurrent
+    ones (noise at ``+Delta`` on every sample) kept a cluster of ~M vertices within
+    rounding of one point, and the tightness check then cost O(M^2) time and memory.
+    """
+    if p is None:
+        return True
+    e = _excess(h, p)
+    return e > 1.0 or (e >= -1.0 and _turns_left(before, after))
+
+
+def _max_violation(A, b, P, chunk: int = 64) -> float:
+    """Largest violation of ``A p <= b`` over the rows of ``P``, relative to ``|a| |p| + |b|``.
+
+    Evaluated ``chunk`` points at a time: memory O(chunk * len(A)), not O(len(P) len(A)).
+    """
+    absA = np.abs(A).sum(axis=1)
+    absb = np.abs(b)
+    worst = -np.inf
+    for k in range(0, P.shape[0], chunk):
+        Q = P[k : k + chunk]
+        scale = np.abs(Q).sum(axis=1)[:, None] * absA + absb
+        v = (Q @ A.T - b) / np.where(scale > 0, scale, 1.0)
+        worst = max(worst, float(np.max(v)))
+    return worst
 
 
 def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
@@ -275,18 +308,10 @@ def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
         last = i
     dq: deque = deque()
     for h in uniq:
-        while len(dq) >= 2:
-            p = _intersect(dq[-1], dq[-2])
-            if p is None or _outside(h, p):
-                dq.pop()
-            else:
-                break
-        while len(dq) >= 2:
-            p = _intersect(dq[0], dq[1])
-            if p is None or _outside(h, p):
-                dq.popleft()
-            else:
-                break
+        while len(dq) >= 2 and _drop(h, _intersect(dq[-1], dq[-2]), dq[-2], h):
+            dq.pop()
+        while len(dq) >= 2 and _drop(h, _intersect(dq[0], dq[1]), h, dq[1]):
+            dq.popleft()
         if dq:
             a1, a2 = np.asarray(dq[-1].a), np.asarray(h.a)
             if a1[0] * a2[1] - a1[1] * a2[0] <= 0:
@@ -294,18 +319,10 @@ def polygon_from_halfplanes(constraints) -> tuple[np.ndarray, list] | None:
                 if _intersect(dq[-1], h) is None:
                     return None
         dq.append(h)
-    while len(dq) >= 3:
-        p = _intersect(dq[-1], dq[-2])
-        if p is None or _outside(dq[0], p):
-            dq.pop()
-        else:
-            break
-    while len(dq) >= 3:
-        p = _intersect(dq[0], dq[1])
-        if p is None or _outside(dq[-1], p):
-            dq.popleft()
-        else:
-            break
+    while len(dq) >= 3 and _drop(dq[0], _intersect(dq[-1], dq[-2]), dq[-2], dq[0]):
+        dq.pop()
+    while len(dq) >= 3 and _drop(dq[-1], _intersect(dq[0], dq[1]), dq[-1], dq[1]):
+        dq.popleft()
     if len(dq) < 2:
         return None
     hs = list(dq)
@@ -388,7 +405,130 @@ def farkas_certificate(rows):
     return None
 
 
-def algorithm_22_1(pairs, extra=()) -> np.ndarray:
+def _merge_vertices(V):
+    """Merge the vertices ``(point, lines, cond)`` of ``V`` that coincide to the rounding
+    of their computation: one point per cluster, carrying the union of the clusters' lines.
+
+    ``cond`` is ``1 / sin`` of the angle between the two lines that made the point: its
+    error along them is about ``eps |p| cond`` (:func:`_intersect`). A point merges into a
+    better-conditioned one within ``max(_VERTEX_ROUNDING, 16 eps cond)`` of the largest
+    coordinate (at most :data:`_MERGE_CAP`): nearly parallel boundaries through one vertex
+    (consecutive amplitudes, noise at ``+Delta``) otherwise leave copies of it a few
+    ``1e-13`` apart, each keeping its boundaries alive.
+    """
+    if len(V) <= 1:
+        return V
+    V = sorted(V, key=lambda v: v[2])
+    P = np.array([v[0] for v in V])
+    mag = 1.0 + float(np.max(np.abs(P)))
+    radius = mag * np.minimum(np.maximum(_VERTEX_ROUNDING, 16 * _EPS * np.array(
+        [v[2] for v in V])), _MERGE_CAP)
+    dist = np.max(np.abs(P[:, None, :] - P[None, :, :]), axis=2)
+    reps: list = []
+    for i, (p, lines, cond) in enumerate(V):
+        near = next((r for r in reps if dist[i, r[3]] <= radius[i]), None)
+        if near is not None:
+            near[1].update(lines)
+            continue
+        reps.append((p, set(lines), cond, i))
+    return [(p, lines, cond) for p, lines, cond, _ in reps]
+
+
+#: Largest merge radius (relative) of :func:`_merge_vertices`, for the worst-conditioned
+#: intersections; the polygon is verified afterwards (:func:`edge_support`).
+_MERGE_CAP = 1e-9
+
+
+def _cond(c1: Constraint, c2: Constraint) -> float:
+    """``1 / sin`` of the angle between two boundaries (``inf`` if parallel)."""
+    a10, a11 = float(c1.a[0]), float(c1.a[1])
+    a20, a21 = float(c2.a[0]), float(c2.a[1])
+    s = abs(a10 * a21 - a11 * a20) / (np.hypot(a10, a11) * np.hypot(a20, a21))
+    return 1.0 / s if s > 0 else np.inf
+
+
+def _edge_lines_only(V, HL):
+    """The vertices ``(point, lines)`` of ``V`` (merged, :func:`_merge_vertices`) with only
+    the lines of ``HL`` that carry an edge between neighbouring vertices.
+
+    A boundary through a single vertex of a convex polygon touches it there only, and
+    every later set is a subset: it can never carry an edge again, so dropping it from H_L
+    loses no vertex. Neighbours that share two or more lines are copies of one vertex
+    (made by different, nearly parallel pairs a few 1e-13 apart) and count as one. The
+    edge between two neighbours is carried by the lines that made both; if they share
+    none, by those of their lines that pass through both to :data:`_EDGE_RESIDUAL`, else
+    by all their lines. With fewer than three vertices ``V`` is returned unchanged. The
+    caller verifies the final polygon (:func:`edges_supported`): this only saves time.
+    """
+    if len(V) < 3:
+        return V
+    P = np.array([v[0] for v in V])
+    c0 = P.mean(axis=0)
+    order = np.argsort(np.arctan2(P[:, 1] - c0[1], P[:, 0] - c0[0])).tolist()
+    groups = [[order[0]]]
+    for i in order[1:]:
+        if len(V[groups[-1][-1]][1] & V[i][1]) >= 2:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    if len(groups) > 1 and len(V[groups[-1][-1]][1] & V[groups[0][0]][1]) >= 2:
+        groups[0] = groups.pop() + groups[0]
+    if len(groups) < 3:
+        return V
+    lines = [set().union(*(V[i][1] for i in g)) for g in groups]
+    keep = set()
+    for a in range(len(groups)):
+        b = (a + 1) % len(groups)
+        shared = lines[a] & lines[b]
+        if not shared:
+            ends = (P[groups[a][-1]], P[groups[b][0]])
+            shared = {k for k in lines[a] | lines[b]
+                      if all(_residual(HL[k], q) <= _EDGE_RESIDUAL for q in ends)}
+            shared = shared or (lines[a] | lines[b])
+        keep |= shared
+    return [(p, ls & keep, c) for p, ls, c in V]
+
+
+def _residual(cons: Constraint, p) -> float:
+    """``|a . p - b|`` relative to ``|a| |p| + |b|``."""
+    a0, a1, b = float(cons.a[0]), float(cons.a[1]), float(cons.b)
+    x, y = float(p[0]), float(p[1])
+    return abs(a0 * x + a1 * y - b) / ((abs(a0) + abs(a1)) * (abs(x) + abs(y)) + abs(b) or 1.0)
+
+
+#: Relative residual up to which a line counts as passing through a vertex when the edge
+#: lines of Algorithm 22.1 are chosen geometrically (:func:`_edge_lines_only`): generous,
+#: since keeping a line too many only costs time.
+_EDGE_RESIDUAL = 1e-10
+
+
+def edge_support(V, constraints, chunk: int = 64) -> float:
+    """Largest, over the edges ``V[k] -> V[k+1]`` of a polygon (vertices in order), of the
+    smallest relative residual of a constraint line at both ends of the edge.
+
+    Small (rounding) when every edge lies on a constraint boundary: then the polygon is the
+    intersection of those constraints' half-planes (it contains the set they define). A
+    vertex of the set missing from ``V`` leaves a chord that lies on no boundary, with a
+    residual of the order of the missing vertex's depth. ``inf`` for fewer than 3 vertices.
+    """
+    V = np.asarray(V, dtype=float)
+    if V.shape[0] < 3:
+        return np.inf
+    A = np.array([c.a for c in constraints], dtype=float)
+    b = np.array([c.b for c in constraints], dtype=float)
+    absA, absb = np.abs(A).sum(axis=1), np.abs(b)
+    W = np.roll(V, -1, axis=0)
+    worst = 0.0
+    for k in range(0, V.shape[0], chunk):
+        r = np.zeros((V[k : k + chunk].shape[0], A.shape[0]))
+        for E in (V[k : k + chunk], W[k : k + chunk]):
+            scale = np.abs(E).sum(axis=1)[:, None] * absA + absb
+            r = np.maximum(r, np.abs(E @ A.T - b) / np.where(scale > 0, scale, 1.0))
+        worst = max(worst, float(np.max(np.min(r, axis=1))))
+    return worst
+
+
+def algorithm_22_1(pairs, extra=(), prune: bool = True) -> np.ndarray:
     """Vertices by the chapter's Algorithm 22.1 (Appendix), in the constraints' coordinates.
 
     Stage 1 calls it on the outward-relaxed constraints in its centred, scaled ``(p, q)``
@@ -400,6 +540,17 @@ def algorithm_22_1(pairs, extra=()) -> np.ndarray:
     (positivity) included from the start. Implemented as written: candidate vertices are
     intersections of the new boundaries with the active list H_L, filtered by the
     measurements seen so far; H_L keeps the boundaries through at least one vertex.
+
+    Three additions for sets with many boundaries through one vertex (noise at ``+Delta``
+    on every sample makes every lower boundary of a side pass through the true point; M =
+    500 gave no answer in 200 s): vertices that coincide to rounding
+    (:data:`_VERTEX_ROUNDING`) are merged after every step, each keeping the boundaries of
+    all its copies; H_L keeps only the boundaries that carry an edge
+    (:func:`_edge_lines_only`); and the filter allows rounding only (the constraints come
+    already relaxed outward by the callers' tolerance; a filter as wide as that tolerance
+    let hundreds of intersections just outside a set of the tolerance's width survive).
+    ``prune=False`` keeps every boundary through a vertex (the procedure as written; the
+    caller falls back to it when :func:`edge_support` does not confirm a pruned result).
     Complexity O(M^2); kept as an independent check of :func:`polygon_from_halfplanes`.
     """
     pairs = list(pairs)
@@ -410,23 +561,36 @@ def algorithm_22_1(pairs, extra=()) -> np.ndarray:
         for j in range(i + 1, len(HL)):
             p = _intersect(HL[i], HL[j])
             if p is not None:
-                V.append((p, i, j))
+                V.append((p, {i, j}, _cond(HL[i], HL[j])))
 
-    def filt(V, cons_list):
-        A = np.array([c.a for c in cons_list])
-        b = np.array([c.b for c in cons_list])
-        tol = 1e-11 * (np.abs(b) + np.hypot(A[:, 0], A[:, 1]))
-        P = np.array([v[0] for v in V]) if V else np.zeros((0, 2))
-        ok = np.all(P @ A.T - b <= tol, axis=1) if len(V) else np.zeros(0, bool)
-        return [v for v, k in zip(V, ok, strict=True) if k]
+    # the constraints seen so far as arrays, filled as they come (rows of ``seen``)
+    n_all = len(seen) + 2 * (len(pairs) - 2)
+    A_seen, b_seen = np.empty((n_all, 2)), np.empty(n_all)
+    A_seen[: len(seen)] = [c.a for c in seen]
+    b_seen[: len(seen)] = [c.b for c in seen]
+
+    def filt(V, n):
+        if not V:
+            return V
+        A, b = A_seen[:n], b_seen[:n]
+        P = np.array([v[0] for v in V])
+        # rounding slack only (_VERTEX_ROUNDING of the terms): the constraints are already
+        # relaxed outward by the callers' tolerance
+        tol = _VERTEX_ROUNDING * (np.abs(P).sum(axis=1)[:, None] * np.abs(A).sum(axis=1)
+                                  + np.abs(b))
+        ok = np.all(P @ A.T - b <= tol, axis=1)
+        return _merge_vertices([v for v, k in zip(V, ok, strict=True) if k])
 
     def relabel(V, HL):
         # rebuild H_L: keep boundaries through a vertex (lines 21-27)
-        used = sorted({v[1] for v in V} | {v[2] for v in V})
+        if prune:
+            V = _edge_lines_only(V, HL)
+        used = sorted(set().union(*(v[1] for v in V)))
         pos = {old: new for new, old in enumerate(used)}
-        return [(p, pos[i], pos[j]) for p, i, j in V], [HL[k] for k in used]
+        return [(p, {pos[i] for i in lines}, c) for p, lines, c in V], [HL[k] for k in used]
 
-    V = filt(V, seen)
+    n = len(seen)
+    V = filt(V, n)
     V, HL = relabel(V, HL)
     for s in range(2, len(pairs)):
         hp, hm = pairs[s]
@@ -436,10 +600,12 @@ def algorithm_22_1(pairs, extra=()) -> np.ndarray:
             for k, h in ((L, hp), (L + 1, hm)):
                 p = _intersect(h, HL[z])
                 if p is not None:
-                    new.append((p, z, k))
+                    new.append((p, {z, k}, _cond(h, HL[z])))
         HL = HL + [hp, hm]
-        seen += [hp, hm]
-        V = filt(V + new, seen)  # line 20
+        A_seen[n : n + 2] = (hp.a, hm.a)
+        b_seen[n : n + 2] = (hp.b, hm.b)
+        n += 2
+        V = filt(V + new, n)  # line 20
         V, HL = relabel(V, HL)
     if not V:
         return np.zeros((0, 2))

@@ -32,13 +32,24 @@ import numpy as np
 
 from ..exceptions import SolverError, UnboundedSetError
 from ..tolerances import ARITHMETIC_RTOL, feasibility_tol
-from .feasible_set import Constraint, algorithm_22_1, farkas_certificate, polygon_from_halfplanes
+from .feasible_set import (
+    Constraint,
+    algorithm_22_1,
+    edge_support,
+    farkas_certificate,
+    polygon_from_halfplanes,
+)
 
 __all__ = ["SideProblem", "SidePolygon", "RELAX_FACTORS"]
 
 #: Multiples of the policy tolerance tried, in turn, when the polygon comes out empty but
 #: no exact certificate of emptiness is found (never needed in the test-suite; a fallback).
 RELAX_FACTORS = (1.0, 1e2, 1e4)
+
+#: Largest relative residual of the nearest constraint boundary along every edge of the
+#: pruned Algorithm 22.1 polygon (:meth:`SideProblem._algorithm`): a vertex lost by the
+#: pruning would leave an edge on no boundary. Ten times below ``ARITHMETIC_RTOL``.
+EDGE_SUPPORT_RTOL = 1e-12
 
 _BOX = 1e6  # in (p, q) the set lies within |p| <= ~2, |q| <= ~3: never active
 _SNAP = 1e-14  # relative rounding below which a vertex is on m = 0 / beta = 0
@@ -49,7 +60,15 @@ def _pow2(x: float) -> float:
 
 
 def _hull_mask(u, v) -> np.ndarray:
-    """Points ``(u_k, v_k)`` that are vertices of their convex hull (all if degenerate)."""
+    """Points ``(u_k, v_k)`` that are vertices of their convex hull (all if undecided).
+
+    Points on a line to rounding -- noise at exactly ``+Delta`` on every sample puts every
+    ``(t_s, z_s)`` of a side on one line -- make Qhull refuse ("initial simplex is flat").
+    Their hull is then taken in sheared, rescaled coordinates ``(u, (v - line(u)) / s)``,
+    an affine map that keeps hull vertices hull vertices: a handful of points instead of
+    all of them. The caller checks the result against every point either way (the mask can
+    only drop constraints, which enlarges the polygon).
+    """
     mask = np.zeros(u.size, dtype=bool)
     if u.size <= 8:
         mask[:] = True
@@ -58,6 +77,20 @@ def _hull_mask(u, v) -> np.ndarray:
 
     try:
         mask[ConvexHull(np.column_stack([u, v])).vertices] = True
+        return mask
+    except (QhullError, ValueError):
+        pass
+    i0, i1 = int(np.argmin(u)), int(np.argmax(u))
+    mask[[i0, i1]] = True
+    if u[i1] == u[i0]:
+        mask[:] = True
+        return mask
+    r = v - (v[i0] + (u - u[i0]) * ((v[i1] - v[i0]) / (u[i1] - u[i0])))
+    s = float(np.max(np.abs(r)))
+    if s == 0.0:  # exactly on the line: the two ends carry the hull
+        return mask
+    try:
+        mask[ConvexHull(np.column_stack([(u - u[i0]) / (u[i1] - u[i0]), r / s])).vertices] = True
     except (QhullError, ValueError):
         mask[:] = True
     return mask
@@ -121,7 +154,7 @@ class SideProblem:
         cols = (self.idx[sel], self.t[sel], zu[sel], zl[sel], self.u[sel], hi[sel], lo[sel],
                 (factor * self.tol)[sel])
         pq, mb = [], []
-        for i, t, a, b, u, h, l, sl in zip(*(c.tolist() for c in cols)):  # Python floats
+        for i, t, a, b, u, h, l, sl in zip(*(c.tolist() for c in cols), strict=True):
             pq.append((Constraint((t, 1.0), a, i, "+"), Constraint((-t, -1.0), -b, i, "-")))
             mb.append((Constraint((u, s), h, i, "+", sl), Constraint((-u, -s), -l, i, "-", sl)))
         return pq, mb
@@ -203,7 +236,8 @@ class SideProblem:
         if method == "algorithm":
             V, E, cons_mb = self._algorithm(factor)
             return SidePolygon(V, E, cons_mb, factor, self.u.size)
-        to_mb = dict(zip(map(id, cons_pq), cons_mb))
+        # cons_pq ends with the box rows, which have no (m, beta) counterpart
+        to_mb = dict(zip(map(id, cons_pq), cons_mb, strict=False))
         return SidePolygon(self.to_mb(V), [to_mb[id(c)] for c in E], cons_mb, factor, n_used)
 
     @staticmethod
@@ -214,17 +248,28 @@ class SideProblem:
         return bool(np.all(lhs <= zu + slop) and np.all(lhs >= zl - slop))
 
     def _algorithm(self, factor):
-        """Algorithm 22.1 on the same relaxed constraints, in the same coordinates."""
+        """Algorithm 22.1 on the same relaxed constraints, in the same coordinates.
+
+        Run with H_L pruned to the edge-carrying boundaries (:func:`algorithm_22_1`), and
+        kept only if every edge of the result lies on a constraint boundary to
+        :data:`EDGE_SUPPORT_RTOL` (:func:`~hammerbound.feasible_set.edge_support`); else
+        (never seen) run again as written, without pruning.
+        """
         pq, mb = self.pairs(slice(None), factor)
         pos_pq, pos_mb = self.positivity()
         order = _processing_order(self.u)
-        v = algorithm_22_1([pq[i] for i in order], extra=pos_pq)
+        cons_pq = [c for pr in pq for c in pr] + pos_pq
+        for prune in (True, False):
+            v = algorithm_22_1([pq[i] for i in order], extra=pos_pq, prune=prune)
+            if v.shape[0] == 0:  # pragma: no cover - the polygon exists at this tolerance
+                raise SolverError(f"Algorithm 22.1 found no vertex of the {self.side} set that "
+                                  "the half-plane intersection found non-empty; please report "
+                                  "these data.")
+            c0 = v.mean(axis=0)
+            v = v[np.argsort(np.arctan2(v[:, 1] - c0[1], v[:, 0] - c0[0]))]
+            if v.shape[0] < 3 or edge_support(v, cons_pq) <= EDGE_SUPPORT_RTOL:
+                break
         cons_mb = [c for pr in mb for c in pr] + pos_mb
-        if v.shape[0] == 0:  # pragma: no cover - the polygon exists at this tolerance
-            raise SolverError(f"Algorithm 22.1 found no vertex of the {self.side} set that the "
-                              "half-plane intersection found non-empty; please report these data.")
-        c0 = v.mean(axis=0)
-        v = v[np.argsort(np.arctan2(v[:, 1] - c0[1], v[:, 0] - c0[0]))]
         V = self.to_mb(v)
         return V, _common_constraints(V, cons_mb), cons_mb
 
@@ -310,10 +355,15 @@ def _processing_order(u):
     return order
 
 
-def _common_constraints(V, cons):
-    """For each edge ``V[k] -> V[k+1]``, the constraint closest to both endpoints."""
+def _common_constraints(V, cons, chunk: int = 64):
+    """For each edge ``V[k] -> V[k+1]``, the constraint closest to both endpoints
+    (``chunk`` edges at a time: memory O(chunk * len(cons)))."""
     A = np.array([c.a for c in cons], dtype=float)
     b = np.array([c.b for c in cons], dtype=float)
-    R = np.abs(V @ A.T - b) / (np.abs(b) + np.hypot(A[:, 0], A[:, 1]))
-    score = R + np.roll(R, -1, axis=0)
-    return [cons[int(k)] for k in np.argmin(score, axis=1)]
+    norm = np.abs(b) + np.hypot(A[:, 0], A[:, 1])
+    W = np.roll(V, -1, axis=0)
+    best = []
+    for k in range(0, V.shape[0], chunk):
+        score = (np.abs(V[k : k + chunk] @ A.T - b) + np.abs(W[k : k + chunk] @ A.T - b)) / norm
+        best.extend(np.argmin(score, axis=1).tolist())
+    return [cons[int(k)] for k in best]

@@ -66,9 +66,9 @@ import numpy as np
 
 from ...exceptions import EmptyFeasibleSetError
 from ..lp import lp_bounds, raise_if_box_limited
-from ..problem import EIVProblem
+from ..problem import EIVProblem, unit_scale
 from ..result import BoundInfo, IntervalResult
-from .local import improve, restore
+from .local import improve, polish, restore, restore_near
 from .mccormick import shared_groups
 from .obbt import _limit_lp, _obbt, _relaxation, _solve
 from .points import _on_gain_plane, _Point, _Pool
@@ -80,6 +80,10 @@ _SPLIT_CLIP = 0.05
 # after a line search that does not improve the incumbent, wait up to this many nodes
 _MAX_SEARCH_GAP = 16
 _MAX_SEARCH_GAP_WALKED = 1024
+# Gauss-Newton restoration next to an LP point at which the relaxation is exact (every
+# product violation below this, relative to max(1, |incumbent|)): once per this many nodes
+_EXACT_VIOLATION = 1e-9
+_RESTORE_GAP = 64
 # the SLP walk to a near-optimal incumbent (.local.improve), and its resolution (a fraction
 # of the tolerance)
 _LOCAL = True
@@ -297,8 +301,10 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
     walked = inc is not None and local
     max_gap = _MAX_SEARCH_GAP_WALKED if walked else _MAX_SEARCH_GAP
     last_try, try_gap = -1, (_MAX_SEARCH_GAP if walked else 1)
+    last_restore = -_RESTORE_GAP
     nodes = 0
     iters = 0
+    refusals = []  # notes of the node LPs HiGHS refused (they kept their parent's bound)
     status = "optimal"
     root_value = np.nan
     bar = None
@@ -343,6 +349,10 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                 relax.lp.set_cutoff(None)
                 res = _solve(relax, pool.screen)
                 iters += res.iterations
+            if res.refused:
+                # HiGHS refused the node LP on every attempt: the node keeps its parent's
+                # certified bound (lb_parent below) and is split without an LP point
+                refusals.append(res.note)
             if res.status == "infeasible":
                 continue
             lb = max(lb_parent, res.bound)
@@ -380,6 +390,16 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
                     # another basin (or the first point): walk it down by SLP as well
                     pt = improve(pool, pt, k, sense, box0, _LOCAL_RES * tol_eff,
                                  stop_at=stop_at)
+                if pt is None and local and nodes - last_restore >= _RESTORE_GAP \
+                        and relax.violations(x, ks).max() <= _EXACT_VIOLATION * max(1.0, abs(ub)):
+                    # the relaxation is exact at the LP point, yet the point is not verified:
+                    # the set is thin there (see restore_near)
+                    last_restore = nodes
+                    pt = restore_near(pool, (th, *relax.split_eta_dx(x)), box[:p],
+                                      0.25 * tol_eff, stop_at=stop_at)
+                    if pt is not None and val(pt.theta) < ub - tol_eff:
+                        pt = improve(pool, pt, k, sense, box0, _LOCAL_RES * tol_eff,
+                                     stop_at=stop_at)
                 if due:
                     # useful: better by more than the searches' resolution
                     useful = pt is not None and val(pt.theta) < ub - 0.25 * tol_eff
@@ -442,6 +462,9 @@ def _search(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, p
         msg = "no verified-feasible point found: only the outer bound is certified"
     else:
         msg = f"gap {gap:.3g} <= tol after {nodes} nodes ({pool.checks} check_theta calls)"
+    if refusals:
+        msg += (f"; {len(refusals)} node LP(s) could not be solved and kept their parent's "
+                f"certified bound ({refusals[0]})")
     return _Search(bound, ub, inc, nodes, elapsed, status, msg, iters, root_value)
 
 
@@ -496,6 +519,12 @@ def exact_bounds(
     Every end starts from, and never reports wider than, the polytopic LP bound
     (:func:`.lp.lp_bounds`) shrunk by OBBT: a node or time limit returns the best certified
     outer bound found so far (status ``"limit"``), never a wider or infinite one.
+
+    The search runs on the data multiplied by a power of two that brings them to order one
+    (:func:`.problem.unit_scale`; exact, the set in theta is the same). A node LP that HiGHS
+    refuses on every attempt (:meth:`._highs.HighsLP.solve`) keeps its parent's certified
+    bound, and the end's message says so. Each end's witness is polished a little into the
+    set (:func:`.local.polish`).
 
     Parameters
     ----------
@@ -555,9 +584,18 @@ def exact_bounds(
         end = time.time() + float(total_time_limit)
         deadline = end if deadline is None else min(deadline, end)
 
+    def time_left():
+        return deadline is None or time.time() < deadline
+
     if theta_box is not None:
         problem = problem.with_theta_box(theta_box)
+    # the LP bound of the data as given (what method="lp" reports: never wider), then the
+    # same set in theta on data of order one (exact power-of-two scaling): HiGHS's
+    # absolute tolerances then act relatively; the witnesses' errors are scaled back below
     lp = lp_bounds(problem, check_box=False)
+    scale = unit_scale(problem)
+    if scale != 1.0:
+        problem = problem.scaled(scale)
     p = problem.p
     jobs = [(k, s) for k in range(p) for s in (1.0, -1.0)]
     parallel = None
@@ -590,6 +628,13 @@ def exact_bounds(
     finally:
         if parallel is not None:
             parallel.__exit__(None, None, None)
+    # witnesses a little inside the set (an independent check accepts them at the error
+    # bounds as given, not only within the acceptance tolerance): see local.polish
+    # (each end's value may worsen only by what is left of its tolerance)
+    keep = [(k, s, tol * max(1.0, abs(o.value)) - (o.value - o.bound)
+             if o.status == "optimal" else np.inf) for (k, s), o in zip(jobs, outs, strict=True)]
+    polished = polish(problem, [o.witness for o in outs], keep=keep) if time_left() else \
+        [o.witness for o in outs]
     if any(o.bound == np.inf for o in outs):
         # every leaf of a search was certified infeasible and no point was verified: the
         # set is empty (reporting +inf/-inf bounds with status "limit" would hide that)
@@ -601,22 +646,22 @@ def exact_bounds(
     bounds = np.zeros((p, 2))
     inner = np.full((p, 2), np.nan)
     infos = []
-    for (k, s), o in zip(jobs, outs, strict=True):
+    for (k, s), o, wit in zip(jobs, outs, polished, strict=True):
         e = 0 if s > 0 else 1
+        value = s * float(wit.theta[k]) if wit is not None else o.value
         bounds[k, e] = s * o.bound
         # never wider than the LP bound (the OBBT box lies inside it; kept explicit)
         bounds[k, e] = max(bounds[k, e], lp.bounds[k, 0]) if e == 0 else \
             min(bounds[k, e], lp.bounds[k, 1])
-        wit = o.witness
         if wit is not None:
             inner[k, e] = wit.theta[k]
         infos.append(BoundInfo(
             param=names[k], sense="min" if s > 0 else "max", bound=float(bounds[k, e]),
             solver_value=float(s * o.solver_value), status=o.status, certified=True,
             time=o.time, iterations=o.iterations,
-            gap=max(float(o.value - o.bound), 0.0) if np.isfinite(o.value) else None,
+            gap=max(float(value - o.bound), 0.0) if np.isfinite(value) else None,
             witness=None if wit is None else wit.theta.copy(), nodes=o.nodes, message=o.message,
-            extra={} if wit is None else {"eta": wit.eta, "dx": wit.dx,
+            extra={} if wit is None else {"eta": wit.eta / scale, "dx": wit.dx / scale,
                                           "value": float(wit.theta[k])},
         ))
     if check_box:

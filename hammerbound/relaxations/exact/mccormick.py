@@ -23,14 +23,17 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ...solvers.highs import HighsLP, round_down, round_up
+from ...solvers.highs import HighsLP, mul_down, mul_up
 from ...tolerances import FEASIBILITY_RTOL
 from ..problem import EIVProblem, equation_scale
 
 
 def _prod_bounds(xl, xu, el, eu):
-    c = np.stack([xl * el, xl * eu, xu * el, xu * eu])
-    return round_down(c.min(axis=0)), round_up(c.max(axis=0))
+    """Outward-rounded bounds of ``x e`` over ``[xl, xu] x [el, eu]`` (arrays)."""
+    pairs = [(xl, el), (xl, eu), (xu, el), (xu, eu)]
+    lo = np.min([mul_down(a, b) for a, b in pairs], axis=0)
+    hi = np.max([mul_up(a, b) for a, b in pairs], axis=0)
+    return lo, hi
 
 
 def _node_options(problem: EIVProblem) -> dict:
@@ -60,10 +63,10 @@ def set_envelope(lp, rows, cols, pos, w_cols, xl, xu, eL, eU):
     # e-coefficients of the 4 rows: -xL, -xU, -xU, -xL
     lp.set_coeffs(rows, cols, pos,
                   np.column_stack([-xl * ones, -xu * ones, -xu * ones, -xl * ones]).ravel())
-    lo = np.column_stack([round_down(-xl * eL), round_down(-xu * eU),
+    lo = np.column_stack([mul_down(-xl, eL) * ones, mul_down(-xu, eU) * ones,
                           -np.inf * ones, -np.inf * ones]).ravel()
     hi = np.column_stack([np.inf * ones, np.inf * ones,
-                          round_up(-xu * eL), round_up(-xl * eU)]).ravel()
+                          mul_up(-xu, eL) * ones, mul_up(-xl, eU) * ones]).ravel()
     lp.set_row_bounds(rows, lo, hi)
     wl, wu = _prod_bounds(xl, xu, eL, eU)
     lp.set_col_bounds(w_cols, wl, wu)

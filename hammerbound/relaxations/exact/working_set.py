@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ...solvers.highs import HighsLP, round_down, round_up
+from ...solvers.highs import HighsLP, mul_down, mul_up
 from ...tolerances import FEASIBILITY_RTOL
 from ..problem import EIVProblem, equation_scale
 from .mccormick import McCormickBase, _node_options, _prod_bounds
@@ -228,8 +228,8 @@ class WorkingSetRelaxation(McCormickBase):
             cc += [cols, ne, nx]
             vals += [np.ones(nnew), e_coef[s], x_coef[s]]
         inf = np.full(nnew, np.inf)
-        lo = np.column_stack([round_down(-xl * eL), round_down(-xu * eU), -inf, -inf]).ravel()
-        hi = np.column_stack([inf, inf, round_up(-xu * eL), round_up(-xl * eU)]).ravel()
+        lo = np.column_stack([mul_down(-xl, eL), mul_down(-xu, eU), -inf, -inf]).ravel()
+        hi = np.column_stack([inf, inf, mul_up(-xu, eL), mul_up(-xl, eU)]).ravel()
         er = r0 + 4 * nnew + np.arange(eqs.size)
         for q in range(p):
             rows.append(er)

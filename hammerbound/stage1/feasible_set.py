@@ -15,12 +15,14 @@ vertices (Propositions 22.1 and 22.2).
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
 
 from ..data.validation import as_theta
+from ..exceptions import ParameterValidationError
+from ..results import DeprecatedExtra, IntervalSet, Result, jsonable
 
 __all__ = [
     "Constraint",
@@ -64,21 +66,30 @@ class Edge:
     end: np.ndarray
 
 
-@dataclass(frozen=True)
-class FeasibleSet:
+@dataclass(frozen=True, repr=False, eq=False)
+class FeasibleSet(Result):
     """A parameter set with an outer-bounding orthotope (22.22)-(22.24).
 
     Attributes
     ----------
     param_names : tuple of str
     orthotope : ndarray of shape (p, 2)
-        Tight (when ``exact``) or outer interval of every parameter.
+        Tight (when ``exact``) or outer interval of every parameter (read-only).
     exact : bool
         True when ``vertices``/``edges`` describe the set exactly.
     vertices : ndarray of shape (n_vertices, p) or None
     edges : tuple of Edge
     polytopes : tuple
         Optional outer polytopes ``(A, b)`` with ``A theta <= b`` (their union contains the set).
+    method : str
+        What computed the set (``"polygon"``, ``"algorithm"``; stage 2: ``"lp"``,
+        ``"moment"``, ``"exact"``).
+    inner : ndarray of shape (p, 2) or None
+        Exact stage 2: the hull of the verified witnesses of the interval ends.
+    intervals : IntervalSet
+        The orthotope as the package's interval-set result (names, bounds, a status per
+        end); default: built from ``param_names`` and ``orthotope``, every end optimal.
+        ``center``, ``radius`` and the orthotope test of ``contains`` are its.
     """
 
     param_names: tuple
@@ -87,51 +98,108 @@ class FeasibleSet:
     vertices: np.ndarray | None = None
     edges: tuple = ()
     polytopes: tuple = ()
-    extra: dict = field(default_factory=dict)
+    method: str = ""
+    inner: np.ndarray | None = None
+    intervals: IntervalSet | None = None
+
+    def __post_init__(self):
+        iv = self.intervals
+        if iv is None:
+            iv = IntervalSet(self.param_names, self.orthotope, method=self.method)
+        elif tuple(iv.param_names) != tuple(self.param_names) or not np.array_equal(
+                iv.bounds, np.asarray(self.orthotope, dtype=float)):
+            raise ParameterValidationError("intervals must have the set's param_names and "
+                                           "orthotope as bounds.")
+        object.__setattr__(self, "intervals", iv)
+        object.__setattr__(self, "param_names", iv.param_names)
+        object.__setattr__(self, "orthotope", iv.bounds)
 
     @property
     def center(self) -> np.ndarray:
         """Central estimate gamma^c / theta^c (22.23)."""
-        return self.orthotope.mean(axis=1)
+        return self.intervals.center
 
     @property
     def radius(self) -> np.ndarray:
         """Uncertainty bound Delta gamma (22.23)."""
-        return 0.5 * (self.orthotope[:, 1] - self.orthotope[:, 0])
+        return self.intervals.radius
 
-    def _intervals_repr(self) -> str:
-        return ", ".join(f"{n} in [{lo:.6g}, {hi:.6g}]"
-                         for n, (lo, hi) in zip(self.param_names, self.orthotope, strict=False))
+    @property
+    def extra(self):
+        """Deprecated (removed in 0.3.0): the old ``extra`` dict, from the typed fields."""
+        vals = {"method": self.method}
+        new = {"method": "FeasibleSet.method"}
+        if self.inner is not None:
+            vals["inner"], new["inner"] = self.inner, "FeasibleSet.inner"
+        return DeprecatedExtra(type(self).__name__, vals, new)
 
     def __repr__(self) -> str:
         extra = f", {len(self.polytopes)} outer polytope(s)" if self.polytopes else ""
-        return (f"FeasibleSet({self._intervals_repr()}; exact={self.exact}{extra})")
+        return (f"FeasibleSet({self.intervals}; exact={self.exact}{extra})")
 
     def contains(self, params, tol: float = 0.0) -> bool:
-        """Whether ``params`` lies in the orthotope (exact sets override this)."""
+        """Whether ``params`` lies in the orthotope (exact sets override this); ``tol`` as
+        :meth:`~hammerbound.results.IntervalSet.contains`."""
         p = as_theta(params, self.orthotope.shape[0], self.param_names, name="params")
-        return bool(np.all(p >= self.orthotope[:, 0] - tol) and np.all(p <= self.orthotope[:, 1] + tol))
+        return self.intervals.contains(p, tol)
+
+    def summary(self) -> str:
+        """The set's description and its orthotope as a table."""
+        return self.intervals.summary(title=repr(self))
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable: the orthotope (:meth:`IntervalSet.to_dict`), ``exact``,
+        ``method``, ``vertices``, the number of outer polytopes and ``inner``."""
+        return jsonable({"intervals": self.intervals.to_dict(), "exact": self.exact,
+                         "method": self.method, "vertices": self.vertices,
+                         "n_polytopes": len(self.polytopes), "inner": self.inner})
+
+    def plot(self, ax=None, **kwargs):
+        """The orthotope's interval bars (:meth:`IntervalSet.plot`); returns the Axes."""
+        return self.intervals.plot(ax, **kwargs)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False, eq=False)
 class PolygonFeasibleSet(FeasibleSet):
     """Exact feasible set of one backlash side, (22.12) or (22.13).
 
     ``vertices`` are in ``(m, c)`` coordinates (counter-clockwise in ``(m, beta)``);
     ``vertices_mb`` in ``(m, beta = m c)``; ``constraints`` are the half-planes in
     ``(m, beta)``; ``sigma`` is ``-1`` for the right side (``y = m u - beta``) and ``+1``
-    for the left side (``y = m u + beta``).
+    for the left side (``y = m u + beta``). ``tolerance_factor`` is the factor by which the
+    outward tolerance had to be widened for the relaxed set to be non-empty (1: the
+    policy's tolerance, ``docs/tolerances.md``), ``max_tolerance`` the largest widening
+    of a constraint that resulted.
     """
 
     side: str = "right"
     sigma: float = -1.0
     vertices_mb: np.ndarray | None = None
     constraints: tuple = ()
+    tolerance_factor: float = 1.0
+    max_tolerance: float = 0.0
 
     def __repr__(self) -> str:
         nv = 0 if self.vertices is None else len(self.vertices)
-        return (f"PolygonFeasibleSet(side={self.side!r}, {self._intervals_repr()}; "
+        return (f"PolygonFeasibleSet(side={self.side!r}, {self.intervals}; "
                 f"{nv} vertices, {len(self.edges)} edges)")
+
+    @property
+    def extra(self):
+        """Deprecated (removed in 0.3.0): the old ``extra`` dict, from the typed fields."""
+        return DeprecatedExtra(
+            "PolygonFeasibleSet",
+            {"tolerance_factor": self.tolerance_factor, "max_tolerance": self.max_tolerance},
+            {"tolerance_factor": "PolygonFeasibleSet.tolerance_factor",
+             "max_tolerance": "PolygonFeasibleSet.max_tolerance"})
+
+    def to_dict(self) -> dict:
+        """As :meth:`FeasibleSet.to_dict`, with ``side``, ``vertices_mb`` and the tolerance."""
+        d = super().to_dict()
+        d.update(jsonable({"side": self.side, "vertices_mb": self.vertices_mb,
+                           "tolerance_factor": self.tolerance_factor,
+                           "max_tolerance": self.max_tolerance}))
+        return d
 
     def contains(self, params, tol: float = 1e-12) -> bool:
         """Membership of ``(m, c)`` in the set (not just in the orthotope).
@@ -175,7 +243,8 @@ class PolygonFeasibleSet(FeasibleSet):
             return np.column_stack([mb[:, 0], mb[:, 1] / mb[:, 0]])
 
     def plot(self, ax=None, *, true_params=None, show_orthotope=True, **kwargs):
-        """Draw the set in ``(m, c)`` (curved edges), its vertices and orthotope."""
+        """Draw the set in ``(m, c)`` (curved edges), its vertices and orthotope; returns
+        the Axes."""
         from ..plotting import plot_feasible_set
 
         return plot_feasible_set(self, ax=ax, true_params=true_params,

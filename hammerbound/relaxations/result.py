@@ -13,8 +13,8 @@ from ..results.base import DeprecatedExtra
 from ..results.intervals import BoundInfo, DualCertificate, IntervalSet, VerifiedPoint
 from ..status import BOX
 
-__all__ = ["BoundInfo", "DualCertificate", "ExactDetails", "IntervalResult", "LPDetails",
-           "MomentDetails", "Polytope", "VerifiedPoint"]
+__all__ = ["BoundInfo", "DualCertificate", "ExactDetails", "IntervalResult", "IntervalSet",
+           "LPDetails", "MomentDetails", "Polytope", "VerifiedPoint"]
 
 
 @dataclass(frozen=True, eq=False)

@@ -269,6 +269,15 @@ def test_stage1_feasible_sets_and_intervals():
     plt.close(ax.figure)
     ib = bl.inner_signal_bounds(1.0)
     assert ib.intervals.contains([np.mean(ib.x_hi), np.mean(ib.x_lo)])
+    inv = bl.inverse()
+    d = _json(inv.to_dict())
+    band = d["error_band"]
+    lo, hi = inv.error_bounds(np.asarray(band["v"]))
+    assert band["lower"] == lo.tolist() and band["upper"] == hi.tolist()
+    assert "guaranteed residual" in inv.summary()
+    fig = inv.plot()
+    assert isinstance(fig, Figure) and len(fig.axes) == 2
+    plt.close(fig)
 
 
 def test_every_result_family_has_the_shape(exact_fit, tmp_path):

@@ -83,7 +83,7 @@ def _run(pr, working_set, n_jobs, tol):
         "iterations": sum(i.iterations or 0 for i in infos),
         "statuses": sorted({i.status for i in infos}),
         "max_gap": max(i.gap or 0.0 for i in infos),
-        "working_set_equations": res.extra.get("working_set"),
+        "working_set_equations": res.details.working_set,
         "peak_rss_mb": round(mem.peak, 1), "rss_before_mb": round(mem.base, 1),
     }
 

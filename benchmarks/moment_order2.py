@@ -54,17 +54,17 @@ def run_moment(pr, lp, basis, n_jobs):
     res = moment_bounds(pr, order=2, theta_box=lp.bounds, fallback=lp.bounds, n_jobs=n_jobs,
                         max_work=float("inf"), basis=basis)
     wall = time.perf_counter() - t0
-    e = res.extra
+    e = res.details
     return {
-        "basis": basis, "wall_s": wall, "build_s": e["build_time"],
+        "basis": basis, "wall_s": wall, "build_s": e.build_time,
         "solve_sum_s": float(sum(i.time for i in res.infos)),
         "solve_max_s": float(max(i.time for i in res.infos)),
         "iterations": [i.iterations for i in res.infos],
         "statuses": [i.status for i in res.infos],
         "certified": [bool(i.certified) for i in res.infos],
-        "n_moments": e["n_moments"], "n_rows": e["n_rows"], "nnz": e["nnz"],
-        "n_psd_blocks": e["n_psd_blocks"],
-        "psd_sides": {str(k): v for k, v in e["psd_sides"].items()},
+        "n_moments": e.n_moments, "n_rows": e.n_rows, "nnz": e.nnz,
+        "n_psd_blocks": e.n_psd_blocks,
+        "psd_sides": {str(k): v for k, v in e.psd_sides.items()},
         "bounds": res.bounds.tolist(), "loadavg": C.loadavg(),
     }
 

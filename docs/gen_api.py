@@ -12,17 +12,21 @@ MODULES = [
     ("hammerbound.relaxations.lp", ["lp_bounds"]),
     ("hammerbound.relaxations.moment.relaxation", ["moment_bounds", "MomentRelaxation"]),
     ("hammerbound.relaxations.exact.bnb", ["exact_bounds"]),
-    ("hammerbound.relaxations.result", ["IntervalResult", "BoundInfo"]),
+    ("hammerbound.results", ["IntervalSet", "BoundInfo", "OutputEnvelope", "Result"]),
+    ("hammerbound.status", None),
+    ("hammerbound.relaxations.result", ["IntervalResult", "Polytope", "LPDetails",
+                                        "MomentDetails", "ExactDetails"]),
     ("hammerbound.solvers", ["available_solvers", "get_solver"]),
     ("hammerbound.discrepancy", ["diagnose", "locate", "DiagnosisReport", "RefinedModel"]),
-    ("hammerbound.app.report", ["write_report"]),
+    ("hammerbound.app.report", ["write_report", "IdentificationReport"]),
     ("hammerbound.plotting", None),
 ]
 
 PUBLIC_METHODS = ("fit", "predict", "score", "contains", "transform", "inner_signal",
                   "inner_signal_bounds", "admissible_prbs_range", "check_prbs_level",
                   "suggest_prbs_level", "to_transfer_function", "one_step_envelope",
-                  "output_envelope", "simulate", "plot", "linear_range", "boundary_mc")
+                  "output_envelope", "simulate", "plot", "linear_range", "boundary_mc",
+                  "summary", "to_dict", "to_frame", "save", "write")
 
 
 def _sig(obj) -> str:

@@ -29,6 +29,7 @@ from .exceptions import (
 from .hammerstein.identifier import HammersteinBacklashIdentifier
 from .model_selection import OrderSelectionCV
 from .relaxations.problem import EIVProblem, check_theta
+from .results import IntervalSet
 from .solvers import available_solvers
 from .stage1.estimator import BacklashSetEstimator, InnerSignalBounds
 from .stage1.feasible_set import FeasibleSet, PolygonFeasibleSet
@@ -74,6 +75,7 @@ __all__ = [
     "IOData",
     "IllPosedBacklashError",
     "InnerSignalBounds",
+    "IntervalSet",
     "LinearEIVSetEstimator",
     "NotEnoughAmplitudesError",
     "NotIdentifiedWarning",

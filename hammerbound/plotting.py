@@ -142,12 +142,13 @@ def plot_backlash(bl, u=None, y=None, ax=None, *, output_bound=None, u_star=None
 
 
 def plot_envelope(t, y, lower, upper, ax=None, *, center=None, label="data"):
-    """Measured output with the guaranteed output envelope of the identified model."""
+    """Measured output (``y``; None: not drawn) with the guaranteed output envelope."""
     ax = _axes(ax)
     ax.fill_between(t, lower, upper, color="C0", alpha=0.3, step="mid", label="output envelope")
     if center is not None:
         ax.plot(t, center, color="C0", lw=1, label="central model")
-    ax.plot(t, y, ".", color="k", ms=3, label=label)
+    if y is not None:
+        ax.plot(t, y, ".", color="k", ms=3, label=label)
     ax.set_xlabel("sample t")
     ax.set_ylabel("output")
     ax.legend(fontsize=7)

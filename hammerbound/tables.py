@@ -12,9 +12,6 @@ import numpy as np
 __all__ = ["bound_status", "bound_text", "interval_frame", "interval_records", "interval_text"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
-#: how a non-optimal end was obtained (the bound is guaranteed in every case)
-STATUS_WORDS = {"inaccurate": "from dual (solver inaccurate)",
-                "limit": "at time/node limit (outer bound)"}
 
 
 def bound_text(bound) -> str:
@@ -25,24 +22,26 @@ def bound_text(bound) -> str:
 
 
 def bound_status(names, infos=(), box_limited=()) -> list[str]:
-    """Per parameter: ``"optimal"`` when both ends are optimal solver bounds set by the
-    data, else which end is set by the a priori box, recovered from the dual of an
-    inaccurate solve, or stopped at a limit (guaranteed in every case)."""
-    by_end = {}
+    """Deprecated (removed in 0.3.0): use ``IntervalSet.status_text()`` (e.g.
+    ``est.intervals_.status_text()``). The status column for ``names``, the ends' statuses
+    from ``infos`` and ``"a2 upper"`` labels in ``box_limited`` set by the a priori box."""
+    import warnings
+
+    from .results import IntervalSet
+    from .status import BOX, OPTIMAL
+
+    warnings.warn("hammerbound.tables.bound_status is deprecated and will be removed in "
+                  "0.3.0; use IntervalSet.status_text() (e.g. est.intervals_.status_text()).",
+                  DeprecationWarning, stacklevel=2)
+    status = [[OPTIMAL, OPTIMAL] for _ in names]
+    where = {n: k for k, n in enumerate(names)}
     for info in infos:
-        by_end[(info.param, "lower" if info.sense == "min" else "upper")] = info.status
-    out = []
-    for name in names:
-        parts = []
-        for end in ("lower", "upper"):
+        status[where[info.param]][0 if info.sense == "min" else 1] = info.status
+    for k, name in enumerate(names):
+        for e, end in enumerate(("lower", "upper")):
             if f"{name} {end}" in box_limited:
-                parts.append(f"{end} from a priori box")
-            else:
-                st = by_end.get((name, end), "optimal")
-                if st != "optimal":
-                    parts.append(f"{end} {STATUS_WORDS.get(st, st)}")
-        out.append("; ".join(parts) or "optimal")
-    return out
+                status[k][e] = BOX
+    return IntervalSet(names, np.zeros((len(names), 2)), status).status_text()
 
 
 def interval_records(names, bounds, status=None) -> list[dict]:

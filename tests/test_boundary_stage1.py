@@ -82,7 +82,7 @@ def _assert_inside(est, gamma, what):
     assert np.all(gb[:, 0] <= gamma) and np.all(gamma <= gb[:, 1]), (what, gb, gamma)
     assert est.left_.contains(gamma[:2]) and est.right_.contains(gamma[2:]), what
     # built at the policy's tolerance, without the widened fallback
-    assert est.left_.extra["tolerance_factor"] == est.right_.extra["tolerance_factor"] == 1.0
+    assert est.left_.tolerance_factor == est.right_.tolerance_factor == 1.0
 
 
 # ----------------------------------------------------------------------------- the repro

@@ -120,7 +120,7 @@ def _check(i, method):
             bounds = _estimator(kw, "exact", theta_box=pr.theta_box, **limits).bounds_
         else:
             res = exact_bounds(pr, check_box=False, **limits)
-            lp = res.extra["lp"].bounds
+            lp = res.lp.bounds
             assert np.all(res.bounds[:, 0] >= lp[:, 0]) and np.all(res.bounds[:, 1] <= lp[:, 1])
             bounds = res.bounds
     _assert_inside(bounds, theta, what)
@@ -243,7 +243,7 @@ def test_property_total_budget_keeps_lp_knowledge(seed, budget):
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         est.fit(x, y)
-    lp = est.result_.extra["lp"].bounds
+    lp = est.result_.lp.bounds
     _assert_inside(est.bounds_, np.array([-0.76, 0.82, 2.15, -1.09]), "budgeted exact")
     assert np.all(est.bounds_[:, 0] >= lp[:, 0]) and np.all(est.bounds_[:, 1] <= lp[:, 1])
     assert np.all(np.isfinite(est.center_)) and np.all(np.isfinite(est.radius_))

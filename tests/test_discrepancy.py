@@ -395,10 +395,18 @@ def test_plot_summary_and_dict(tmp_path):
     u, y = make_data("deadzone", 0.2, 0)
     rep = diagnose(G, u, y, output_bound=NB, candidates=["deadzone", "saturation"])
     assert isinstance(rep, DiagnosisReport)
-    out = tmp_path / "diag.png"
-    fig = rep.plot(out)
+    fig = rep.plot()
     assert isinstance(fig, Figure) and len(fig.axes) == 4
-    assert out.stat().st_size > 10_000
+    plt.close(fig)
+    out = rep.save(tmp_path / "diag.png")
+    assert out == tmp_path / "diag.png" and out.stat().st_size > 10_000
+    old = tmp_path / "old.png"
+    with pytest.warns(DeprecationWarning, match=r"plot\(path\) is deprecated"):
+        fig = rep.plot(old)  # the old form still draws and saves
+    assert isinstance(fig, Figure) and old.stat().st_size > 10_000
+    plt.close(fig)
+    fig, axes = plt.subplots(4, 1)
+    assert rep.plot(axes) is fig  # draws into given axes
     plt.close(fig)
     text = rep.summary()
     assert "deadzone" in text and "gap after" in text

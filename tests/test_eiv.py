@@ -51,7 +51,7 @@ def test_methods_nest_lp_moment_exact():
     x, y, _, _ = _data(N=60, deta=0.02, seed=3)
     res = {m: LinearEIVSetEstimator(output_bound=0.02, method=m).fit(x, y, input_bound=0.003)
            for m in ("lp", "moment", "exact")}
-    inner = res["exact"].result_.extra["inner"]  # verified-feasible extreme values
+    inner = res["exact"].result_.inner  # verified-feasible extreme values
     for m in ("lp", "moment"):
         assert np.all(res[m].bounds_[:, 0] <= inner[:, 0] + 1e-12)
         assert np.all(res[m].bounds_[:, 1] >= inner[:, 1] - 1e-12)

@@ -73,7 +73,7 @@ def test_true_theta_inside_exact_intervals(seed, deta, two_level):
     assert res.contains(theta), (res.bounds, theta)
     assert_contains(res.bounds, witnesses(res), what="exact bounds")
     # the exact intervals lie in the OBBT root box, itself inside the LP intervals
-    lp = res.extra["lp"].bounds
+    lp = res.lp.bounds
     assert np.all(res.bounds[:, 0] >= lp[:, 0] - 1e-12)
     assert np.all(res.bounds[:, 1] <= lp[:, 1] + 1e-12)
     assert np.sum(res.width) < np.sum(lp[:, 1] - lp[:, 0])  # tighter than the LP
@@ -91,7 +91,7 @@ def test_witnesses_satisfy_every_constraint(seed, deta, two_level):
         assert w is not None and w.shape == (pr.p,)
         assert check_theta(pr, w).feasible
         # recompute (22.34) directly with the witness noise
-        eta, dxv = info.extra["eta"], info.extra["dx"]
+        eta, dxv = info.point.eta, info.point.dx
         assert eta.shape == (pr.N,) and dxv.shape == (pr.n_groups,)
         assert np.all(np.abs(eta) <= pr.deta)
         assert np.all(np.abs(dxv) <= pr.dx_group)
@@ -102,8 +102,8 @@ def test_witnesses_satisfy_every_constraint(seed, deta, two_level):
         assert abs(b.sum() - pr.gain * (1 + w[: pr.na].sum())) <= 1e-9
         assert np.all(w >= pr.theta_box[:, 0]) and np.all(w <= pr.theta_box[:, 1])
         # the value, the bound and the certified gap are consistent
-        v = info.extra["value"]
-        assert v == w[k] == res.extra["inner"][k, e]
+        v = info.inner
+        assert v == w[k] == res.inner[k, e]
         assert info.gap is not None and 0.0 <= info.gap <= TOL * max(1.0, abs(v)) + 1e-12
         if info.sense == "min":
             assert info.bound <= v <= info.bound + info.gap + 1e-12
@@ -118,7 +118,7 @@ def test_exact_contains_sampled_feasible_points(seed, deta, two_level):
     pts = sampled_feasible(pr, res, np.random.default_rng(seed))
     assert len(pts) >= 10
     assert_contains(res.bounds, np.vstack([pts, theta]), what="exact bounds")
-    assert_contains(res.extra["lp"].bounds, pts, what="LP bounds")
+    assert_contains(res.lp.bounds, pts, what="LP bounds")
 
 
 def test_two_level_exact_intervals_inside_independent_ones():
@@ -157,7 +157,7 @@ def test_node_and_time_limits_return_valid_outer_bounds(limit):
 
 def test_theta_box_argument():
     pr, theta, full = _case(1, 0.05, False)
-    lp = full.extra["lp"].bounds
+    lp = full.lp.bounds
     loose = lp + np.array([-0.5, 0.5])
     res = exact_bounds(pr, tol=TOL, theta_box=loose)
     assert res.contains(theta)
@@ -308,7 +308,7 @@ def test_reduced_cost_tightening_cuts_only_parts_above_the_target(k, sense):
     from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
 
     pr, _ = make_eiv_problem(N=30, deta=0.1, seed=4)
-    box = lp_bounds(pr).bounds
+    box = lp_bounds(pr).bounds.copy()  # results are read-only
     relax = McCormickRelaxation(pr, box)
     c = np.zeros(relax.ncol)
     c[k] = sense

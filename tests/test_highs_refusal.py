@@ -83,7 +83,7 @@ def test_refused_node_lps_keep_their_parents_certified_bound(monkeypatch):
     res = exact_bounds(pr, tol=1e-3, max_nodes=400)
     assert state["refused"] > 0
     assert _inside(res.bounds, theta), res.bounds
-    lp = res.extra["lp"].bounds
+    lp = res.lp.bounds
     assert np.all(res.bounds[:, 0] >= lp[:, 0]) and np.all(res.bounds[:, 1] <= lp[:, 1])
     # every point verified feasible without refusals (independent LP: inside the error
     # bounds) lies inside the bounds computed with them
@@ -198,7 +198,7 @@ def test_exact_fit_on_small_scale_records_noise_at_the_bound(case):
     assert unit_scale(pr) != 1.0  # the case the exact method rescales internally
     for info in est.bound_info_:
         assert "could not be solved" not in info.message
-        eta, dxv = info.extra["eta"], info.extra["dx"]
+        eta, dxv = info.point.eta, info.point.dx
         assert np.all(np.abs(eta) <= pr.deta) and np.all(np.abs(dxv) <= pr.dx_group)
         assert check_theta(pr, info.witness, witness=(eta, dxv)).feasible
 

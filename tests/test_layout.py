@@ -16,8 +16,8 @@ PKG = Path(__file__).resolve().parents[1] / "hammerbound"
 
 # bottom to top; a module may import its own layer and the layers below it
 LAYERS = [
-    {"exceptions", "tolerances", "_compat", "data"},
-    {"systems", "solvers", "tables", "plotting", "timeseries"},
+    {"exceptions", "tolerances", "_compat", "data", "status"},
+    {"systems", "solvers", "tables", "plotting", "timeseries", "results"},
     {"relaxations"},
     {"modelset"},
     {"stage1", "stage2"},

@@ -49,7 +49,7 @@ def _start(kind, seed):
     pr = _problem(kind, seed)
     res = _exact(kind, seed)
     pool = _Pool(pr)
-    for th in [res.extra["inner"].mean(axis=1), *[i.witness for i in res.infos]]:
+    for th in [res.inner.mean(axis=1), *[i.witness for i in res.infos]]:
         if np.all(np.isfinite(th)) and pool.add(th) is not None:
             return pr, pool, pool.points[-1], res
     raise AssertionError("no verified start")
@@ -76,7 +76,7 @@ def test_linearised_set_holds_the_verified_point():
 @pytest.mark.parametrize("kind,seed", [("two-level", 0), ("two-level", 1), ("independent", 2)])
 def test_improve_walks_to_the_exact_ends_with_verified_points(kind, seed):
     pr, pool, start, res = _start(kind, seed)
-    box = res.extra["root_box"]
+    box = res.root_box
     for k in range(pr.p):
         for sense in (1.0, -1.0):
             pt = improve(pool, start, k, sense, box, 0.05 * TOL)
@@ -91,13 +91,13 @@ def test_improve_walks_to_the_exact_ends_with_verified_points(kind, seed):
 
 def test_improve_respects_the_box_and_the_time_limit():
     pr, pool, start, res = _start("two-level", 1)
-    box = res.extra["root_box"].copy()
+    box = res.root_box.copy()
     # a box that ends just below the start in b1: nothing better inside it
     box[2, 0] = start.theta[2]
     pt = improve(pool, start, 2, 1.0, box, 0.05 * TOL)
     assert pt.theta[2] >= box[2, 0] - 1e-12
     # stop_at in the past: no step at all
-    assert improve(pool, start, 2, -1.0, res.extra["root_box"], 0.0, stop_at=0.0) is start
+    assert improve(pool, start, 2, -1.0, res.root_box, 0.0, stop_at=0.0) is start
 
 
 @pytest.mark.parametrize("kind,seed", [("two-level", 0), ("independent", 2)])
@@ -147,7 +147,7 @@ def test_restore_finds_the_single_point_of_a_set_at_the_noise_bound(seed):
         assert np.allclose(info.witness, truth, atol=1e-6)
     assert np.all(truth >= res.bounds[:, 0] - 1e-12) and np.all(truth <= res.bounds[:, 1] + 1e-12)
     # restore on its own, from the root box centre with zero errors (not a feasible point)
-    box = res.extra["root_box"]
+    box = res.root_box
     pool = _Pool(pr)
     pt = restore(pool, [(box.mean(axis=1), np.zeros(pr.N), np.zeros(pr.n_groups))], box)
     assert pt is not None and _inside(pr, pt.theta)

@@ -124,27 +124,27 @@ def test_lp_contains_every_verified_feasible_point(seed, deta, two_level):
     res = lp_bounds(pr)
     assert_contains(res.bounds, pts, what="LP intervals")
     # every point lies in (at least) one of the reported orthant polytopes
-    polys = res.extra["polytopes"]
-    assert 1 <= len(polys) == res.extra["n_feasible_orthants"] <= res.extra["n_orthants"]
+    polys = res.polytopes
+    assert 1 <= len(polys) == res.details.n_feasible_orthants <= res.details.n_orthants
     for th in pts:
-        slack = [np.max(P["A"] @ th - P["b"]) for P in polys]
+        slack = [np.max(P.A @ th - P.b) for P in polys]
         assert min(slack) <= 1e-7, (th, slack)
 
 
 def test_lp_bounds_match_the_reported_polytopes():
-    """Re-optimise over extra['polytopes'] with scipy: the bounds are outer and tight."""
+    """Re-optimise over the reported polytopes with scipy: the bounds are outer and tight."""
     pr, _ = make_eiv_problem(N=30, deta=0.1, seed=11)
     res = lp_bounds(pr)
     p = pr.p
     lo = np.full(p, np.inf)
     hi = np.full(p, -np.inf)
-    for P in res.extra["polytopes"]:
-        assert set(np.unique(P["signs"]).tolist()) <= {-1, 1}
+    for P in res.polytopes:
+        assert set(np.unique(P.signs).tolist()) <= {-1, 1}
         for k in range(p):
             c = np.zeros(p)
             c[k] = 1.0
             for s in (1.0, -1.0):
-                r = linprog(s * c, A_ub=P["A"], b_ub=P["b"], bounds=[(None, None)] * p,
+                r = linprog(s * c, A_ub=P.A, b_ub=P.b, bounds=[(None, None)] * p,
                             method="highs")
                 if r.status == 2:
                     continue

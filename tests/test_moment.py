@@ -98,8 +98,8 @@ ORDER1_CASES = [(0, 0.005, False), (1, 0.05, False), (2, 0.2, False), (3, 0.05, 
 def test_order1_contains_truth_and_every_verified_point(seed, deta, two_level):
     pr, theta, lp, ex, pts = _chapter(seed, deta, two_level)
     res = _order1(seed, deta, two_level)
-    assert res.method == "moment" and res.extra["order"] == 1
-    assert res.extra["solver"] == "clarabel" and res.extra["eliminated"] in res.param_names
+    assert res.method == "moment" and res.details.order == 1
+    assert res.details.solver == "clarabel" and res.details.eliminated in res.param_names
     assert res.contains(theta), (res.bounds, theta)
     assert all(i.certified for i in res.infos), [i.message for i in res.infos]
     assert_sound(res, pts, lp.bounds)
@@ -107,14 +107,14 @@ def test_order1_contains_truth_and_every_verified_point(seed, deta, two_level):
     assert np.sum(res.width) < np.sum(lp.width)
     for j, info in enumerate(res.infos):
         k, e = divmod(j, 2)
-        ex_ = info.extra
-        assert ex_["psd_correction"] >= 0 and ex_["residual_correction"] >= 0
+        cert = info.certificate
+        assert cert.psd_correction >= 0 and cert.residual_correction >= 0
         # the reported bound is the dual value minus the (non-negative) corrections, or
         # the box end when that is tighter
         if e == 0:
-            assert info.bound <= ex_["dual_value"] + 1e-12 or info.bound == lp.bounds[k, 0]
+            assert info.bound <= cert.dual_value + 1e-12 or info.bound == lp.bounds[k, 0]
         else:
-            assert info.bound >= ex_["dual_value"] - 1e-12 or info.bound == lp.bounds[k, 1]
+            assert info.bound >= cert.dual_value - 1e-12 or info.bound == lp.bounds[k, 1]
 
 
 def test_two_level_moment_intervals_inside_independent_ones():
@@ -140,7 +140,7 @@ def test_order2_is_sound_and_tighter_than_order1(two_level):
     assert all(check_theta(pr, t).feasible for t in pts)
     r1 = moment_bounds(pr, order=1, theta_box=lp.bounds)
     r2 = moment_bounds(pr, order=2, theta_box=lp.bounds)
-    assert r2.extra["order"] == 2 and r2.extra["n_moments"] > r1.extra["n_moments"]
+    assert r2.details.order == 2 and r2.details.n_moments > r1.details.n_moments
     for r in (r1, r2):
         assert r.contains(theta)
         assert all(i.certified for i in r.infos)

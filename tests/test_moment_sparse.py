@@ -53,7 +53,7 @@ def test_sparse_order2_equals_exact_on_the_chapter_model():
     ex = exact_bounds(pr, tol=1e-6)
     pts = feasible_points(pr, theta, ex, 4, n=20)
     res = moment_bounds(pr, order=2, theta_box=lp.bounds, n_jobs=2)
-    assert res.extra["basis"] == "sparse"
+    assert res.details.basis == "sparse"
     assert all(i.certified for i in res.infos), [i.message for i in res.infos]
     assert res.contains(theta)
     assert_sound(res, pts, lp.bounds)
@@ -72,7 +72,7 @@ def test_full_basis_kept_and_at_least_as_tight():
     assert all(check_theta(pr, t).feasible for t in pts)
     rs = moment_bounds(pr, order=2, theta_box=lp.bounds, basis="sparse")
     rf = moment_bounds(pr, order=2, theta_box=lp.bounds, basis="full")
-    assert rf.extra["basis"] == "full" and rf.extra["n_moments"] > rs.extra["n_moments"]
+    assert rf.details.basis == "full" and rf.details.n_moments > rs.details.n_moments
     for r in (rs, rf):
         assert all(i.certified for i in r.infos)
         assert r.contains(theta)

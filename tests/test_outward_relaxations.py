@@ -65,9 +65,12 @@ def test_crossing_bounds_are_reported_empty(monkeypatch):
     orig = lpmod.lp_bounds
 
     def crossing(*args, **kwargs):
+        import dataclasses
+
         res = orig(*args, **kwargs)
-        res.bounds[0] = [res.bounds[0, 1] + 0.1, res.bounds[0, 1]]
-        return res
+        bounds = res.bounds.copy()  # results are read-only: build a crossed one
+        bounds[0] = [bounds[0, 1] + 0.1, bounds[0, 1]]
+        return dataclasses.replace(res, bounds=bounds)
 
     monkeypatch.setattr(lpmod, "lp_bounds", crossing)
     pr = _problem()

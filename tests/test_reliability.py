@@ -126,7 +126,7 @@ def _check_coverage(case, N, linear_kw, inner_signal):
         f"bounds {ident.bounds_.tolist()}; " + _describe(case, N=N, kw=linear_kw,
                                                         inner=inner_signal))
     if linear_kw.get("method") == "exact":  # every witness is feasible, so inside too
-        inner = ident.linear_.feasible_set_.extra["inner"]
+        inner = ident.linear_.feasible_set_.inner
         ok = np.isnan(inner) | ((inner >= ident.theta_bounds_[:, [0]] - 1e-12)
                                 & (inner <= ident.theta_bounds_[:, [1]] + 1e-12))
         assert np.all(ok)

@@ -296,7 +296,7 @@ def test_moment_order1_clarabel_and_cvxopt_agree():
     box = lp_bounds(pr).bounds
     r_cl = moment_bounds(pr, order=1, theta_box=box, solver="clarabel")
     r_cv = moment_bounds(pr, order=1, theta_box=box, solver="cvxopt")
-    assert r_cv.extra["solver"] == "cvxopt"
+    assert r_cv.details.solver == "cvxopt"
     for r in (r_cl, r_cv):
         assert r.contains(theta)
         assert all(i.certified for i in r.infos)

@@ -88,7 +88,7 @@ def _lp_bounds(fs, D, relaxed=True):
 
 
 def _check_side(fs, D, gamma_side):
-    assert fs.extra["tolerance_factor"] == 1.0
+    assert fs.tolerance_factor == 1.0
     poly = fs.orthotope
     lp = _lp_bounds(fs, D, relaxed=True)
     exact = _lp_bounds(fs, D, relaxed=False)

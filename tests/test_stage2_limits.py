@@ -44,7 +44,7 @@ def test_time_limited_exact_keeps_the_lp_bound(box):
     x, y = chapter_record(300)
     theta_box = default_theta_box(2, 2, False) if box else None
     est, warns = _fit(x, y, time_limit=0.0, theta_box=theta_box)
-    lp = est.result_.extra["lp"].bounds
+    lp = est.result_.lp.bounds
     assert np.all(np.isfinite(est.bounds_))
     assert np.all(est.bounds_[:, 0] >= lp[:, 0]) and np.all(est.bounds_[:, 1] <= lp[:, 1])
     assert est.contains(THETA)
@@ -60,7 +60,7 @@ def test_time_limited_exact_keeps_the_lp_bound(box):
 def test_total_budget_zero_reports_the_lp_bounds_for_every_end():
     x, y = chapter_record(200)
     est, warns = _fit(x, y, total_time_limit=0.0)
-    lp = est.result_.extra["lp"].bounds
+    lp = est.result_.lp.bounds
     np.testing.assert_array_equal(est.bounds_, lp)
     assert all(i.status == "limit" and "total time budget" in i.message
                for i in est.bound_info_)

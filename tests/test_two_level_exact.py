@@ -106,7 +106,7 @@ def test_two_level_exact_sound_and_tight(seed, deta, at_bound):
         assert info.status == "optimal"
         assert min_error_scale(pr, info.witness) <= 1 + 1e-6
         # the stopping rule: gap <= tol * max(1, |value|), value = theta_k at the witness
-        assert info.gap <= TOL * max(1.0, abs(info.extra["value"])) * (1 + 1e-9)
+        assert info.gap <= TOL * max(1.0, abs(info.inner)) * (1 + 1e-9)
     # never wider than the polytopic LP bound
     lp = lp_bounds(pr).bounds
     assert np.all(res.bounds[:, 0] >= lp[:, 0]) and np.all(res.bounds[:, 1] <= lp[:, 1])

@@ -77,7 +77,7 @@ def test_exact_witnesses_need_no_widening(name):
     for info in res.infos:
         assert info.witness is not None
         assert error_scale(pr, info.witness) <= 1.0 + LP_ROUNDING, (name, info.param)
-        assert check_theta(pr, info.witness, witness=(info.extra["eta"], info.extra["dx"])).feasible
+        assert check_theta(pr, info.witness, witness=(info.point.eta, info.point.dx)).feasible
 
 
 def test_polish_moves_an_edge_witness_inside():

@@ -79,10 +79,10 @@ def _pair(seed=1, deta=0.05, N=50):
 
 def test_working_set_equals_full_lp_method_within_tolerance():
     pr, theta, full, ws = _pair()
-    assert full.extra["working_set"] is None and 0 < ws.extra["working_set"] <= pr.N
+    assert full.details.working_set is None and 0 < ws.details.working_set <= pr.N
     for f, w in zip(full.infos, ws.infos, strict=True):
         assert f.status == w.status == "optimal"
-        v = max(abs(f.extra["value"]), abs(w.extra["value"]))
+        v = max(abs(f.inner), abs(w.inner))
         tol = TOL * max(1.0, v)
         # both are certified outer bounds within tol of a verified value: they agree
         assert abs(f.bound - w.bound) <= tol + 1e-12, (f.param, f.sense, f.bound, w.bound)
@@ -99,7 +99,7 @@ def test_working_set_lp_relaxes_the_full_lp_scipy_check():
     """The working-set LP bound is <= the full McCormick LP (solved by scipy), and equal
     to it once every equation is in the set."""
     pr, _, full, _ = _pair()
-    box = full.extra["root_box"]
+    box = full.root_box
     fullr = McCormickRelaxation(pr, box)
     m = pr.equation_times.size
     ws = WorkingSetRelaxation(pr, box, np.arange(0, m, 7))
@@ -159,7 +159,7 @@ def test_noise_exactly_at_the_bound_truth_inside_working_set(seed):
     assert _own_feasible(pr, theta)
     for i in res.infos:
         assert i.status == "optimal" and _own_feasible(pr, i.witness)
-    lp = res.extra["lp"].bounds
+    lp = res.lp.bounds
     assert np.all(res.bounds[:, 0] >= lp[:, 0] - 1e-12)
     assert np.all(res.bounds[:, 1] <= lp[:, 1] + 1e-12)
 
@@ -168,7 +168,7 @@ def test_working_set_limits_give_valid_outer_bounds():
     pr, theta, full, _ = _pair()
     res = exact_bounds(pr, tol=TOL, working_set=True, max_nodes=1)
     assert res.contains(theta)
-    inner = full.extra["inner"]  # hull of the full method's verified witnesses
+    inner = full.inner  # hull of the full method's verified witnesses
     assert np.all(res.bounds[:, 0] <= inner[:, 0]) and np.all(res.bounds[:, 1] >= inner[:, 1])
     for i in res.infos:
         assert i.status in ("optimal", "limit") and i.gap is not None
@@ -205,9 +205,9 @@ def test_automatic_working_set_only_for_independent_input_errors():
     n = AUTO_MIN_EQUATIONS + 20
     shared, truth = make_two_level(0, N=n, deta=0.05)
     res = exact_bounds(shared, tol=1e-4, max_nodes=50)
-    assert res.extra["working_set"] is None
+    assert res.details.working_set is None
     assert np.all((res.bounds[:, 0] <= truth) & (truth <= res.bounds[:, 1]))
     indep, truth = make_eiv_problem(N=n, deta=0.05, dx=0.003, seed=1)
     res = exact_bounds(indep, tol=1e-4, max_nodes=50)
-    assert res.extra["working_set"] is not None
+    assert res.details.working_set is not None
     assert np.all((res.bounds[:, 0] <= truth) & (truth <= res.bounds[:, 1]))

@@ -42,6 +42,7 @@ from ..exceptions import ParameterValidationError
 from ..stage1.estimator import BacklashSetEstimator, InnerSignalBounds
 from ..stage2.estimator import LinearEIVSetEstimator
 from ..systems.experiments import CHAPTER_NOISE_LEVELS, CHAPTER_U_STAR, chapter_example
+from ..systems.models import GAMMA_NAMES
 
 __all__ = [
     "STAGE1_MODES",
@@ -60,7 +61,6 @@ __all__ = [
 STAGE1_MODES = ("experiment", "chapter")
 #: Seeds of the default ``hammerbound demo`` (a quick run; the benchmark uses 0-4).
 DEMO_SEEDS = (0, 1)
-GAMMA_NAMES = ("ml", "cl", "mr", "cr")
 THETA_NAMES = ("a1", "a2", "b1", "b2")
 INNER_NAMES = ("x(+u*)", "x(-u*)")
 _TABLE_OF_N = {100: "22.2", 300: "22.3"}

@@ -15,16 +15,30 @@ def _label(data, which):
     return f"{name} [{unit}]" if unit else name
 
 
-def plot_report(self, path=None, *, max_samples=None):
-    """Figure of a :class:`~.report.DiagnosisReport` (see its ``plot``)."""
+def _panels(axes):
     import matplotlib.pyplot as plt
 
+    if axes is None:
+        fig, axes = plt.subplots(
+            4, 1, figsize=(10, 10.5), gridspec_kw={"height_ratios": [1, 1.6, 1.6, 1.4]}
+        )
+        return fig, axes
+    axes = list(np.ravel(axes))
+    if len(axes) != 4:
+        from ..exceptions import ParameterValidationError
+
+        raise ParameterValidationError(
+            f"pass 4 axes (input, output, residuals, candidates); got {len(axes)}.")
+    return axes[0].figure, axes
+
+
+def plot_report(self, axes=None, *, max_samples=None):
+    """Figure of a :class:`~.report.DiagnosisReport` (see its ``plot``) in ``axes`` (4
+    Axes) or a new figure; returns the Figure."""
     n = self.y.size if max_samples is None else max(1, min(int(max_samples), self.y.size))
     t = np.arange(n)
     sl = slice(0, n)
-    fig, axes = plt.subplots(
-        4, 1, figsize=(10, 10.5), gridspec_kw={"height_ratios": [1, 1.6, 1.6, 1.4]}
-    )
+    fig, axes = _panels(axes)
     fig.suptitle(
         f"Discrepancy diagnosis - missing effect: {self.effect_label};  "
         f"gap {self.gap_before:.3g} -> "
@@ -89,8 +103,6 @@ def plot_report(self, path=None, *, max_samples=None):
                  "grey: inconsistent)", fontsize=9)
     ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, dpi=110)
     return fig
 
 

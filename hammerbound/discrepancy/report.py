@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._compat import warn_renamed
+from ..results import Result, jsonable, warn_plot_path
 
 if TYPE_CHECKING:
     from .model import RefinedModel
@@ -196,7 +197,7 @@ class Disagreement:
 
 
 @dataclass(frozen=True)
-class DiagnosisReport:
+class DiagnosisReport(Result):
     """Result of :func:`diagnose`.
 
     Attributes
@@ -358,7 +359,7 @@ class DiagnosisReport:
         """JSON-serialisable summary (no signals; NaN and inf become None)."""
         d = self.disagreement
         rm = self.refined_model
-        return _json_clean({
+        return jsonable({
             "effect": self.effect,
             "effect_label": self.effect_label,
             "effects_added": list(self.effects_added),
@@ -391,19 +392,21 @@ class DiagnosisReport:
             "message": self.message,
         })
 
-    def plot(self, path=None, *, max_samples: int | None = None):
+    def plot(self, ax=None, *, max_samples: int | None = None):
         """Figure: input, output and predictions, residuals with the noise band, candidates.
 
         Panels: (1) the input; (2) data, the model as given and the refined model;
         (3) the minimax residual before (original class, refitted) and after adding the
         effect, with the noise band ``+-output_bound`` - the gap is the largest excursion;
         (4) the minimax error of every candidate against the output bound and the gap
-        before (log scale).
+        before (log scale). :meth:`save` writes it to a file.
 
         Parameters
         ----------
-        path : str or path-like, optional
-            If given, the figure is also saved there (PNG recommended).
+        ax : sequence of 4 matplotlib Axes, optional
+            The panels to draw into (default: a new figure). A path here is the
+            deprecated ``plot(path)`` (removed in 0.3.0): the figure is drawn and saved
+            there, as ``save(path)`` does.
         max_samples : int, optional
             Show only the first ``max_samples`` samples in the time panels (long records).
 
@@ -411,28 +414,19 @@ class DiagnosisReport:
         -------
         matplotlib.figure.Figure
         """
+        import os
+
         from .plot import plot_report
 
-        return plot_report(self, path, max_samples=max_samples)
+        if isinstance(ax, (str, os.PathLike)):
+            warn_plot_path("DiagnosisReport")
+            fig = plot_report(self, None, max_samples=max_samples)
+            fig.savefig(ax, dpi=110)
+            return fig
+        return plot_report(self, ax, max_samples=max_samples)
 
 
 def _val(v) -> str:
     if isinstance(v, tuple):
         return ",".join(f"{x:.3g}" for x in v)
     return f"{v:.5g}"
-
-
-def _json_clean(obj):
-    if isinstance(obj, dict):
-        return {k: _json_clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_clean(v) for v in obj]
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if np.isfinite(obj) else None
-    return obj
-
-

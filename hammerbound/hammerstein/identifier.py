@@ -29,10 +29,12 @@ from sklearn.utils.validation import check_is_fitted
 from .._compat import is_given
 from ..data.validation import as_signal, as_theta, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
+from ..results import IntervalSet
 from ..stage1.estimator import BacklashSetEstimator
 from ..stage1.inner_signal import INNER_SIGNALS
 from ..stage2.estimator import LinearEIVSetEstimator
-from ..systems.models import Backlash, HammersteinSystem
+from ..stage2.linear_model import is_vector_like
+from ..systems.models import GAMMA_NAMES, Backlash, HammersteinSystem
 
 __all__ = ["HammersteinBacklashIdentifier"]
 
@@ -160,6 +162,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         Bounds on ``(a_1.., b_1..)``.
     bounds_ : ndarray (4 + p, 2)
         Both, stacked; names in :attr:`param_names_`.
+    intervals_ : IntervalSet
+        Every interval (backlash, then linear block) as one
+        :class:`~hammerbound.results.IntervalSet`: a status per end, ``contains``,
+        ``to_frame``, ``summary``, ``to_dict``, ``plot``.
     bound_info_ : tuple of BoundInfo
         Per interval end: status, certified bound, verified witness (one-record: of the
         backlash's ends too; two-stage: of the linear block's ends).
@@ -281,8 +287,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             self._fit_two_stage(bl, lin, data, steady_state, output_bound)
         else:
             self._fit_one_record(bl, lin, data, steady_state, output_bound)
-        self.bounds_ = np.vstack([self.gamma_bounds_, self.theta_bounds_])
-        self.param_names_ = ("ml", "cl", "mr", "cr") + tuple(self.linear_.param_names_)
+        self.bounds_ = np.array(self.intervals_.bounds)
+        self.param_names_ = self.intervals_.param_names
         self.dt_ = data.dt
         self.output_bound_ = output_bound
         self.n_features_in_ = 1
@@ -299,6 +305,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.gamma_bounds_ = bl.gamma_bounds_
         self.theta_bounds_ = lin.bounds_
         self.bound_info_ = tuple(lin.bound_info_)
+        self.intervals_ = IntervalSet.stack(bl.intervals_, lin.intervals_, method="two-stage")
         from ..tables import bound_text
 
         self.assumptions_ = (
@@ -322,10 +329,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                            steady_bound=None if steady is None else _steady_bound(bl),
                            output_bound=output_bound)
         self.one_record_ = f
-        pool = [i.extra.get("witness") for i in f.result.infos]
+        pool = [i.point for i in f.result.infos]
 
         def sampler(n, random_state):
-            return joint_samples(f.problem, f.result.extra["box"], pool, n, random_state)
+            return joint_samples(f.problem, f.result.root_box, pool, n, random_state)
 
         self.linear_ = LinearBlockView(
             f.problem, f.theta_bounds, f.result.infos[: 2 * f.problem.p], method=lin.method,
@@ -336,6 +343,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                                          sampler)
         self.gamma_bounds_, self.theta_bounds_ = f.gamma_bounds, f.theta_bounds
         self.bound_info_ = tuple(f.result.infos)
+        self.intervals_ = IntervalSet(GAMMA_NAMES + self.linear_.param_names_,
+                                      np.vstack([f.gamma_bounds, f.theta_bounds]),
+                                      infos=self.bound_info_, method="one-record")
         self.assumptions_ = f.assumptions
         self.system_ = None
         if np.all(np.isfinite(f.gamma_bounds)):
@@ -343,29 +353,18 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             self.system_ = _central_system(Backlash(ml, cl, mr, cr), self.linear_.A_,
                                            self.linear_.B_, data.dt)
 
-    def _status(self):
-        if self.procedure_ == "one-record":
-            from ..tables import bound_status
-
-            st = bound_status(self.param_names_, self.bound_info_)
-            return [("not identified" if not np.all(np.isfinite(b)) else s)
-                    for s, b in zip(st, self.bounds_, strict=True)]
-        return ["optimal"] * 4 + list(self.linear_._status())
-
     def to_frame(self):
         """All intervals (backlash, then linear block) as a table: parameter, lower,
         centre, upper, half_width, status. A pandas DataFrame when pandas is installed,
         else a numpy structured array with the same fields."""
         check_is_fitted(self, "bounds_")
-        from ..tables import interval_frame
-
-        return interval_frame(self.param_names_, self.bounds_, self._status())
+        return self.intervals_.to_frame()
 
     def summary(self) -> str:
         """Text summary: the procedure and its settings, the interval table (and, for one
         record, the assumptions the bounds rest on)."""
         check_is_fitted(self, "bounds_")
-        from ..tables import bound_text, interval_text
+        from ..tables import bound_text
 
         lin = self.linear_
         pr = lin.problem_
@@ -373,7 +372,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
                     f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")
-            table = interval_text(self.param_names_, self.bounds_, self._status(), title=head)
+            table = self.intervals_.summary(title=head)
             return table + "\nassumptions:\n" + "\n".join(f"  - {a}" for a in self.assumptions_)
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
@@ -383,17 +382,17 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "
                 f"bounds |dx_t| <= {bound_text(pr.input_bound)}; unit steady-state gain of "
                 "the linear block (22.8)")
-        return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
+        return self.intervals_.summary(title=head)
 
     @property
     def center_(self):
         check_is_fitted(self, "bounds_")
-        return self.bounds_.mean(axis=1)
+        return self.intervals_.center
 
     @property
     def radius_(self):
         check_is_fitted(self, "bounds_")
-        return 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
+        return self.intervals_.radius
 
     def contains(self, gamma, theta=None) -> bool:
         """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals.
@@ -409,9 +408,11 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             gamma = gamma.gamma
         if theta is None:
             raise DataValidationError("contains needs theta (or a HammersteinSystem).")
-        g = as_theta(gamma, 4, ("ml", "cl", "mr", "cr"), name="gamma")
-        in_gamma = np.all((g >= self.gamma_bounds_[:, 0]) & (g <= self.gamma_bounds_[:, 1]))
-        return bool(in_gamma) and self.linear_.contains(theta)
+        g = as_theta(gamma, 4, GAMMA_NAMES, name="gamma")
+        lin = self.linear_
+        th = as_theta(theta if is_vector_like(theta) else lin.theta_of(theta),
+                      len(lin.param_names_), lin.param_names_)
+        return self.intervals_.contains(np.concatenate([g, th]))
 
     def predict(self, X):
         """Output of the central model simulated on input ``X``.

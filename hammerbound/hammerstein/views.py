@@ -15,7 +15,9 @@ import numpy as np
 
 from ..data.validation import as_bound
 from ..modelset.estimator import ModelSetMixin
+from ..results import IntervalSet
 from ..stage2.linear_model import LinearModelMixin
+from ..systems.models import GAMMA_NAMES
 
 __all__ = ["BacklashBoxView", "JointSamples", "LinearBlockView", "joint_samples"]
 
@@ -31,11 +33,12 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
         self.steady_state_gain = float(problem.gain)
         self.method = method
         self.problem_ = problem
-        self.bounds_ = np.asarray(bounds, dtype=float)
-        self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
-        self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
-        self.param_names_ = tuple(problem.theta_names)
-        self.bound_info_ = tuple(infos)
+        self.intervals_ = IntervalSet(problem.theta_names, bounds, infos=infos, method=method)
+        self.bounds_ = np.array(self.intervals_.bounds)
+        self.center_ = self.intervals_.center
+        self.radius_ = self.intervals_.radius
+        self.param_names_ = self.intervals_.param_names
+        self.bound_info_ = self.intervals_.infos
         self.box_limited_ = ()
         self.dt_ = dt
         self.signal_names_ = names
@@ -69,8 +72,9 @@ class BacklashBoxView:
     """The backlash's certified intervals from the one-record path (read-only)."""
 
     def __init__(self, bounds, input_range, sampler):
-        self.gamma_bounds_ = np.asarray(bounds, dtype=float)
-        self.gamma_center_ = self.gamma_bounds_.mean(axis=1)
+        self.intervals_ = IntervalSet(GAMMA_NAMES, bounds, method="one-record")
+        self.gamma_bounds_ = np.array(self.intervals_.bounds)
+        self.gamma_center_ = self.intervals_.center
         self.input_range_ = tuple(float(v) for v in input_range)
         self._sampler = sampler
 

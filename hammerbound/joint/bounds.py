@@ -10,8 +10,9 @@
 
 The result is an :class:`~hammerbound.relaxations.IntervalResult` over
 ``[theta, m_l, c_l, m_r, c_r]`` whose every :class:`~hammerbound.relaxations.BoundInfo`
-carries the end's status, its verified witness (``extra["witness"]``: the
-:class:`~.problem.Witness`) and the gap between them.
+carries the end's status, its verified witness (``point``: the
+:class:`~.problem.Witness`) and the gap between them; the result's ``root_box`` is the OBBT
+box of every variable and ``pool`` the verified points found on the way.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import time
 import numpy as np
 
 from ..relaxations.result import BoundInfo, IntervalResult
+from ..status import RELAXATION
 from .local import restore
 from .problem import RecordProblem
 from .search import outer_leaves, search_end
@@ -52,12 +54,11 @@ def _info(name, sense, res, bound):
     return BoundInfo(name, "min" if sense > 0 else "max", float(bound),
                      solver_value=value, status=res.status, certified=True,
                      time=res.seconds, gap=None if w is None else abs(value - bound),
-                     witness=None if w is None else w.vector, nodes=res.nodes,
-                     extra={"witness": w})
+                     witness=None if w is None else w.vector, nodes=res.nodes, point=w)
 
 
 def _lp_infos(names, box):
-    return tuple(BoundInfo(n, s, float(box[i, j]), status="relaxation", certified=True)
+    return tuple(BoundInfo(n, s, float(box[i, j]), status=RELAXATION, certified=True)
                  for i, n in enumerate(names) for j, s in ((0, "min"), (1, "max")))
 
 
@@ -89,9 +90,9 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
                            np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]
     if method == "lp":
-        return IntervalResult(box[: problem.p + 4].copy(), _lp_infos(names, box), "lp",
-                              tuple(names), time.perf_counter() - t0,
-                              {"box": box, "leaves": tuple(leaves), "pool": ()})
+        return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
+                              infos=_lp_infos(names, box), method="lp",
+                              time=time.perf_counter() - t0, root_box=box)
     pool = _pool(problem, points)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
@@ -111,6 +112,5 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         else:
             bounds[k, 1] = min(bounds[k, 1], b)
         infos.append(_info(names[k], s, res, bounds[k, 0 if s > 0 else 1]))
-    return IntervalResult(bounds, tuple(infos), "exact", tuple(names),
-                          time.perf_counter() - t0,
-                          {"box": box, "leaves": tuple(leaves), "pool": tuple(pool)})
+    return IntervalResult(tuple(names), bounds, infos=tuple(infos), method="exact",
+                          time=time.perf_counter() - t0, root_box=box, pool=tuple(pool))

@@ -21,11 +21,10 @@ import numpy as np
 
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..relaxations.problem import EIVProblem, b_lags_of, check_theta
+from ..systems.models import GAMMA_NAMES
 from .modes import play
 
 __all__ = ["GAMMA_NAMES", "RecordProblem", "Witness", "verify_point"]
-
-GAMMA_NAMES = ("ml", "cl", "mr", "cr")
 
 
 @dataclass(frozen=True)

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..data.validation import as_signal
 from ..exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
+from ..results import Result, jsonable
 
 __all__ = ["BacklashInverse", "build_inverse"]
 
@@ -45,7 +46,7 @@ def _signal(v):
 
 
 @dataclass(frozen=True)
-class BacklashInverse:
+class BacklashInverse(Result):
     """Backlash-inverse compensator with a guaranteed residual error band.
 
     Attributes
@@ -143,8 +144,31 @@ class BacklashInverse:
         lo, hi = self.error_bounds(v, initial_error)
         return np.maximum(np.abs(lo), np.abs(hi))
 
+    def summary(self) -> str:
+        """The central backlash, the command range and the guaranteed error over it."""
+        v = np.linspace(self.v_range[0], self.v_range[1], 201)
+        lo, hi = self.error_bounds(v)
+        ml, cl, mr, cr = self.gamma
+        return (f"backlash inverse of ml={ml:.4g} cl={cl:.4g} mr={mr:.4g} cr={cr:.4g}, "
+                f"from x0 = {self.x0:g}\n"
+                f"commands v in [{self.v_range[0]:.4g}, {self.v_range[1]:.4g}], inputs u in "
+                f"[{self.u_range[0]:.4g}, {self.u_range[1]:.4g}]\n"
+                f"guaranteed residual x - v in [{lo.min():.4g}, {hi.max():.4g}] over the "
+                "command range (every feasible backlash)")
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable: ``gamma``, the ranges, ``x0``, the polygons' vertices and the
+        guaranteed error band on 201 commands across ``v_range``."""
+        v = np.linspace(self.v_range[0], self.v_range[1], 201)
+        lo, hi = self.error_bounds(v)
+        return jsonable({"gamma": self.gamma, "v_range": self.v_range, "x0": self.x0,
+                         "u_range": self.u_range, "left_vertices": self.left_vertices,
+                         "right_vertices": self.right_vertices,
+                         "error_band": {"v": v, "lower": lo, "upper": hi}})
+
     def plot(self, ax=None, **kwargs):
-        """Figure: backlash band and compensated characteristic (see ``modelset.plots``)."""
+        """Figure: backlash band and compensated characteristic (see ``modelset.plots``);
+        ``ax`` a pair of Axes or None; returns the Figure."""
         from .plots import plot_compensation
 
         return plot_compensation(self, ax=ax, **kwargs)

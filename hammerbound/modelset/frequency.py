@@ -42,6 +42,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..exceptions import DataValidationError, ParameterValidationError
+from ..results import Result, jsonable
 from .zonotope import Zonotopes, value_sets
 
 __all__ = ["FrequencyEnvelope", "frequency_envelope", "default_omega", "denominators_stable"]
@@ -79,7 +80,7 @@ def _lipschitz(lo, hi, lags, dt):
 
 
 @dataclass(frozen=True)
-class FrequencyEnvelope:
+class FrequencyEnvelope(Result):
     """Guaranteed bounds on ``G(e^{j w dt})`` for every parameter vector in a box.
 
     Attributes
@@ -178,8 +179,41 @@ class FrequencyEnvelope:
                           signal_units=self.signal_units)
         return env
 
+    def summary(self) -> str:
+        """Frequencies, the range of the magnitude bounds and where they are infinite or
+        the phase is unbounded."""
+        w, up = self.omega, self.mag_upper
+        fin = np.isfinite(up)
+        lines = [f"frequency-response envelope of {self.signal_names[1]}/{self.signal_names[0]}: "
+                 f"{w.size} frequencies in [{w[0]:.4g}, {w[-1]:.4g}] {self.frequency_unit}",
+                 f"|G| lower bound in [{self.mag_lower.min():.4g}, {self.mag_lower.max():.4g}]"]
+        if fin.any():
+            lines.append(f"|G| upper bound in [{up[fin].min():.4g}, {up[fin].max():.4g}]"
+                         + ("" if fin.all() else f"; infinite at {int((~fin).sum())} "
+                            "frequencies (some A of the box vanishes on the unit circle)"))
+        else:
+            lines.append("|G| upper bound infinite at every frequency")
+        nb = int((~self.phase_bounded).sum())
+        lines.append("phase bounded at every frequency" if nb == 0 else
+                     f"phase unbounded at {nb} frequencies")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable: ``omega``, the magnitude and phase bounds (``None`` where
+        infinite or unbounded), the central model's magnitude and phase, the units."""
+        return jsonable({"omega": self.omega, "dt": self.dt,
+                         "frequency_unit": self.frequency_unit,
+                         "signal_names": list(self.signal_names),
+                         "signal_units": list(self.signal_units),
+                         "mag_lower": self.mag_lower, "mag_upper": self.mag_upper,
+                         "phase_lower": self.phase_lower, "phase_upper": self.phase_upper,
+                         "phase_bounded": self.phase_bounded,
+                         "mag_central": self.mag_central,
+                         "phase_central": self.phase_central})
+
     def plot(self, ax=None, **kwargs):
-        """Bode plot of the envelope (see :func:`hammerbound.modelset.plots.plot_bode_envelope`)."""
+        """Bode plot of the envelope (see :func:`hammerbound.modelset.plots.plot_bode_envelope`);
+        ``ax`` a pair of Axes (magnitude, phase) or None; returns the Figure."""
         from .plots import plot_bode_envelope
 
         return plot_bode_envelope(self, ax=ax, **kwargs)

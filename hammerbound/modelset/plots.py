@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot_bode_envelope", "plot_compensation"]
+__all__ = ["plot_bode_envelope", "plot_compensation", "plot_weight"]
 
 
 def _axes(ax, n):
@@ -105,6 +105,28 @@ def plot_bode_envelope(env, ax=None, *, samples=None, max_samples=200, db=True,
         am.set_title(title, fontsize=9)
     am.legend(loc="best", fontsize=8)
     return fig
+
+
+def plot_weight(uw, ax=None, *, db=True):
+    """``|W|`` of an :class:`~hammerbound.modelset.UncertaintyWeight` over the exact
+    deviation bound on its fit grid (log frequency axis). Returns the Axes."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 3.5))
+    conv = _db if db else np.asarray
+    w = uw.omega
+    keep = w > 0  # log axis
+    ax.plot(w[keep], conv(uw.deviation[keep]), color="C0", lw=1.2,
+            label=f"exact {uw.kind} deviation bound")
+    ax.plot(w[keep], conv(uw.magnitude()[keep]), color="C3", lw=1.2,
+            label=f"|W| (order {uw.order}, certified)")
+    ax.set_xscale("log")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.set_xlabel(f"frequency [{uw.frequency_unit}]")
+    ax.set_ylabel("magnitude [dB]" if db else "magnitude")
+    ax.legend(loc="best", fontsize=8)
+    return ax
 
 
 def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):

@@ -49,12 +49,11 @@ A lower order wins ties, so the returned order can be lower than the one asked f
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..exceptions import ParameterValidationError, UnboundedSetError
 from .frequency import _lipschitz
+from .weight import UncertaintyWeight, WeightCertificate
 from .weight_shape import embed, fit_shape, magnitude, polynomial, start_from_roots
 from .zonotope import ROUND_RTOL, value_sets
 
@@ -219,25 +218,6 @@ class _ProofGrid:
             return 0.5 * (d["dev"][:-1] + d["dev"][1:]) + 0.5 * K * h
 
 
-@dataclass(frozen=True)
-class WeightCertificate:
-    """Proof that ``|W| >= deviation`` on every interval of a grid covering ``[0, pi/dt]``.
-
-    ``omega`` is the proof grid (uniform, with some intervals bisected), ``deviation``
-    the exact bound at its points, ``deviation_between[k]`` bounds the deviation on
-    ``[omega_k, omega_k+1]`` and ``weight_lower[k]`` bounds ``|W|`` from below there;
-    ``holds`` is ``all(weight_lower >= deviation_between)`` and ``min_ratio`` the smallest
-    ratio.
-    """
-
-    omega: np.ndarray
-    deviation: np.ndarray
-    deviation_between: np.ndarray
-    weight_lower: np.ndarray
-    holds: bool
-    min_ratio: float
-
-
 def _poly_abs(coefs, omega, dt):
     """``|P(e^{jw dt})|`` for ``P(z) = sum coefs[k] z^(n-k)``, its Lipschitz constant in
     ``w`` and an absolute rounding margin of the evaluation."""
@@ -303,54 +283,6 @@ def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
         raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
     grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid) if _grid is None else _grid
     return _certify(W, grid, _REFINE_FACTOR * int(n_grid))[0]
-
-
-@dataclass(frozen=True)
-class UncertaintyWeight:
-    """A certified uncertainty weight.
-
-    Attributes
-    ----------
-    W : control.TransferFunction
-        Stable, minimum-phase weight with the data's sampling time.
-    kind : {"multiplicative", "additive"}
-    central : control.TransferFunction
-        The central model ``G0`` the uncertainty is measured around.
-    omega, deviation : ndarray
-        Fit grid (in :attr:`frequency_unit`) and the exact deviation bound there.
-    certificate : WeightCertificate
-        The proof over all frequencies (``certificate.holds`` is always True for a
-        returned weight).
-    excess_db : float
-        The selection criterion: mean over-bound ``mean 20 log10(|W| / deviation)`` on
-        ``omega`` in dB (deviation floored at ``1e-6`` of its maximum); the smallest of
-        all certified candidates.
-    frequency_unit : str
-        Unit of ``omega`` and ``certificate.omega``: ``"rad/s"`` (rad per unit of the
-        sampling time) or ``"rad/sample"`` when no sampling time is known.
-    """
-
-    W: object
-    kind: str
-    central: object
-    omega: np.ndarray
-    deviation: np.ndarray
-    certificate: WeightCertificate
-    excess_db: float = float("nan")
-    frequency_unit: str = "rad/s"
-
-    @property
-    def order(self) -> int:
-        """Order of ``W`` (degree of its denominator)."""
-        return int(np.ravel(np.asarray(self.W.den[0][0])).size - 1)
-
-    @property
-    def poles(self):
-        return np.asarray(self.W.poles())
-
-    @property
-    def zeros(self):
-        return np.asarray(self.W.zeros())
 
 
 def _unbounded_message(kind):

@@ -8,7 +8,7 @@ from .exact.consistency import Consistency, consistency
 from .lp import lp_bounds
 from .moment import moment_bounds
 from .problem import EIVProblem, FeasibilityCheck, check_theta
-from .result import BoundInfo, IntervalResult
+from .result import BoundInfo, IntervalResult, IntervalSet
 
 __all__ = [
     "BoundInfo",
@@ -16,6 +16,7 @@ __all__ = [
     "EIVProblem",
     "FeasibilityCheck",
     "IntervalResult",
+    "IntervalSet",
     "check_theta",
     "consistency",
     "exact_bounds",

@@ -29,9 +29,10 @@ import scipy.sparse as sp
 
 from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
 from ..solvers.highs import HighsLP
+from ..status import BOX
 from ..tolerances import feasibility_tol
 from .problem import EIVProblem
-from .result import BoundInfo, IntervalResult
+from .result import BoundInfo, IntervalResult, LPDetails, Polytope
 
 __all__ = ["lp_bounds", "orthant_polytope"]
 
@@ -173,6 +174,18 @@ def box_limited_ends(bounds, box, names) -> list[tuple[int, str]]:
             for k, e in zip(*np.nonzero(touch), strict=True)]
 
 
+def end_statuses(names, infos, bounds, box) -> tuple:
+    """``(lower, upper)`` status per parameter: each end's solve status (from ``infos``),
+    :data:`~hammerbound.status.BOX` where the end coincides with the a priori ``box``."""
+    where = {n: k for k, n in enumerate(names)}
+    st = [[None, None] for _ in names]
+    for info in infos:
+        st[where[info.param]][0 if info.sense == "min" else 1] = info.status
+    for k, e in zip(*np.nonzero(touches_box(bounds, box)), strict=True):
+        st[k][e] = BOX
+    return tuple(tuple(pair) for pair in st)
+
+
 def raise_if_box_limited(bounds, box, names) -> None:
     """Raise :class:`UnboundedSetError` when some interval end coincides with the box."""
     ends = box_limited_ends(bounds, box, names)
@@ -198,10 +211,12 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
     -------
     IntervalResult
         ``method="lp"``; ``bounds`` (p, 2) are guaranteed to contain the intervals of the
-        (nonconvex) EIV set. ``extra["polytopes"]`` lists, for every feasible orthant, a
-        dict with ``signs`` (p,), ``A`` (k, p), ``b`` (k,) such that the orthant's part of
-        the outer set is ``{theta : A theta <= b}`` (the box, the orthant and the gain
-        equality are included as rows).
+        (nonconvex) EIV set; an end that coincides with ``theta_box`` has status
+        :data:`~hammerbound.status.BOX`. ``polytopes`` lists, for every feasible orthant, a
+        :class:`~hammerbound.relaxations.result.Polytope` with ``signs`` (p,), ``A`` (k, p),
+        ``b`` (k,) such that the orthant's part of the outer set is ``{theta : A theta <= b}``
+        (the box, the orthant and the gain equality are included as rows); ``details``
+        counts the orthants (:class:`~hammerbound.relaxations.result.LPDetails`).
 
     Raises
     ------
@@ -264,10 +279,11 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
         eye = np.eye(p)
         A = np.vstack([A_ub, A_eq, -A_eq, eye, -eye])
         b = np.concatenate([b_ub, b_eq, -b_eq, box[:, 1], -box[:, 0]])
-        polys.append({"signs": s, "A": A, "b": b})
+        polys.append(Polytope(s, A, b))
     if check_box:
         raise_if_box_limited(bounds, problem.theta_box, names)
     return IntervalResult(
-        bounds=bounds, infos=tuple(infos), method="lp", param_names=tuple(names), time=elapsed,
-        extra={"polytopes": polys, "n_orthants": len(orthants), "n_feasible_orthants": len(feas)},
+        param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="lp", time=elapsed,
+        status=end_statuses(names, infos, bounds, problem.theta_box), polytopes=tuple(polys),
+        details=LPDetails(len(orthants), len(feas)),
     )

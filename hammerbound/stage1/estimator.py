@@ -22,6 +22,8 @@ from ..exceptions import (
     ResultOneViolationError,
     UnboundedSetError,
 )
+from ..results import IntervalSet
+from ..systems.models import GAMMA_NAMES
 from .feasible_set import Edge, PolygonFeasibleSet
 from .inner_signal import InnerSignalBounds
 from .side_polygon import SideProblem
@@ -62,6 +64,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         Tight intervals (22.24) of ``[m_l, c_l, m_r, c_r]``.
     gamma_center_, gamma_radius_ : ndarray of shape (4,)
         Central estimate and uncertainty bound (22.23).
+    intervals_ : IntervalSet
+        The tight intervals (22.24) as an :class:`~hammerbound.results.IntervalSet` over
+        ``("ml", "cl", "mr", "cr")``: table, ``contains``, ``to_dict``, ``plot``.
     output_bound_ : ndarray of shape (n_samples,)
         The output error bound of every steady-state sample the sets rest on.
     n_features_in_ : int
@@ -162,9 +167,11 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         self.left_, self.right_ = sets["left"], sets["right"]
         self.output_bound_ = deta
         self.input_range_ = (float(X.min()), float(X.max()))
-        self.gamma_bounds_ = np.vstack([self.left_.orthotope, self.right_.orthotope])
-        self.gamma_center_ = self.gamma_bounds_.mean(axis=1)
-        self.gamma_radius_ = 0.5 * (self.gamma_bounds_[:, 1] - self.gamma_bounds_[:, 0])
+        self.intervals_ = IntervalSet(GAMMA_NAMES, np.vstack(
+            [self.left_.orthotope, self.right_.orthotope]), method=self.method)
+        self.gamma_bounds_ = np.array(self.intervals_.bounds)
+        self.gamma_center_ = self.intervals_.center
+        self.gamma_radius_ = self.intervals_.radius
         return self
 
     def _fit_side(self, side, u, y, deta, idx):
@@ -181,10 +188,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         res = problem.solve(self.method)
         if res is None:
             raise self._empty_error(side, problem)
-        fs = _make_polygon_set(side, sigma, res.verts_mb, res.edge_cons, res.constraints)
-        fs.extra.update({"tolerance_factor": res.factor,
-                         "max_tolerance": float(res.factor * problem.tol.max())})
-        return fs
+        return _make_polygon_set(side, sigma, res.verts_mb, res.edge_cons, res.constraints,
+                                 method=self.method, tolerance_factor=res.factor,
+                                 max_tolerance=float(res.factor * problem.tol.max()))
 
     def _empty_error(self, side, problem):
         # the smallest prefix (in the caller's order) whose relaxed set is certified empty
@@ -324,14 +330,12 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         is installed, else a numpy structured array): parameter, lower, centre, upper,
         half_width, status."""
         check_is_fitted(self, "left_")
-        from ..tables import interval_frame
-
-        return interval_frame(("ml", "cl", "mr", "cr"), self.gamma_bounds_)
+        return self.intervals_.to_frame()
 
     def summary(self) -> str:
         """Text summary: the exact feasible sets and the tight intervals (22.24)."""
         check_is_fitted(self, "left_")
-        from ..tables import bound_text, interval_text
+        from ..tables import bound_text
 
         head = (f"BacklashSetEstimator: exact feasible sets, left {len(self.left_.vertices)} "
                 f"and right {len(self.right_.vertices)} vertices, inputs in "
@@ -339,7 +343,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
                 f"assumptions: output error bound |eta| <= {bound_text(self.output_bound_)}; "
                 "the steady-state samples are at steady state; unit steady-state gain of the "
                 "linear block (22.8)")
-        return interval_text(("ml", "cl", "mr", "cr"), self.gamma_bounds_, title=head)
+        return self.intervals_.summary(title=head)
 
     # ------------------------------------------------------------------ model set (issue 16)
     def sample(self, n, random_state=None):
@@ -401,7 +405,7 @@ def _column(X, name):
     return X
 
 
-def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons) -> PolygonFeasibleSet:
+def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons, **fields) -> PolygonFeasibleSet:
     n = len(verts_mb)
     edges = tuple(Edge(edge_cons[k], verts_mb[k], verts_mb[(k + 1) % n]) for k in range(n))
     m, beta = verts_mb[:, 0], verts_mb[:, 1]
@@ -417,5 +421,5 @@ def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons) -> PolygonFeasible
     return PolygonFeasibleSet(
         param_names=names, orthotope=orth, exact=True, vertices=np.column_stack([m, c]),
         edges=edges, side=side, sigma=sigma, vertices_mb=np.asarray(verts_mb),
-        constraints=tuple(k for k in cons if k.sign != "box"),
+        constraints=tuple(k for k in cons if k.sign != "box"), **fields,
     )

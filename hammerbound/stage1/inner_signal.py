@@ -24,6 +24,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..data.validation import as_real
 from ..exceptions import DataValidationError, ParameterValidationError
+from ..results import IntervalSet
 
 __all__ = ["INNER_SIGNALS", "InnerSignalBounds", "Stage2Record", "read_prbs_level"]
 
@@ -106,14 +107,21 @@ class InnerSignalBounds:
     slope_max: float | None = None
 
     @property
+    def intervals(self) -> IntervalSet:
+        """The two inner levels as an :class:`~hammerbound.results.IntervalSet`:
+        ``x(+u*)`` = ``x_hi`` and ``x(-u*)`` = ``x_lo``."""
+        return IntervalSet(("x(+u*)", "x(-u*)"), [self.x_hi, self.x_lo],
+                           method="inner-signal bounds")
+
+    @property
     def center(self) -> tuple[float, float]:
         """Central values ``(xbar^c, x_^c)`` (22.29)-(22.30)."""
-        return 0.5 * (self.x_hi[0] + self.x_hi[1]), 0.5 * (self.x_lo[0] + self.x_lo[1])
+        return tuple(float(v) for v in self.intervals.center)
 
     @property
     def radius(self) -> tuple[float, float]:
         """Uncertainty bounds ``(Delta xbar, Delta x_)`` (22.29)-(22.30)."""
-        return 0.5 * (self.x_hi[1] - self.x_hi[0]), 0.5 * (self.x_lo[1] - self.x_lo[0])
+        return tuple(float(v) for v in self.intervals.radius)
 
     def transform(self, u) -> tuple[np.ndarray, np.ndarray]:
         """Central inner signal ``x^c_t`` and radius ``Delta x_t`` for a PRBS ``u`` (22.31)-(22.33)."""

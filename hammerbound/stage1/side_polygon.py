@@ -32,7 +32,7 @@ import numpy as np
 
 from ..exceptions import SolverError, UnboundedSetError
 from ..tolerances import ARITHMETIC_RTOL, feasibility_tol
-from .feasible_set import (
+from .halfplanes import (
     Constraint,
     algorithm_22_1,
     edge_support,

@@ -40,6 +40,7 @@ from ..exceptions import (
 from ..modelset.estimator import ModelSetMixin
 from ..relaxations.problem import EIVProblem
 from ..stage1.feasible_set import FeasibleSet
+from ..status import BOX
 from ..tables import bound_text
 from .linear_model import LinearModelMixin
 from .orders import check_orders
@@ -145,8 +146,14 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     bound_info_ : tuple of BoundInfo
         Per bound: status, objective, certificate, time, iterations (and witness/gap for
         the exact method).
+    intervals_ : IntervalResult
+        The one result behind the attributes above: an
+        :class:`~hammerbound.results.IntervalSet` (names, bounds, a status per end --
+        :data:`~hammerbound.status.BOX` for ``box_limited_`` --, ``infos``, ``center``,
+        ``radius``, ``contains``, ``to_frame``, ``summary``, ``to_dict``, ``plot``) with
+        the method's typed details (``lp``, ``polytopes``, ``inner``, ``details``).
     result_ : IntervalResult
-        The raw result of the method.
+        The same object as ``intervals_`` (its older name).
     problem_ : EIVProblem
         The problem (22.34) that was bounded.
     output_bound_ : ndarray of shape (N,)
@@ -308,8 +315,9 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         """Decide what a bound that coincides with the a priori box means.
 
         The default box on ``a`` (``|a_i| <= binom(na, i)``) contains every *stable* ``A``
-        (assumption A1), so a bound set by it is still guaranteed under A1; it is recorded
-        in ``res.extra["box_limited"]``. The same holds for a user-supplied ``theta_box``
+        (assumption A1), so a bound set by it is still guaranteed under A1; the result
+        gives it the status :data:`~hammerbound.status.BOX`. The same holds for a
+        user-supplied ``theta_box``
         (the user's prior). The default box on ``b`` (``|b_j| <= 1e4``) is arbitrary:
         touching it means the data do not bound that coefficient, which is an error.
         """
@@ -317,7 +325,6 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         from ..relaxations.lp import box_limited_ends
 
         ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
-        res.extra["box_limited"] = [lab for _, lab in ends]
         if self.theta_box is None:
             bad = [lab for k, lab in ends if k >= problem.na]
             if bad:
@@ -443,12 +450,11 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                     problem, self.relaxation_order, basis=self.relaxation_basis))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
+                # the LP bounds are the a priori box and the fallback; kept as res.lp
                 res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
                                     solver_options=self.solver_options, n_jobs=self.n_jobs,
-                                    theta_box=lp.bounds, on_failure=self.on_failure,
-                                    fallback=lp.bounds, max_work=float("inf"),
-                                    basis=self.relaxation_basis)
-                res.extra["lp"] = lp
+                                    on_failure=self.on_failure, max_work=float("inf"),
+                                    basis=self.relaxation_basis, lp=lp)
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
             hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))
                             if h)
@@ -478,20 +484,17 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 f"no parameters explain the data within the bounds: the certified bounds on "
                 f"{name} cross ({self.bounds_[k, 0]:.6g} > {self.bounds_[k, 1]:.6g}). "
                 f"{self._assumptions(problem)}")
-        # halves first: no overflow for bounds near the float range
-        self.center_ = 0.5 * self.bounds_[:, 0] + 0.5 * self.bounds_[:, 1]
-        self.radius_ = 0.5 * (self.bounds_[:, 1] - self.bounds_[:, 0])
+        self.intervals_ = res
+        self.center_ = res.center
+        self.radius_ = res.radius
         self.coef_ = self.center_
-        self.param_names_ = tuple(problem.param_names)
-        self.bound_info_ = tuple(res.infos)
-        polys = tuple((d["A"], d["b"]) for d in res.extra.get("polytopes", ()))
-        self.box_limited_ = tuple(res.extra.get("box_limited", ())) or tuple(
-            res.extra["lp"].extra.get("box_limited", ()) if "lp" in res.extra else ())
-        extra = {"method": self.method}
-        if self.method == "exact":
-            extra["inner"] = res.extra.get("inner")
-        self.feasible_set_ = FeasibleSet(self.param_names_, self.bounds_.copy(), exact=False,
-                                         polytopes=polys, extra=extra)
+        self.param_names_ = res.param_names
+        self.bound_info_ = res.infos
+        self.box_limited_ = res.ends_with(BOX)
+        self.feasible_set_ = FeasibleSet(
+            self.param_names_, res.bounds, exact=False, method=self.method,
+            polytopes=tuple((q.A, q.b) for q in res.polytopes), inner=res.inner,
+            intervals=res)
         self.n_features_in_ = 1
         self.dt_ = None if data is None else data.dt
         self.signal_names_ = ("u", "y") if data is None else (data.input_name,

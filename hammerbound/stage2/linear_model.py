@@ -2,9 +2,9 @@
 membership test, predictions, score and guaranteed one-step band.
 
 :class:`LinearModelMixin` is mixed into :class:`~hammerbound.LinearEIVSetEstimator`; it
-reads the fitted attributes (``bounds_``, ``center_``, ``param_names_``, ``problem_``,
-``bound_info_``, ``box_limited_``, ``dt_``, ``signal_names_``) and the structure (``na``,
-``nb``, ``_lags()``, ``_nk()``, ``_output_bound()``).
+reads the fitted attributes (``intervals_``, ``bounds_``, ``center_``, ``param_names_``,
+``problem_``, ``dt_``, ``signal_names_``) and the structure (``na``, ``nb``, ``_lags()``,
+``_nk()``, ``_output_bound()``).
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..data.iodata import signal_label
 from ..data.validation import as_bound, as_signal, as_theta
 from ..exceptions import DataValidationError, ParameterValidationError
+from ..results import OutputEnvelope
 
 __all__ = ["LinearModelMixin", "is_vector_like"]
 
@@ -38,9 +39,7 @@ class LinearModelMixin:
 
     # ------------------------------------------------------------------ tables
     def _status(self):
-        from ..tables import bound_status
-
-        return bound_status(self.param_names_, self.bound_info_, self.box_limited_)
+        return self.intervals_.status_text()
 
     def to_frame(self):
         """The intervals as a table: parameter, lower, centre, upper, half_width, status.
@@ -50,15 +49,11 @@ class LinearModelMixin:
         priori box or by a solver/time limit (still guaranteed).
         """
         check_is_fitted(self, "bounds_")
-        from ..tables import interval_frame
-
-        return interval_frame(self.param_names_, self.bounds_, self._status())
+        return self.intervals_.to_frame()
 
     def summary(self) -> str:
         """Text summary: model structure, assumptions, data and the interval table."""
         check_is_fitted(self, "bounds_")
-        from ..tables import interval_text
-
         pr = self.problem_
         g = self.steady_state_gain
         dt = getattr(self, "dt_", None)
@@ -72,7 +67,7 @@ class LinearModelMixin:
         if sig:
             head += f"\nsignals: {sig}"
         head += "\nassumptions: " + "; ".join(self._assumption_list(pr))
-        return interval_text(self.param_names_, self.bounds_, self._status(), title=head)
+        return self.intervals_.summary(title=head)
 
     # ------------------------------------------------------------------ model
     def _polys(self, theta=None):
@@ -156,13 +151,15 @@ class LinearModelMixin:
         """Whether ``theta`` lies in every reported interval.
 
         ``theta`` is a vector in :attr:`param_names_` order, a discrete
-        ``control.TransferFunction`` or a pair ``(A, B)`` (see :meth:`theta_of`).
+        ``control.TransferFunction`` or a pair ``(A, B)`` (see :meth:`theta_of`). ``tol``
+        widens each end by ``tol max(1, |end|)``
+        (:meth:`hammerbound.results.IntervalSet.contains`).
         """
         check_is_fitted(self, "bounds_")
         if not is_vector_like(theta):
             theta = self.theta_of(theta)
         th = as_theta(theta, self.bounds_.shape[0], self.param_names_)
-        return bool(np.all(th >= self.bounds_[:, 0] - tol) and np.all(th <= self.bounds_[:, 1] + tol))
+        return self.intervals_.contains(th, tol)
 
     def _n0(self) -> int:
         return max(self.na, int(self._lags()[-1]))
@@ -219,7 +216,9 @@ class LinearModelMixin:
 
         Returns
         -------
-        lower, upper : ndarray of shape (N,)
+        OutputEnvelope
+            ``lower``, ``upper`` of shape (N,) with the measured ``y`` and its bound; it
+            unpacks as before: ``lower, upper = est.one_step_envelope(X, y)``.
         """
         check_is_fitted(self, "bounds_")
         x = as_signal("X", X)
@@ -258,4 +257,4 @@ class LinearModelMixin:
         eps = 8 * np.finfo(float).eps * (np.abs(acc_lo) + np.abs(acc_hi) + 1)
         lo[t] = acc_lo - eps
         hi[t] = acc_hi + eps
-        return lo, hi
+        return OutputEnvelope(lo, hi, y=yy, output_bound=deta)

@@ -16,6 +16,7 @@ from .experiments import (
     uniform_noise,
 )
 from .models import (
+    GAMMA_NAMES,
     Backlash,
     HammersteinSystem,
     as_polynomials,
@@ -25,6 +26,7 @@ from .models import (
 )
 
 __all__ = [
+    "GAMMA_NAMES",
     "Backlash",
     "ChapterExample",
     "EIVExample",

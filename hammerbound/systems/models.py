@@ -25,6 +25,7 @@ from ..data.validation import as_signal
 from ..exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
 
 __all__ = [
+    "GAMMA_NAMES",
     "Backlash",
     "HammersteinSystem",
     "as_polynomials",
@@ -32,6 +33,10 @@ __all__ = [
     "simulate_backlash",
     "steady_state_gain",
 ]
+
+
+#: Names of the backlash parameters ``gamma = [m_l, c_l, m_r, c_r]`` (22.6) in every table.
+GAMMA_NAMES = ("ml", "cl", "mr", "cr")
 
 
 @dataclass(frozen=True)

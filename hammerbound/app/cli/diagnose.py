@@ -148,13 +148,10 @@ def _plot(rep, path):
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     try:
-        fig = rep.plot(path)
+        rep.save(path)
     except OSError as exc:
         raise UsageError(f"cannot write the figure to {path}: {exc}") from None
-    plt.close(fig)
 
 
 def diagnose_cli_main(argv=None) -> int:

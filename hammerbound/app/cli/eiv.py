@@ -53,7 +53,6 @@ def input_bound_assumption(value):
 def run(args) -> int:
     from ...data.iodata import IOData
     from ...stage2.estimator import LinearEIVSetEstimator
-    from ...tables import bound_status, interval_records
 
     output_bound = require(args.output_bound, "--output-bound",
                            "the bound on the output errors that the intervals rest on, "
@@ -71,8 +70,7 @@ def run(args) -> int:
         out = {
             "parameters": list(est.param_names_),
             "lower": est.bounds_[:, 0].tolist(), "upper": est.bounds_[:, 1].tolist(),
-            "intervals": interval_records(est.param_names_, est.bounds_, bound_status(
-                est.param_names_, est.bound_info_, est.box_limited_)),
+            "intervals": est.intervals_.records(),
             "model": {"na": args.na, "nb": args.nb, "nk": est.problem_.nk,
                       "steady_state_gain": args.steady_state_gain, "method": args.method},
             "data": {"file": str(args.data), "N": data.N, "dt": data.dt,

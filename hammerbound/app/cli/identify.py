@@ -110,13 +110,10 @@ def _two_records(args) -> int:
 
 
 def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
-    from ...tables import interval_records
-
     pr = ident.linear_.problem_
     return {"parameters": list(ident.param_names_),
             "lower": ident.bounds_[:, 0].tolist(), "upper": ident.bounds_[:, 1].tolist(),
-            "intervals": interval_records(ident.param_names_, ident.bounds_,
-                                          ident.to_frame()["status"]),
+            "intervals": ident.intervals_.records(),
             "u_star": ident.u_star_,
             "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method,
                       "inner_signal": args.inner_signal},

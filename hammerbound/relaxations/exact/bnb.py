@@ -65,9 +65,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...exceptions import EmptyFeasibleSetError
-from ..lp import lp_bounds, raise_if_box_limited
+from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem, unit_scale
-from ..result import BoundInfo, IntervalResult
+from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
 from .local import improve, polish, restore, restore_near
 from .mccormick import shared_groups
 from .obbt import _limit_lp, _obbt, _relaxation, _solve
@@ -567,10 +567,12 @@ def exact_bounds(
     IntervalResult
         ``method="exact"``; ``bounds`` (p, 2) are guaranteed outer bounds of (22.36) and
         (22.37). Every :class:`BoundInfo` carries ``gap`` (bound to best verified value),
-        ``witness`` (verified-feasible theta, shape (p,)), ``nodes``, ``time``, and in
-        ``extra`` the witness ``eta`` (N,), ``dx`` (K,) and the ``value`` theta_k at it.
-        ``extra`` of the result holds the ``lp`` result, the OBBT ``root_box`` (p, 2)
-        and ``inner`` (p, 2), the hull of the witnesses.
+        ``witness`` (verified-feasible theta, shape (p,)), ``point`` (a
+        :class:`~hammerbound.relaxations.result.VerifiedPoint`: the witness with its ``eta``
+        (N,) and ``dx`` (K,)), ``inner`` (theta_k at the witness), ``nodes``, ``time``. The
+        result holds the ``lp`` result, the OBBT ``root_box`` (p, 2), ``inner`` (p, 2), the
+        hull of the witnesses, and ``details.working_set``; an end that coincides with
+        ``problem.theta_box`` has status ``BOX``.
 
     Raises
     ------
@@ -661,14 +663,15 @@ def exact_bounds(
             time=o.time, iterations=o.iterations,
             gap=max(float(value - o.bound), 0.0) if np.isfinite(value) else None,
             witness=None if wit is None else wit.theta.copy(), nodes=o.nodes, message=o.message,
-            extra={} if wit is None else {"eta": wit.eta / scale, "dx": wit.dx / scale,
-                                          "value": float(wit.theta[k])},
+            point=None if wit is None else VerifiedPoint(wit.theta.copy(), wit.eta / scale,
+                                                         wit.dx / scale),
+            inner=None if wit is None else float(wit.theta[k]),
         ))
     if check_box:
         raise_if_box_limited(bounds, problem.theta_box, names)
     return IntervalResult(
-        bounds=bounds, infos=tuple(infos), method="exact", param_names=tuple(names),
+        param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="exact",
         time=time.perf_counter() - t0,
-        extra={"lp": lp, "root_box": box, "inner": inner,
-               "working_set": None if ws is None else int(ws.size)},
+        status=end_statuses(names, infos, bounds, problem.theta_box), lp=lp, root_box=box,
+        inner=inner, details=ExactDetails(None if ws is None else int(ws.size)),
     )

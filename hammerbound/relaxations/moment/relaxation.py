@@ -40,7 +40,7 @@ from ...solvers.conic import (
     verified_lower_bound,
 )
 from ..problem import EIVProblem
-from ..result import BoundInfo, IntervalResult
+from ..result import BoundInfo, DualCertificate, IntervalResult, MomentDetails
 from .basis import (  # noqa: F401 - re-exported for compatibility
     BASES,
     _affine,
@@ -263,6 +263,7 @@ def moment_bounds(
     fallback=None,
     max_work: float | None = None,
     basis: str = "sparse",
+    lp: IntervalResult | None = None,
 ) -> IntervalResult:
     """Guaranteed parameter uncertainty intervals (22.35) from the sparse moment relaxation.
 
@@ -306,12 +307,19 @@ def moment_bounds(
         the one usable at the chapter's N = 100 (about 40x smaller PSD blocks); ``"full"``
         (every monomial of degree <= 2, Lasserre's dense-per-clique relaxation) is at
         least as tight and costs minutes already at N = 10-20.
+    lp : IntervalResult, optional
+        The polytopic LP result of ``problem`` (:func:`~hammerbound.relaxations.lp_bounds`)
+        when already computed: its bounds are then the a priori box and the fallback
+        (unless ``theta_box``/``fallback`` are given), and it is kept as ``result.lp``.
 
     Returns
     -------
     IntervalResult
         ``bounds`` shape ``(p, 2)``; ``infos`` holds ``2 p`` :class:`BoundInfo` (p0 min,
-        p0 max, ...); method ``"moment"``; ``extra`` has the relaxation size and build time.
+        p0 max, ...) with their dual ``certificate``; method ``"moment"``; an end that
+        coincides with ``problem.theta_box`` has status ``BOX``; ``lp`` is the LP result
+        used (given or computed here, else None); ``details`` has the relaxation's size
+        and build time (:class:`~hammerbound.relaxations.result.MomentDetails`).
 
     Raises
     ------
@@ -331,6 +339,10 @@ def moment_bounds(
         raise ParameterValidationError(
             f"basis must be one of {', '.join(map(repr, BASES))}; got {basis!r}.")
     t_start = time.perf_counter()
+    if lp is not None and theta_box is None:
+        theta_box = lp.bounds
+    if lp is not None and fallback is None:
+        fallback = lp.bounds
     backend = get_solver(solver)
     opts = backend.check_options(solver_options)
     if theta_box is not None:
@@ -351,7 +363,8 @@ def moment_bounds(
         else:
             from ..lp import lp_bounds
 
-            fallback = lp_bounds(problem, check_box=False).bounds
+            lp = lp_bounds(problem, check_box=False)
+            fallback = lp.bounds
     fallback = np.asarray(fallback, dtype=float)
     if fallback.shape != (problem.p, 2):
         raise ParameterValidationError(
@@ -413,14 +426,11 @@ def moment_bounds(
         sv = np.nan
         if sol is not None and np.isfinite(sol.primal_value):
             sv = sol.primal_value if sense == "min" else -sol.primal_value
-        extra = {}
+        cert = None
         if vb is not None:
-            extra = {
-                "dual_value": vb.dual_value if sense == "min" else -vb.dual_value,
-                "psd_correction": vb.psd_correction,
-                "residual_correction": vb.residual_correction,
-                "cone_correction": vb.cone_correction,
-            }
+            cert = DualCertificate(vb.dual_value if sense == "min" else -vb.dual_value,
+                                   vb.psd_correction, vb.residual_correction,
+                                   vb.cone_correction)
         msg = err
         if sol is not None:
             msg = f"{backend.name}: {sol.native_status}" + (f"; {err}" if err else "")
@@ -431,21 +441,24 @@ def moment_bounds(
                 param=names[k], sense=sense, bound=float(bnd), solver_value=float(sv),
                 status=status, certified=certified,
                 time=float(sol.time) if sol is not None else 0.0,
-                iterations=None if sol is None else sol.iterations, message=msg, extra=extra,
+                iterations=None if sol is None else sol.iterations, message=msg,
+                certificate=cert,
             )
         )
         bounds[k, 0 if sense == "min" else 1] = bnd
+    from ..lp import end_statuses
+
     return IntervalResult(
-        bounds=bounds, infos=tuple(infos), method="moment", param_names=tuple(names),
+        param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="moment",
         time=time.perf_counter() - t_start,
-        extra={
-            "order": relax.order, "basis": relax.basis, "solver": backend.name,
-            "n_moments": relax.n_moments, "n_psd_blocks": relax.n_psd_blocks,
-            "psd_sides": relax.psd_sides, "nnz": int(relax.data.A.nnz),
-            "n_cliques": len(relax.pop.cliques), "build_time": t_build,
-            "eliminated": None if relax.pop.elim is None else names[relax.pop.elim],
-            "n_rows": relax.data.m,
-        },
+        status=end_statuses(names, infos, bounds, problem.theta_box), lp=lp,
+        details=MomentDetails(
+            order=relax.order, basis=relax.basis, solver=backend.name,
+            n_moments=relax.n_moments, n_psd_blocks=relax.n_psd_blocks,
+            psd_sides=dict(relax.psd_sides), nnz=int(relax.data.A.nnz),
+            n_cliques=len(relax.pop.cliques), build_time=t_build,
+            eliminated=None if relax.pop.elim is None else names[relax.pop.elim],
+            n_rows=relax.data.m),
     )
 
 

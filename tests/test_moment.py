@@ -19,7 +19,7 @@ from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.moment.relaxation import MomentRelaxation, moment_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta
 from hammerbound.solvers import available_solvers, get_solver
-from hammerbound.solvers.clarabel_picos import ClarabelConic
+from hammerbound.solvers.clarabel import ClarabelConic
 from hammerbound.solvers.conic import verified_lower_bound
 
 ATOL = 1e-7  # slack of check_theta's acceptance, see tests/test_lp.py

@@ -113,7 +113,7 @@ def add_model_options(p, *, required=False):
                    help="input delay: 0 adds b0, 1 = chapter (default), >1 more delay")
 
 
-def add_stage2_options(p, method="moment", *, inner_signal=False):
+def add_stage2_options(p, method="exact", *, inner_signal=False):
     """Method, relaxation, solver, parallel jobs and the exact method's stopping rules."""
     p.add_argument("--method", default=method, choices=["lp", "moment", "exact"],
                    help=f"stage-2 method (default {method}; exact gives the tight intervals)")

@@ -222,9 +222,9 @@ class MomentRelaxation:
 # ---------------------------------------------------------------------------------------
 
 
-def _solve_group(data: ConicData, xub, jobs, solver: str, solver_options: dict | None):
-    """Worker: solve several objectives on one conic data set and certify each."""
-    backend = get_solver(solver)
+def _solve_group(data: ConicData, xub, jobs, backend, solver_options: dict | None):
+    """Worker: solve several objectives on one conic data set and certify each (``backend``
+    is the registry's object, passed as it is: no lookup or licence check in a worker)."""
     out = []
     try:
         inst = backend.conic(data, solver_options)
@@ -278,7 +278,9 @@ def moment_bounds(
         The EIV problem (22.34).
     order : int, default 2
         Relaxation order ``delta``.
-    solver : {"clarabel", "cvxopt", "mosek"}
+    solver : str, default "clarabel"
+        A conic backend of :func:`~hammerbound.solvers.available_solvers`
+        (``"clarabel"``, ``"cvxopt"``, ``"qics"``, ``"mosek"``).
     solver_options : dict, optional
         Native solver options (e.g. ``{"max_iter": 50}`` for Clarabel).
     n_jobs : int, default 1
@@ -396,13 +398,13 @@ def moment_bounds(
         # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
         opts = {**opts, "max_threads": 1}
     if n_jobs == 1:
-        results = _solve_group(data, relax.xub, jobs, backend.name, opts)
+        results = _solve_group(data, relax.xub, jobs, backend, opts)
     else:
         from joblib import Parallel, delayed
 
         groups = [jobs[i::n_jobs] for i in range(n_jobs)]
         parts = Parallel(n_jobs=n_jobs)(
-            delayed(_solve_group)(data, relax.xub, g, backend.name, opts) for g in groups
+            delayed(_solve_group)(data, relax.xub, g, backend, opts) for g in groups
         )
         results = [r for part in parts for r in part]
     results.sort(key=lambda r: r[0])

@@ -15,8 +15,10 @@ import numpy as np
 
 try:
     from benchmarks import _common as C
+    from benchmarks import default_method
 except ImportError:  # run as a script
     import _common as C
+    import default_method
 
 OUT = C.ROOT / "docs" / "benchmarks.md"
 NOTES = C.HERE / "report_notes.md"
@@ -712,6 +714,8 @@ def main(argv=None):
            section_chapter_seeds(), section_stage1_draws(), notes_section("chapter-seeds-findings"),
            "## 2. Method comparison\n", notes_section("methods-intro"), section_methods(),
            notes_section("methods-findings"),
+           "### Default method\n", notes_section("default-method-intro"),
+           default_method.report_section(), notes_section("default-method-findings"),
            "### Order-2 moment relaxation at the chapter's size\n", notes_section("moment2-intro"),
            section_moment2(), notes_section("moment2-findings"),
            "### LRIC exam record\n", section_lric(),

@@ -34,10 +34,7 @@ ALLOWED_UPWARD = {
     # lazily on first use only
     ("discrepancy/__init__.py", "app.cli"),
 }
-ALLOWED_PRIVATE = {
-    # the sampler's verified pool: to become the shared fixed-theta witness LP (issue 27.5)
-    ("modelset/sampling.py", "relaxations.exact.points"),
-}
+ALLOWED_PRIVATE: set = set()
 
 
 def _layer(top):

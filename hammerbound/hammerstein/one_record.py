@@ -106,6 +106,24 @@ def _report_unidentified(problem, bounds, prior):
     return gb, tuple(found)
 
 
+def _at_assumed_limit(problem, prior):
+    """Skip the search of a backlash end already at a default (assumed) a priori limit
+    after OBBT: no search inside the box can move it off, and it is reported as not
+    identified (infinite) anyway. With a box the user gave, every end is searched."""
+    if prior.user_given:
+        return None
+    p, assumed = problem.p, prior.assumed()
+
+    def skip(k, sense, bound):
+        i, j = k - p, (0 if sense > 0 else 1)
+        if not 0 <= i < 4 or not assumed[i, j]:
+            return False
+        lim = prior.box[i, j]
+        return abs(bound - lim) <= 1e-6 * max(1.0, abs(lim))
+
+    return skip
+
+
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                    output_bound=None) -> OneRecordFit:
     """Certified intervals of both blocks from the record ``data`` (an IOData)."""
@@ -121,7 +139,8 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
     res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
                         max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
-                        deadline=deadline, n_jobs=lin.n_jobs)
+                        deadline=deadline, n_jobs=lin.n_jobs,
+                        skip=_at_assumed_limit(problem, prior))
     gb, found = _report_unidentified(problem, res.bounds, prior)
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,

@@ -48,6 +48,14 @@ def _end_job(problem, box, k, sense, start, kw):
     return search_end(problem, box, k, sense, start, **kw)
 
 
+def _not_searched(box, k, sense):
+    """The result of an end left at its OBBT bound (see ``skip``)."""
+    from .search import EndResult
+
+    return EndResult(sense * (box[k, 0] if sense > 0 else box[k, 1]), np.inf, None, 0, 0.0,
+                     "limit")
+
+
 def _info(name, sense, res, bound):
     w = res.witness
     value = sense * res.value if w is not None else float("nan")
@@ -63,7 +71,7 @@ def _lp_infos(names, box):
 
 
 def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes=2000,
-                  time_limit=None, deadline=None, n_jobs=1) -> IntervalResult:
+                  time_limit=None, deadline=None, n_jobs=1, skip=None) -> IntervalResult:
     """Certified intervals of ``[theta, m_l, c_l, m_r, c_r]`` over the one-record set.
 
     Parameters
@@ -77,6 +85,10 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     max_nodes, time_limit : per interval end; ``deadline``: absolute :func:`time.time`.
     n_jobs : int
         Interval ends searched in parallel (joblib).
+    skip : callable or None
+        ``skip(k, sense, bound) -> bool``: an end whose OBBT bound makes the search
+        pointless (e.g. it is at an assumed a priori limit, so it will be reported as not
+        identified) keeps that certified bound, status "limit", without a search.
 
     Raises
     ------
@@ -96,13 +108,19 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     pool = _pool(problem, points)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
-    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs]
+    skipped = {(k, s) for k, s in jobs
+               if skip is not None and skip(k, s, box[k, 0] if s > 0 else box[k, 1])}
+    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs
+            if (k, s) not in skipped]
     if n_jobs == 1:
-        results = [_end_job(*a) for a in args]
+        found = [_end_job(*a) for a in args]
     else:
         from joblib import Parallel, delayed
 
-        results = Parallel(n_jobs=n_jobs)(delayed(_end_job)(*a) for a in args)
+        found = Parallel(n_jobs=n_jobs)(delayed(_end_job)(*a) for a in args)
+    found = iter(found)
+    results = [_not_searched(box, k, s) if (k, s) in skipped else next(found)
+               for k, s in jobs]
     bounds = box[: problem.p + 4].copy()
     infos = []
     for (k, s), res in zip(jobs, results, strict=True):

@@ -85,11 +85,12 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     return tuple(out)
 
 
-def _report_unidentified(problem, bounds, prior):
+def _report_unidentified(problem, bounds, prior, stopped_by_time=False):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
     p = problem.p
     gb = bounds[p: p + 4].copy()
-    found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed())
+    found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed(),
+                         stopped_by_time=stopped_by_time)
     if not found:
         return gb, ()
     for name, _cause in found:
@@ -101,7 +102,8 @@ def _report_unidentified(problem, bounds, prior):
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
     warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
-                  "Use a record whose input reverses by more than the dead band.",
+                  "Use a record whose input reverses by more than the dead band, or give more "
+                  "time (total_time_limit) or a gamma_box.",
                   NotIdentifiedWarning, stacklevel=4)
     return gb, tuple(found)
 
@@ -141,7 +143,8 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                         max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
                         deadline=deadline, n_jobs=lin.n_jobs,
                         skip=_at_assumed_limit(problem, prior))
-    gb, found = _report_unidentified(problem, res.bounds, prior)
+    gb, found = _report_unidentified(problem, res.bounds, prior,
+                                     res.details is not None and res.details.stopped_by_time)
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,

@@ -18,6 +18,7 @@ box of every variable and ``pool`` the verified points found on the way.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -27,13 +28,24 @@ from .local import restore
 from .problem import RecordProblem
 from .search import outer_leaves, search_end
 
-__all__ = ["record_bounds"]
+__all__ = ["RecordDetails", "record_bounds"]
 
 
-def _pool(problem, points, limit=24):
+@dataclass(frozen=True)
+class RecordDetails:
+    """What the one-record search did: the number of leaf boxes after OBBT, and whether
+    the time limit stopped it (then ends may sit at the a priori box for that reason)."""
+
+    leaves: int
+    stopped_by_time: bool
+
+
+def _pool(problem, points, limit=24, deadline=None):
     """Verified points from the last LP points of OBBT (restored to the set)."""
     out = []
     for x in points[-limit:]:
+        if deadline is not None and time.time() > deadline:
+            break
         w = restore(problem, x, max_iter=12)
         if w is not None:
             out.append(w)
@@ -104,8 +116,9 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     if method == "lp":
         return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
                               infos=_lp_infos(names, box), method="lp",
-                              time=time.perf_counter() - t0, root_box=box)
-    pool = _pool(problem, points)
+                              time=time.perf_counter() - t0, root_box=box,
+                              details=RecordDetails(len(leaves), _stopped(deadline)))
+    pool = _pool(problem, points, deadline=deadline)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
     skipped = {(k, s) for k, s in jobs
@@ -131,4 +144,9 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
             bounds[k, 1] = min(bounds[k, 1], b)
         infos.append(_info(names[k], s, res, bounds[k, 0 if s > 0 else 1]))
     return IntervalResult(tuple(names), bounds, infos=tuple(infos), method="exact",
-                          time=time.perf_counter() - t0, root_box=box, pool=tuple(pool))
+                          time=time.perf_counter() - t0, root_box=box, pool=tuple(pool),
+                          details=RecordDetails(len(leaves), _stopped(deadline)))
+
+
+def _stopped(deadline) -> bool:
+    return deadline is not None and time.time() > deadline

@@ -95,6 +95,10 @@ def _tighten_one(problem, box, k):
     return (None if out[0] > out[1] else out), points
 
 
+def _past(deadline) -> bool:
+    return deadline is not None and time.time() > deadline
+
+
 def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
          on_point=None, rows=None):
     """Shrink the box by OBBT rounds until a round shrinks no width by more than
@@ -112,6 +116,8 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
     for _ in range(max_rounds):
         old = box.copy()
         for k in order:
+            if _past(deadline):  # every row so far is certified: stop here
+                return box
             row, points = _tighten_one(problem, box, k)
             if row is None:
                 raise EmptyFeasibleSetError(
@@ -125,7 +131,7 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
         w_new = box[:, 1] - box[:, 0]
         if np.all(w_old - w_new <= shrink * np.maximum(w_old, 1e-300)):
             break
-        if deadline is not None and time.time() > deadline:
+        if _past(deadline):
             break
     return box
 
@@ -159,7 +165,7 @@ def _partition(problem, prior, parts, deadline):
     queue, out = [prior.copy()], []
     while queue:
         b = queue.pop()
-        if deadline is not None and time.time() > deadline:
+        if _past(deadline):
             out.append(b)
             continue
         try:

@@ -14,6 +14,11 @@ The difference is the certified gap. The search stops when the gap is below
 ``tol * max(1, |value|)``; node and time limits return the still-valid outer bound with
 status ``"limit"``.
 
+This module runs the LP, OBBT (:mod:`.obbt`) and the first verified points, then one
+search per interval end (:mod:`.search`, serially or on joblib workers), and assembles the
+result. Every part of the search listed below that can be switched off (to measure what
+it buys) is a :class:`.search.SearchOptions` field, passed as ``options``.
+
 What keeps the tree small and the nodes cheap (N = 300, Delta eta = 0.3, two-level inner
 signal: 2297 -> 1768 nodes and 60 s -> 14 s for the 8 bounds on 2 cores; independent
 errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchmarks.md``):
@@ -32,10 +37,13 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
 * every node box is **capped at the incumbent** (``sense * theta_k <= value``): nothing
   above it can hold the minimum, and the cap tightens every envelope involving theta_k;
 * **reduced-cost bound tightening** removes the part of a node box whose rigorous LP bound
-  already exceeds the incumbent (:func:`_reduced_cost_tightening`);
+  already exceeds the incumbent (:func:`.node_box._reduced_cost_tightening`);
 * every child node starts from its parent's simplex basis (a snapshot kept with the
   node; one bound away), not from whatever node was solved last: 3.5x fewer simplex
   iterations on the chapter's two-level data (``python -m benchmarks.exact_ablation``);
+* in a serial run the ends share one node LP model, screening LP and SLP LP
+  (:class:`.search.Workspace`; each end resets box, cost, cut-off and basis) and the OBBT
+  bases stay in-process snapshots (no element-by-element conversion);
 * node LPs stop at a cut-off half the tolerance below the incumbent; a cut-off node whose
   certified bound still does not close it is solved to the end (a point to branch at)
   rather than split blindly;

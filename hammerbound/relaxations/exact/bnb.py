@@ -41,9 +41,9 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
 * every child node starts from its parent's simplex basis (a snapshot kept with the
   node; one bound away), not from whatever node was solved last: 3.5x fewer simplex
   iterations on the chapter's two-level data (``python -m benchmarks.exact_ablation``);
-* in a serial run the ends share one node LP model, screening LP and SLP LP
-  (:class:`.search.Workspace`; each end resets box, cost, cut-off and basis) and the OBBT
-  bases stay in-process snapshots (no element-by-element conversion);
+* in a serial run the ends share one node LP model (:class:`.search.Workspace`; each end
+  resets box, cost, cut-off and basis) and the OBBT bases stay in-process snapshots (no
+  element-by-element conversion): 7 % less CPU time at Delta eta = 0.005, N = 300;
 * node LPs stop at a cut-off half the tolerance below the incumbent; a cut-off node whose
   certified bound still does not close it is solved to the end (a point to branch at)
   rather than split blindly;

@@ -200,7 +200,7 @@ def tightness_run(seed, deta, M, n_prbs, method):
     import hammerbound as hb
 
     ex = hb.chapter_example(output_bound=deta, N=n_prbs, random_state=seed,
-                            amplitudes=np.linspace(0.5, 2.0, M))
+                            amplitudes=np.linspace(0.25, 2.5, M))  # the chapter's for M = 50
     lin = hb.LinearEIVSetEstimator(output_bound=deta, na=2, nb=2, method=method, n_jobs=1)
     t0 = time.perf_counter()
     idf = hb.HammersteinBacklashIdentifier(backlash=hb.BacklashSetEstimator(deta), linear=lin,

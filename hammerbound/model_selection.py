@@ -206,7 +206,7 @@ class OrderSelectionCV(BaseEstimator):
                                 for p, r in zip(cands, rows, strict=True))
             raise EmptyFeasibleSetError(
                 "no candidate order explains the data within the bounds (" + listing + "). "
-                "Check the error bounds (noise_bound, input_bound) or widen the grid.",
+                "Check the error bounds (output_bound, input_bound) or widen the grid.",
                 first_index=None)
         n_splits = None
         with warnings.catch_warnings():

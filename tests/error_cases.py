@@ -395,9 +395,10 @@ CASES: list[ErrorCase] = [
       lambda: ident().fit(u_prbs(), y_prbs(),
                           steady_state={"x": u_ss()}),
       DataValidationError, "keys 'u' and 'y'"),
-    C("h-prbs-three-levels", "identifier", "PRBS input with more than two levels",
-      "HammersteinBacklashIdentifier(bl, lin).fit(u_prbs with u[0] = 0.5, y_prbs, steady_state=...)",
-      lambda: ident().fit(
+    C("h-prbs-three-levels", "identifier", "two-stage procedure, PRBS with more than two levels",
+      "HammersteinBacklashIdentifier(bl, lin, procedure='two-stage').fit(u_prbs with u[0] = 0.5, "
+      "y_prbs, steady_state=...)",
+      lambda: ident(procedure="two-stage").fit(
           with_value(u_prbs(), 0, 0.5), y_prbs(), steady_state=(u_ss(), y_ss())),
       DataValidationError, "ordinary record"),
     C("h-length-mismatch", "identifier", "PRBS input and output of different lengths",

@@ -46,6 +46,15 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
         self.time_unit_ = time_unit
         self._sampler = sampler
 
+    def __sklearn_tags__(self):
+        """scikit-learn's tags (its validation helpers read them): a fitted regressor."""
+        from sklearn.utils import Tags, TargetTags
+
+        return Tags(estimator_type="regressor", target_tags=TargetTags(required=True))
+
+    def __sklearn_is_fitted__(self) -> bool:
+        return True
+
     def fit(self, *args, **kwargs):
         """A view is not refitted: fit the identifier that holds it."""
         raise TypeError("this is a read-only view of an identifier's one-record fit; "

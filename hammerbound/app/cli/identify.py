@@ -1,4 +1,5 @@
-"""``hammerbound identify``: both stages from a steady-state CSV and a PRBS CSV."""
+"""``hammerbound identify``: backlash and linear block from one ordinary record (``--record``)
+or from the chapter's two experiments (``--steady`` and ``--prbs``)."""
 
 from __future__ import annotations
 
@@ -24,11 +25,21 @@ __all__ = ["add_parser", "run"]
 def add_parser(sub):
     p = sub.add_parser(
         "identify", help="identify backlash and linear block from CSV files",
-        description="Bound backlash and linear block from a steady-state CSV (--steady) and "
-                    "a PRBS CSV (--prbs), both with a header row naming the input and output "
+        description="Bound backlash and linear block from one ordinary record (--record: "
+                    "any input that reverses, e.g. steps, a sine, a closed-loop log) or from "
+                    "the chapter's two experiments, a steady-state CSV (--steady) and a PRBS "
+                    "CSV (--prbs); every CSV has a header row naming the input and output "
                     "columns.")
-    # the records are checked in the command, not by argparse: other ways to give the
-    # data (e.g. one record) can be added beside them
+    # the records are checked in the command, not by argparse (clear messages, and the
+    # deprecated spellings of the options also count)
+    p.add_argument("--record", default=None, metavar="CSV",
+                   help="one ordinary record (input, output): backlash and linear block "
+                        "bounded jointly, initial backlash state unknown")
+    p.add_argument("--gamma-box", type=float, nargs=8, default=None,
+                   metavar=("ML_LO", "ML_HI", "CL_LO", "CL_HI", "MR_LO", "MR_HI", "CR_LO",
+                            "CR_HI"),
+                   help="--record: a priori box of the backlash (default: 0 <= m <= 100 "
+                        "range(y)/range(u), 0 <= c <= range(u), printed as an assumption)")
     p.add_argument("--steady", default=None, metavar="CSV",
                    help="CSV of steady-state points (signed input amplitudes, outputs)")
     p.add_argument("--prbs", default=None, metavar="CSV",
@@ -36,7 +47,7 @@ def add_parser(sub):
     add_bound_options(p, input_bound=False, steady=True)
     add_model_options(p)
     add_csv_options(p)
-    add_stage2_options(p, inner_signal=True)
+    add_stage2_options(p, method=None, inner_signal=True)
     p.add_argument("--json", action="store_true",
                    help="write the result as JSON to stdout (and nothing else)")
     p.add_argument("--report", default=None, metavar="DIR",
@@ -63,9 +74,23 @@ def _bounds(args):
 
 
 def run(args) -> int:
+    if args.record is not None:
+        if args.prbs is not None:
+            raise UsageError("give either one ordinary record (--record DATA.csv) or the "
+                             "PRBS experiment (--prbs PRBS.csv with --steady STEADY.csv), "
+                             "not both")
+        args.method = args.method or "exact"
+        from .one_record import run_one_record
+
+        return run_one_record(args)
+    if args.gamma_box is not None:
+        raise UsageError("--gamma-box is the a priori backlash box of --record; the "
+                         "two-stage procedure bounds the backlash from --steady")
     if args.steady is None or args.prbs is None:
-        raise UsageError("give both records: --steady STEADY.csv (steady-state points) and "
+        raise UsageError("give one ordinary record (--record DATA.csv), or the chapter's "
+                         "two experiments: --steady STEADY.csv (steady-state points) and "
                          "--prbs PRBS.csv (the PRBS experiment)")
+    args.method = args.method or "moment"
     return _two_records(args)
 
 

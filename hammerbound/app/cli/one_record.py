@@ -1,0 +1,83 @@
+"""``hammerbound identify --record``: backlash and linear block from one ordinary record."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from .options import CLI_NAMES, UsageError, require, stage2_kwargs
+from .printing import assumption_lines, record_line, transfer_function
+
+__all__ = ["run_one_record"]
+
+
+def _gamma_box(args):
+    """The ``--gamma-box`` option as a (4, 2) array (rows m_l, c_l, m_r, c_r) or None."""
+    if args.gamma_box is None:
+        return None
+    box = np.asarray(args.gamma_box, dtype=float).reshape(4, 2)
+    return box
+
+
+def run_one_record(args) -> int:
+    from ...data.iodata import IOData
+    from ...hammerstein.identifier import HammersteinBacklashIdentifier
+    from ...stage2.estimator import LinearEIVSetEstimator
+
+    output_bound = require(args.output_bound, "--output-bound",
+                           "the bound on the record's output errors that the intervals rest "
+                           "on, e.g. --output-bound 0.05")
+    if args.report:
+        raise UsageError("--report needs the chapter's two experiments (--steady, --prbs); "
+                         "with --record use --json for the intervals and witnesses")
+    if args.steady_output_bound is not None:
+        raise UsageError("--steady-output-bound belongs to --steady; one record has one "
+                         "output error bound (--output-bound)")
+    data = IOData.from_csv(args.record, u=args.u_col, y=args.y_col, t=args.t_col or None,
+                           dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
+    steady = None
+    if args.steady is not None:
+        from ...data.csv_reader import read_columns
+
+        ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
+                          argument_names=CLI_NAMES)
+        steady = (ss[args.u_col], ss[args.y_col])
+    ident = HammersteinBacklashIdentifier(
+        linear=LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk,
+                                     output_bound=output_bound, **stage2_kwargs(args)),
+        procedure="one-record", gamma_box=_gamma_box(args))
+    ident.fit(data, steady_state=steady)
+    given = [f"output error bound {output_bound:g} (--output-bound)"]
+    tf_text, tf = (transfer_function(ident.linear_, ident.dt_) if ident.system_ is not None
+                   else ("central model: not given (an interval is infinite)", None))
+    if args.json:
+        print(json.dumps(_record(args, ident, data, output_bound, tf), indent=2))
+        return 0
+    print("record " + record_line(args.record, data))
+    if steady is not None:
+        print(f"steady-state points {args.steady}: {steady[0].size}, used jointly")
+    print("\n".join(assumption_lines(given, [])))
+    print(ident.summary())
+    print(tf_text)
+    return 0
+
+
+def _finite(v):
+    """JSON has no infinity: an interval end the record does not bound is ``null``."""
+    return [float(x) if np.isfinite(x) else None for x in v]
+
+
+def _record(args, ident, data, output_bound, tf) -> dict:
+    pr = ident.linear_.problem_
+    return {"procedure": "one-record",
+            "parameters": list(ident.param_names_),
+            "lower": _finite(ident.bounds_[:, 0]), "upper": _finite(ident.bounds_[:, 1]),
+            "intervals": ident.intervals_.records(),
+            "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method},
+            "data": {"record": str(args.record), "N": data.N, "dt": data.dt,
+                     "input": data.input_name, "output": data.output_name,
+                     "output_bound": output_bound,
+                     "steady": None if args.steady is None else str(args.steady)},
+            "assumptions": list(ident.assumptions_),
+            "transfer_function": tf}

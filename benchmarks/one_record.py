@@ -244,10 +244,10 @@ def run_tightness(args):
 
 def tightness_table(rows):
     out = []
-    for (deta, method), rs in sorted(itertools.groupby(
-            sorted(rows, key=lambda r: (r["deta"], r["method"])),
-            key=lambda r: (r["deta"], r["method"]))):
-        rs = list(rs)
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["deta"], r["method"]), []).append(r)
+    for (deta, method), rs in sorted(groups.items()):
         two = np.median([r["two_stage_width"] for r in rs], axis=0)
         one = np.median([r["one_record_width"] for r in rs], axis=0)
         for k, p in enumerate(PARAMS):

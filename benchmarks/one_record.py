@@ -165,17 +165,19 @@ def run_soundness(args):
     env = C.environment()
     t0 = time.perf_counter()
     C.log(f"soundness: {len(done)} done, {len(todo)} to run")
-    for i in range(0, len(todo), 2 * args.n_jobs):
-        if args.budget is not None and time.perf_counter() - t0 > args.budget:
-            C.log(f"budget used; {len(todo) - i} runs left (re-run to resume)")
-            break
-        batch = todo[i: i + 2 * args.n_jobs]
-        for r in Parallel(n_jobs=args.n_jobs)(delayed(soundness_run)(c, args.exact_end_limit)
-                                                   for c in batch):
-            done[_key(r)] = r
-            C.log(f"{_key(r)}: inside={r.get('inside')} {r.get('seconds', 0):.1f} s "
-                  f"witnesses {r.get('witnesses', 0)} failed {r.get('witnesses_failed', 0)}"
-                  + (f" ERROR {r['error'][:80]}" if "error" in r else ""))
+    def jobs():
+        for c in todo:  # a budget stop ends the plan; the runs under way finish
+            if args.budget is not None and time.perf_counter() - t0 > args.budget:
+                C.log("budget used; re-run to resume")
+                return
+            yield delayed(soundness_run)(c, args.exact_end_limit)
+
+    # every finished run is saved at once (a killed run loses only the runs under way)
+    for r in Parallel(n_jobs=args.n_jobs, return_as="generator_unordered")(jobs()):
+        done[_key(r)] = r
+        C.log(f"{_key(r)}: inside={r.get('inside')} {r.get('seconds', 0):.1f} s "
+              f"witnesses {r.get('witnesses', 0)} failed {r.get('witnesses_failed', 0)}"
+              + (f" ERROR {r['error'][:80]}" if "error" in r else ""))
         C.write_json({"environment": env, "rows": list(done.values())}, path)
     rows = list(done.values())
     C.write_csv([{k: v for k, v in r.items() if k not in ("not_identified",)} for r in rows],

@@ -99,8 +99,7 @@ def check_witnesses(u, y, deta, infos):
         exc = S.noise_excess(u, y, deta, th, ga, float(w.z0))
         worst = max(worst, exc)
         vec = np.concatenate([ga, th])
-        k = PARAMS.index({"m_l": "ml", "c_l": "cl", "m_r": "mr", "c_r": "cr"}.get(
-            info.name, info.name))
+        k = PARAMS.index(info.param)
         inside = info.bound - 1e-9 * max(1, abs(info.bound)) <= vec[k] if info.sense == "min" \
             else vec[k] <= info.bound + 1e-9 * max(1, abs(info.bound))
         if not (exc <= S.WITNESS_TOL and S.gain_error(th) <= 1e-6 and inside):

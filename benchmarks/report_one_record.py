@@ -113,7 +113,7 @@ def section_speed():
                 for r in j["rows"]]
         parts.append(_table(["N", "method", "jobs", "wall s", "statuses", "truth inside",
                              "load"], body) + "\n\n" + _env(j))
-    return "\n\n".join(parts) + "\n" if parts else ""
+    return "\n\n".join(parts) + "\n" if parts else "_No results (`--part speed` not run)._\n"
 
 
 def section_valve():

@@ -6,6 +6,7 @@
     python -m benchmarks methods  [--quick] [--part same|delta2|scaling|order] ...
     python -m benchmarks coverage [--quick] [--dask] ...
     python -m benchmarks moment2  [--N 10 20 50 100] [--full-N 10]
+    python -m benchmarks default_method  # lp / moment / exact on the cases behind the default method
     python -m benchmarks weights                # certified uncertainty weights by order
     python -m benchmarks orders [--orders 2 3 4 5 6]  # LP time by model order, guard refusals
     python -m benchmarks lric                   # the LRIC exam record (../shared/data/lric/)
@@ -25,6 +26,7 @@ COMMANDS = {
     "chapter": "chapter_tables",
     "methods": "methods",
     "moment2": "moment_order2",
+    "default_method": "default_method",
     "coverage": "coverage",
     "weights": "weights",
     "orders": "lp_orders",

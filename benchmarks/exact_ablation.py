@@ -37,24 +37,18 @@ def _problem(deta, N, inner):
     return ident.linear_.problem_
 
 
-def _run(problem, variant, tol):
-    import hammerbound.relaxations.exact.bnb as bnb
-    import hammerbound.solvers.highs as highs
+#: the search options of each variant (explicit options: they reach joblib workers too)
+OPTIONS = {"all": {}, "no-local": {"local_search": False},
+           "no-shared-branching": {"shared_branching": False},
+           "no-parent-basis": {"parent_basis": False}}
 
-    saved = (bnb._LOCAL, bnb.shared_groups, highs.HighsLP.restore)
-    try:
-        if variant == "no-local":
-            bnb._LOCAL = False
-        elif variant == "no-shared-branching":
-            bnb.shared_groups = lambda problem: 0
-        elif variant == "no-parent-basis":
-            highs.HighsLP.restore = lambda self, snapshot: False
-        t = time.perf_counter()
-        res = bnb.exact_bounds(problem, tol=tol, n_jobs=1)
-        wall = time.perf_counter() - t
-    finally:
-        bnb._LOCAL, bnb.shared_groups, highs.HighsLP.restore = saved
-    return res, wall
+
+def _run(problem, variant, tol):
+    from hammerbound.relaxations.exact.bnb import SearchOptions, exact_bounds
+
+    t = time.perf_counter()
+    res = exact_bounds(problem, tol=tol, n_jobs=1, options=SearchOptions(**OPTIONS[variant]))
+    return res, time.perf_counter() - t
 
 
 def main(argv=None) -> int:

@@ -15,9 +15,11 @@ import numpy as np
 
 try:
     from benchmarks import _common as C
+    from benchmarks import default_method
     from benchmarks import report_one_record as R1
 except ImportError:  # run as a script
     import _common as C
+    import default_method
     import report_one_record as R1
 
 OUT = C.ROOT / "docs" / "benchmarks.md"
@@ -149,6 +151,7 @@ def section_targets(parts):
                          f"{fs(w)} s, {r['new']['peak_rss_mb']:.0f} MB peak (load "
                          f"{r['loadavg_start']})",
                          "met" if w <= goal else f"**missed** ({w / goal:.1f}× over, under load)"])
+    rows += _ratio_targets()
     if not rows:
         return ""
     out = table(["target", "goal", "measured", "verdict"], rows) + "\n"
@@ -191,6 +194,93 @@ def section_ablation():
     out += table(["inner signal", "Δη", "variant", "time", "nodes", "simplex iterations",
                   "status", "|Δ bounds|", "load"], rows) + "\n\n"
     return out + env_line(j) + "\n"
+
+
+def _ratio_key(r):
+    return (r["inner_signal"], r["N"], r["delta_eta"])
+
+
+def _ratio_targets():
+    """Rows of the issue-28 targets from results/exact_ratio_after.json."""
+    j = _json("exact_ratio_after.json") or _json("exact_ratio.json")
+    if not j or not j.get("rows"):
+        return []
+    out = []
+    ind = [r for r in j["rows"] if r["inner_signal"] == "independent"]
+    if ind:
+        worst = max(ind, key=lambda r: r["ratio_max"])
+        n_ok = sum(r["ratio_max"] <= 10 for r in ind)
+        out.append([f"Exact within 10× of the LP method, independent, N = "
+                    f"{', '.join(str(n) for n in sorted({r['N'] for r in ind}))}, Δη = "
+                    f"{', '.join(f'{d:g}' for d in sorted({r['delta_eta'] for r in ind}))} "
+                    f"({ind[0]['ratio_basis'].upper()} time, {ind[0]['n_jobs']} job)", "≤ 10×",
+                    f"{min(r['ratio_min'] for r in ind):.0f}–{worst['ratio_max']:.0f}× "
+                    f"(worst N = {worst['N']}, Δη = {worst['delta_eta']:g})",
+                    "met" if n_ok == len(ind) else
+                    f"**missed** at {len(ind) - n_ok} of {len(ind)} rows"])
+    for r in j["rows"]:
+        two = r.get("two_level_over_independent")
+        if r["inner_signal"] == "two-level" and r["N"] == 300 and r["delta_eta"] == 0.3 \
+                and two is not None:
+            out.append(["Two-level / independent exact time, N = 300, Δη = 0.3", "≤ 1.5",
+                        f"{two:.2f}", "met" if two <= 1.5 else "**missed**"])
+        if r["inner_signal"] == "two-level" and r["N"] == 3000:
+            basis = r["ratio_basis"]
+            t = min(x[f"exact_{basis}_s"] for x in r["repeats"])
+            out.append([f"Two-level exact, N = 3000, Δη = {r['delta_eta']:g}", "≤ 30 s",
+                        f"{fs(t)} s ({basis.upper()} time, {r['n_jobs']} job, load "
+                        f"{r['loadavg_start']}), {r['peak_rss_mb']:.0f} MB peak",
+                        "met" if t <= 30 else f"**missed** ({t / 30:.1f}× over)"])
+    return out
+
+
+def section_exact_ratio():
+    """Exact / LP time per (N, Delta eta), before and after a change
+    (benchmarks/exact_ratio.py: results/exact_ratio_before.json, exact_ratio_after.json)."""
+    after = _json("exact_ratio_after.json") or _json("exact_ratio.json")
+    if not after or not after.get("rows"):
+        return ""
+    before = {_ratio_key(r): r for r in (_json("exact_ratio_before.json") or {}).get("rows", [])}
+    rows = []
+    for r in after["rows"]:
+        b = before.get(_ratio_key(r))
+        basis = r["ratio_basis"]
+        best = min(x[f"exact_{basis}_s"] for x in r["repeats"])
+        lp = float(np.median([x[f"lp_{basis}_s"] for x in r["repeats"]]))
+        diff = "–"
+        if b is not None:
+            a_b, b_b = np.asarray(r["bounds"]), np.asarray(b["bounds"])
+            diff = f"{np.max(np.abs(a_b - b_b) / (1e-4 * np.maximum(1.0, np.abs(b_b)))):.2f}"
+        two = r.get("two_level_over_independent")
+        rows.append([r["inner_signal"], r["N"], f"{r['delta_eta']:g}", f"{fs(lp)} s",
+                     f"{fs(min(x[f'exact_{basis}_s'] for x in b['repeats']))} s" if b else "–",
+                     f"{fs(best)} s",
+                     f"{b['ratio_min']:.0f}–{b['ratio_max']:.0f}×" if b else "–",
+                     f"{r['ratio_min']:.0f}–{r['ratio_max']:.0f}×",
+                     f"{b['nodes']} → {r['nodes']}" if b else r["nodes"],
+                     f"{b['two_level_over_independent']:.2f} → {two:.2f}"
+                     if two is not None and b and b.get("two_level_over_independent")
+                     else (f"{two:.2f}" if two is not None else "–"),
+                     f"{r['peak_rss_mb']:.0f} MB", diff, ", ".join(r["statuses"]),
+                     r["loadavg_start"]])
+    n_jobs = after["rows"][0]["n_jobs"]
+    out = ("The exact method in units of the LP method (`python -m benchmarks.exact_ratio`; "
+           "chapter example, seed 0, stage 2 only, the same EIV problem for both methods, "
+           f"{n_jobs} job(s), each fit repeated "
+           f"{len(after['rows'][0]['repeats'])}×; times are the "
+           f"{'CPU time of the process' if after['rows'][0]['ratio_basis'] == 'cpu' else 'wall time'}"
+           " (fastest repeat for the exact method, median of 5 runs for the LP), which the "
+           "load of the shared machine disturbs less than wall time; *before*: the code "
+           "before the issue-28 work, *after*: now, both run at the same time on the same "
+           "machine; exact/LP: smallest–largest ratio over the repeats; 2-level/indep.: "
+           "exact time of the two-level inner signal over the independent one at the same "
+           "N and Δη; memory: peak resident set of the process and its workers; diff/tol: "
+           "largest difference of a bound after vs before, divided by the tolerance "
+           "1e-4·max(1, |bound|) of that end):\n\n")
+    out += table(["inner signal", "N", "Δη", "LP", "exact before", "exact after",
+                  "exact/LP before", "exact/LP after", "nodes", "2-level/indep.", "memory",
+                  "diff/tol", "status", "load"], rows) + "\n\n"
+    return out + env_line(after) + "\n"
 
 
 def section_scaling():
@@ -709,11 +799,15 @@ def main(argv=None):
     replot()
     doc = [notes_section("intro"), "## Performance targets\n", section_targets(None),
            section_ablation(), notes_section("targets"),
+           "### Exact method in units of the LP method\n", section_exact_ratio(),
+           notes_section("exact-ratio-findings"),
            "## 1. Chapter reproduction (section 22.5)\n", notes_section("chapter-setup"),
            section_chapter(), notes_section("chapter-findings"),
            section_chapter_seeds(), section_stage1_draws(), notes_section("chapter-seeds-findings"),
            "## 2. Method comparison\n", notes_section("methods-intro"), section_methods(),
            notes_section("methods-findings"),
+           "### Default method\n", notes_section("default-method-intro"),
+           default_method.report_section(), notes_section("default-method-findings"),
            "### Order-2 moment relaxation at the chapter's size\n", notes_section("moment2-intro"),
            section_moment2(), notes_section("moment2-findings"),
            "### LRIC exam record\n", section_lric(),

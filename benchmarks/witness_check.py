@@ -96,10 +96,8 @@ def error_scale(pr, theta) -> float:
 
 
 def widening(seeds: int, polish: bool):
-    from hammerbound.relaxations import bnb
+    from hammerbound.relaxations.exact.bnb import SearchOptions, exact_bounds
 
-    if not polish:
-        bnb.polish = lambda problem, points, **kw: list(points)
     rows = []
     for inner in ("independent", "two-level"):
         for noise in (0.005, 0.05, 0.3):
@@ -108,10 +106,13 @@ def widening(seeds: int, polish: bool):
                     ex = hb.chapter_example(noise, N=N, random_state=seed)
                     idf = hb.HammersteinBacklashIdentifier(
                         hb.BacklashSetEstimator(noise),
-                        hb.LinearEIVSetEstimator(output_bound=noise, method="exact"),
+                        hb.LinearEIVSetEstimator(output_bound=noise, method="lp"),
                         inner_signal=inner).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
                     pr = idf.linear_.problem_
-                    w = [error_scale(pr, i.witness) - 1.0 for i in idf.linear_.bound_info_
+                    # the estimator's exact method (its defaults), witnesses polished or not
+                    res = exact_bounds(pr, tol=1e-4, check_box=False,
+                                       options=SearchOptions(polish=polish))
+                    w = [error_scale(pr, i.witness) - 1.0 for i in res.infos
                          if i.witness is not None]
                     rows.append({"inner": inner, "noise": noise, "N": N, "seed": seed,
                                  "widening": w})

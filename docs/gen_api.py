@@ -11,7 +11,7 @@ MODULES = [
     ("hammerbound.stage2.orders", ["check_orders", "largest_order"]),
     ("hammerbound.relaxations.lp", ["lp_bounds"]),
     ("hammerbound.relaxations.moment.relaxation", ["moment_bounds", "MomentRelaxation"]),
-    ("hammerbound.relaxations.exact.bnb", ["exact_bounds"]),
+    ("hammerbound.relaxations.exact.bnb", ["exact_bounds", "SearchOptions"]),
     ("hammerbound.results", ["IntervalSet", "BoundInfo", "OutputEnvelope", "Result"]),
     ("hammerbound.status", None),
     ("hammerbound.relaxations.result", ["IntervalResult", "Polytope", "LPDetails",

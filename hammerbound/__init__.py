@@ -41,6 +41,7 @@ from .systems.experiments import (
     square_wave_experiment,
 )
 from .systems.models import Backlash, HammersteinSystem, simulate_backlash
+from .systems.records import ordinary_record
 
 _compat.install()
 
@@ -93,6 +94,7 @@ __all__ = [
     "chapter_example",
     "check_theta",
     "eiv_example",
+    "ordinary_record",
     "prbs_experiment",
     "simulate_backlash",
     "square_wave_experiment",

@@ -29,6 +29,7 @@ MOVED = {
     "cli": "app.cli",
     "cli_paths": "app.paths",
     "report": "app.report",
+    "solvers.clarabel_picos": "solvers.clarabel",
 }
 
 

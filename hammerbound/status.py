@@ -14,7 +14,8 @@ constant           meaning
                    bound, possibly looser than the exact one
 ``BOX``            the end is set by the a priori box (``theta_box``, the stability box
                    under A1): guaranteed under that assumption, not by the data
-``RELAXATION``     the certified bound of a relaxation, not searched to tightness
+``RELAXATION``     the certified bound of a relaxation, not searched to tightness (e.g.
+                   the LP bound a moment end keeps where its certificate is not tighter)
 ``NOT_IDENTIFIED`` the data do not bound this end: reported as infinite
 ``INFEASIBLE``     the solver reported the subproblem infeasible
 ``FAILED``         no usable solve: the fallback bound (LP / a priori box) is reported

@@ -304,8 +304,8 @@ def test_property_true_theta_inside_lp_and_exact(system):
 
 @pytest.mark.parametrize("k,sense", [(0, 1.0), (2, -1.0), (3, 1.0)])
 def test_reduced_cost_tightening_cuts_only_parts_above_the_target(k, sense):
-    from hammerbound.relaxations.exact.bnb import _reduced_cost_tightening
     from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
+    from hammerbound.relaxations.exact.node_box import _reduced_cost_tightening
 
     pr, _ = make_eiv_problem(N=30, deta=0.1, seed=4)
     box = lp_bounds(pr).bounds.copy()  # results are read-only
@@ -341,7 +341,7 @@ def test_reduced_cost_tightening_cuts_only_parts_above_the_target(k, sense):
 
 
 def test_cap_keeps_only_the_part_below_the_incumbent():
-    from hammerbound.relaxations.exact.bnb import _cap
+    from hammerbound.relaxations.exact.node_box import _cap
 
     box = np.array([[0.0, 1.0], [-2.0, 2.0]])
     np.testing.assert_array_equal(_cap(box, 1, 1.0, 0.5), [[0.0, 1.0], [-2.0, 0.5]])

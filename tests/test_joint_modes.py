@@ -113,7 +113,7 @@ def test_a_point_box_has_no_ambiguity_and_reproduces_the_play_operator():
     st = inner_structure(u, np.vstack([np.column_stack([GAMMA, GAMMA]), [z0, z0]]))
     assert st.n_ambiguous == 0
     x = own_play(u, *GAMMA, z0)
-    vals = [form_value(u, GAMMA, z0, int(k), int(s)) for k, s in zip(st.kind, st.src)]
+    vals = [form_value(u, GAMMA, z0, int(k), int(s)) for k, s in zip(st.kind, st.src, strict=True)]
     np.testing.assert_allclose(vals, x, rtol=0, atol=1e-14)
 
 

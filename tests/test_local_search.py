@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from conftest import make_eiv_problem, make_two_level, min_error_scale
 
-import hammerbound.relaxations.exact.bnb as bnb
-from hammerbound.relaxations.exact.bnb import exact_bounds
+import hammerbound.relaxations.exact.search as search
+from hammerbound.relaxations.exact.bnb import SearchOptions, exact_bounds
 from hammerbound.relaxations.exact.local import LinearisedSet, improve, restore
 from hammerbound.relaxations.exact.points import _Pool
 from hammerbound.relaxations.lp import lp_bounds
@@ -35,12 +35,7 @@ def _problem(kind, seed):
 @functools.cache
 def _exact(kind, seed, local=True):
     pr = _problem(kind, seed)
-    saved = bnb._LOCAL
-    bnb._LOCAL = local
-    try:
-        return exact_bounds(pr, tol=TOL)
-    finally:
-        bnb._LOCAL = saved
+    return exact_bounds(pr, tol=TOL, options=SearchOptions(local_search=local))
 
 
 def _start(kind, seed):
@@ -121,7 +116,7 @@ def test_a_local_search_that_finds_nothing_still_closes_every_end(monkeypatch):
         calls.append(1)
         return start
 
-    monkeypatch.setattr(bnb, "improve", stuck)
+    monkeypatch.setattr(search, "improve", stuck)
     res = exact_bounds(pr, tol=TOL)
     assert calls
     assert all(i.status == "optimal" for i in res.infos)

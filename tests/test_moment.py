@@ -19,7 +19,7 @@ from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.moment.relaxation import MomentRelaxation, moment_bounds
 from hammerbound.relaxations.problem import EIVProblem, check_theta
 from hammerbound.solvers import available_solvers, get_solver
-from hammerbound.solvers.clarabel_picos import ClarabelConic
+from hammerbound.solvers.clarabel import ClarabelConic
 from hammerbound.solvers.conic import verified_lower_bound
 
 ATOL = 1e-7  # slack of check_theta's acceptance, see tests/test_lp.py
@@ -192,8 +192,10 @@ def test_crippled_solver_never_reports_a_too_tight_bound(solver, opts):
     if it_cap is not None:  # the option reached the solver
         for info in res.infos:
             assert info.iterations is not None and info.iterations <= it_cap
-        if solver == "clarabel":
-            assert all(i.status in ("limit", "optimal") for i in res.infos)
+        if solver == "clarabel":  # the solve's status, or the LP end where it is not tighter
+            for k, info in enumerate(res.infos):
+                at_lp = info.bound == lp.bounds[k // 2, k % 2]
+                assert info.status in (("relaxation", "box") if at_lp else ("limit", "optimal"))
     try:
         raised = moment_bounds(pr, order=1, theta_box=lp.bounds, solver=solver,
                                solver_options=opts, on_failure="raise")

@@ -72,8 +72,11 @@ def _expected(est):
 @parametrize_with_checks(
     [hb.LinearEIVSetEstimator(1, 1, output_bound=1e3, method="lp",
                               theta_box=[[-1.0, 1.0], [-10.0, 10.0]]),
+     # the two-stage procedure: scikit-learn's random data as one record would be a long
+     # search of a set that is empty or unbounded (the one-record API: test_one_record*.py)
      hb.HammersteinBacklashIdentifier(hb.BacklashSetEstimator(0.05),
-                                      hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"))],
+                                      hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"),
+                                      procedure="two-stage")],
     expected_failed_checks=_expected)
 def test_sklearn_estimator_checks(estimator, check):
     check(estimator)

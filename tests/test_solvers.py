@@ -1,4 +1,4 @@
-"""Solver registry, the PICOS Clarabel interface and verified conic bounds (solvers/)."""
+"""Solver registry, the backends on conic data and verified conic bounds (solvers/)."""
 
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ from hammerbound.exceptions import SolverNotAvailableError, SolverOptionError
 from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.moment.relaxation import moment_bounds
 from hammerbound.solvers import (
-    ClarabelSolver,
+    BACKENDS,
     available_solvers,
     extract_conic_data,
     get_solver,
     normalise_status,
     verified_lower_bound,
 )
-from hammerbound.solvers.clarabel_picos import ClarabelConic
+from hammerbound.solvers.clarabel import ClarabelConic
 
 HAVE_CVXOPT = importlib.util.find_spec("cvxopt") is not None
 needs_cvxopt = pytest.mark.skipif(not HAVE_CVXOPT, reason="cvxopt not installed")
@@ -71,7 +71,7 @@ def test_available_solvers_and_lookup():
     avail = available_solvers()
     assert avail[0] == "clarabel"
     assert ("cvxopt" in avail) == HAVE_CVXOPT
-    assert set(avail) <= {"clarabel", "cvxopt", "mosek"}
+    assert set(avail) <= set(BACKENDS)
     for name in avail:
         b = get_solver(name)
         assert b.name == name and b.available()
@@ -95,9 +95,9 @@ def test_mosek_backend_if_installed():
             get_solver("mosek")
         assert "clarabel" in str(ei.value)
         pytest.skip("MOSEK not installed/licensed (unavailability is reported correctly)")
-    P, x, _ = lp_problem()  # pragma: no cover - only with MOSEK
-    get_solver("mosek").picos_solve(P)
-    assert P.value == pytest.approx(2.8, abs=1e-6)
+    data = extract_conic_data(lp_problem()[0])  # pragma: no cover - only with MOSEK
+    sol = get_solver("mosek").conic(data).solve()
+    assert -sol.primal_value == pytest.approx(2.8, abs=1e-6)
 
 
 def test_normalise_status():
@@ -122,6 +122,9 @@ BAD_OPTIONS = [
     ("cvxopt", {"max_iter": 5}),
     ("cvxopt", {"maxiters": "ten"}),
     ("cvxopt", {"abstol": "small"}),
+    ("qics", {"max_iter": 5}),
+    ("qics", {"max_iterations": "ten"}),
+    ("qics", {"qics_params": 3}),
 ]
 
 
@@ -134,12 +137,9 @@ def test_bad_options_raise_solver_option_error(name, opts):
         backend.check_options(opts)
     assert isinstance(ei.value, TypeError)
     assert next(iter(opts)) in str(ei.value)
-    P, _, _ = lp_problem()
+    data = extract_conic_data(lp_problem()[0])
     with pytest.raises(SolverOptionError):
-        backend.picos_solve(P, opts)
-    if name == "clarabel":
-        with pytest.raises(SolverOptionError):
-            ClarabelSolver.with_options(**opts)
+        backend.conic(data, opts)
 
 
 def test_valid_options_pass_and_take_effect():
@@ -158,79 +158,6 @@ def test_valid_options_pass_and_take_effect():
 
 
 # ---------------------------------------------------------------------------------------
-# the PICOS ad hoc Clarabel solver
-# ---------------------------------------------------------------------------------------
-
-
-def _solve(make, how):
-    out = make()
-    P = out[0]
-    if how == "ad_hoc":
-        P.options.ad_hoc_solver = ClarabelSolver
-        sol = P.solve()
-    elif how == "backend":
-        sol = get_solver("clarabel").picos_solve(P)
-    else:
-        sol = P.solve(solver="cvxopt")
-    return out, sol
-
-
-@pytest.mark.parametrize("how", ["ad_hoc", "backend"])
-def test_picos_clarabel_lp_matches_cvxopt(how):
-    (P, x, (c1, c2)), sol = _solve(lp_problem, how)
-    assert sol.claimedStatus == "optimal"
-    assert P.value == pytest.approx(2.8, abs=1e-7)
-    np.testing.assert_allclose(np.ravel(x.value), [1.6, 1.2], atol=1e-7)
-    np.testing.assert_allclose(np.ravel(c1.dual), [0.4, 0.2], atol=1e-7)
-    if HAVE_CVXOPT:
-        (P2, x2, (d1, d2)), _ = _solve(lp_problem, "cvxopt")
-        assert P.value == pytest.approx(P2.value, abs=1e-6)
-        np.testing.assert_allclose(np.ravel(c1.dual), np.ravel(d1.dual), atol=1e-6)
-        np.testing.assert_allclose(np.ravel(c2.dual), np.ravel(d2.dual), atol=1e-6)
-
-
-@pytest.mark.parametrize("how", ["ad_hoc", "backend"])
-def test_picos_clarabel_sdp_matches_cvxopt(how):
-    (P, X, (c1, c2)), sol = _solve(sdp_problem, how)
-    lam, vec = np.linalg.eigh(C3)
-    assert P.value == pytest.approx(lam[0], abs=1e-7)
-    Xv = np.array(X.value)
-    np.testing.assert_allclose(Xv, np.outer(vec[:, 0], vec[:, 0]), atol=1e-4)
-    assert float(c1.dual) == pytest.approx(lam[0], abs=1e-7)
-    Z = np.array(c2.dual)
-    np.testing.assert_allclose(Z, C3 - lam[0] * np.eye(3), atol=1e-6)  # dual slack
-    if HAVE_CVXOPT:
-        (P2, X2, (d1, d2)), _ = _solve(sdp_problem, "cvxopt")
-        assert P.value == pytest.approx(P2.value, abs=1e-6)
-        np.testing.assert_allclose(Xv, np.array(X2.value), atol=1e-4)
-        assert float(c1.dual) == pytest.approx(float(d1.dual), abs=1e-6)
-        np.testing.assert_allclose(Z, np.array(d2.dual), atol=1e-5)
-
-
-@pytest.mark.parametrize("how", ["ad_hoc", "backend"])
-def test_picos_clarabel_soc(how):
-    (P, x, _, opt, xs), sol = _solve(soc_problem, how)
-    assert P.value == pytest.approx(opt, abs=1e-7)
-    np.testing.assert_allclose(np.ravel(x.value), xs, atol=1e-6)
-
-
-def test_backend_restores_the_problem_and_passes_options():
-    P, x, _ = lp_problem()
-    sol = get_solver("clarabel").picos_solve(P, {"max_iter": 1})
-    assert sol.info["clarabel_status"] == "MaxIterations"
-    assert P.options.ad_hoc_solver is None  # cleaned up
-    get_solver("clarabel").picos_solve(P)
-    assert P.value == pytest.approx(2.8, abs=1e-7)
-    if HAVE_CVXOPT:  # the problem can still be solved by a registered solver
-        P.solve(solver="cvxopt")
-        assert P.value == pytest.approx(2.8, abs=1e-6)
-    # options on the ad hoc class
-    P2, _, _ = lp_problem()
-    P2.options.ad_hoc_solver = ClarabelSolver.with_options(max_iter=1)
-    assert P2.solve(primals=None).info["clarabel_status"] == "MaxIterations"
-
-
-# ---------------------------------------------------------------------------------------
 # conic layer and verified bounds
 # ---------------------------------------------------------------------------------------
 
@@ -242,7 +169,7 @@ def test_conic_backends_agree_and_certify(make):
     sign = 1.0 if data.sense == "min" else -1.0
     opt = 2.8 if make is lp_problem else np.linalg.eigvalsh(C3)[0]
     xub = np.full(data.n, 10.0)  # every feasible point of both problems is inside
-    names = [n for n in ("clarabel", "cvxopt") if n in available_solvers()]
+    names = available_solvers()  # the PICOS-solved ones too (e.g. QICS)
     for name in names:
         sol = get_solver(name).conic(data, {}).solve()
         assert sol.status == "optimal"

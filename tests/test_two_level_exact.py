@@ -1,5 +1,5 @@
 """Exact method on the two-level inner signal: branching on the shared input errors,
-warm starts from the parent node and the cut-off re-solve (relaxations/bnb.py,
+warm starts from the parent node and the cut-off re-solve (relaxations/exact/search.py,
 relaxations/mccormick.py).
 
 The data are simulated here with plain numpy/scipy (a two-level input through the true
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from conftest import make_two_level, min_error_scale
 
-import hammerbound.relaxations.exact.bnb as bnb
-from hammerbound.relaxations.exact.bnb import exact_bounds
+import hammerbound.relaxations.exact.search as search
+from hammerbound.relaxations.exact.bnb import SearchOptions, exact_bounds
 from hammerbound.relaxations.exact.mccormick import McCormickRelaxation, shared_groups
 from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.problem import EIVProblem
@@ -27,14 +27,8 @@ TOL = 1e-4
 @functools.cache
 def _fit(seed, deta, branch_shared=True, at_bound=True):
     pr, theta = make_two_level(seed, deta=deta, at_bound=at_bound)
-    if branch_shared:
-        return pr, theta, exact_bounds(pr, tol=TOL)
-    saved = bnb.shared_groups
-    bnb.shared_groups = lambda problem: 0
-    try:
-        return pr, theta, exact_bounds(pr, tol=TOL)
-    finally:
-        bnb.shared_groups = saved
+    return pr, theta, exact_bounds(pr, tol=TOL,
+                                   options=SearchOptions(shared_branching=branch_shared))
 
 
 def test_shared_groups_only_for_few_shared_errors():
@@ -128,7 +122,7 @@ def test_cut_off_node_with_weak_certificate_is_resolved(monkeypatch):
     (here: no certificate at all) is solved to the end, not split blindly: the search
     still ends with status "optimal" and the same bounds."""
     pr, _, ref = _fit(0, 0.05)
-    real = bnb._solve
+    real = search._solve
     hits = []
 
     def weak_cutoff(relax, screen=None):
@@ -138,7 +132,7 @@ def test_cut_off_node_with_weak_certificate_is_resolved(monkeypatch):
             return LPSolve("cutoff", -np.inf, np.nan, None, 0)
         return real(relax, screen)
 
-    monkeypatch.setattr(bnb, "_solve", weak_cutoff)
+    monkeypatch.setattr(search, "_solve", weak_cutoff)
     res = exact_bounds(pr, tol=TOL, max_nodes=3000)
     assert hits, "the cut-off path was not exercised"
     assert all(i.status == "optimal" for i in res.infos)

@@ -85,11 +85,12 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     return tuple(out)
 
 
-def _report_unidentified(problem, bounds, prior):
+def _report_unidentified(problem, bounds, prior, stopped_by_time=False):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
     p = problem.p
     gb = bounds[p: p + 4].copy()
-    found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed())
+    found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed(),
+                         stopped_by_time=stopped_by_time)
     if not found:
         return gb, ()
     for name, _cause in found:
@@ -101,9 +102,28 @@ def _report_unidentified(problem, bounds, prior):
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
     warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
-                  "Use a record whose input reverses by more than the dead band.",
+                  "Use a record whose input reverses by more than the dead band, or give more "
+                  "time (total_time_limit) or a gamma_box.",
                   NotIdentifiedWarning, stacklevel=4)
     return gb, tuple(found)
+
+
+def _at_assumed_limit(problem, prior):
+    """Skip the search of a backlash end already at a default (assumed) a priori limit
+    after OBBT: no search inside the box can move it off, and it is reported as not
+    identified (infinite) anyway. With a box the user gave, every end is searched."""
+    if prior.user_given:
+        return None
+    p, assumed = problem.p, prior.assumed()
+
+    def skip(k, sense, bound):
+        i, j = k - p, (0 if sense > 0 else 1)
+        if not 0 <= i < 4 or not assumed[i, j]:
+            return False
+        lim = prior.box[i, j]
+        return abs(bound - lim) <= 1e-6 * max(1.0, abs(lim))
+
+    return skip
 
 
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
@@ -121,8 +141,10 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
     res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
                         max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
-                        deadline=deadline, n_jobs=lin.n_jobs)
-    gb, found = _report_unidentified(problem, res.bounds, prior)
+                        deadline=deadline, n_jobs=lin.n_jobs,
+                        skip=_at_assumed_limit(problem, prior))
+    gb, found = _report_unidentified(problem, res.bounds, prior,
+                                     res.details is not None and res.details.stopped_by_time)
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,

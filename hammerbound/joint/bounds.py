@@ -18,6 +18,7 @@ box of every variable and ``pool`` the verified points found on the way.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -27,13 +28,24 @@ from .local import restore
 from .problem import RecordProblem
 from .search import outer_leaves, search_end
 
-__all__ = ["record_bounds"]
+__all__ = ["RecordDetails", "record_bounds"]
 
 
-def _pool(problem, points, limit=24):
+@dataclass(frozen=True)
+class RecordDetails:
+    """What the one-record search did: the number of leaf boxes after OBBT, and whether
+    the time limit stopped it (then ends may sit at the a priori box for that reason)."""
+
+    leaves: int
+    stopped_by_time: bool
+
+
+def _pool(problem, points, limit=24, deadline=None):
     """Verified points from the last LP points of OBBT (restored to the set)."""
     out = []
     for x in points[-limit:]:
+        if deadline is not None and time.time() > deadline:
+            break
         w = restore(problem, x, max_iter=12)
         if w is not None:
             out.append(w)
@@ -46,6 +58,14 @@ def _best_start(pool, k, sense):
 
 def _end_job(problem, box, k, sense, start, kw):
     return search_end(problem, box, k, sense, start, **kw)
+
+
+def _not_searched(box, k, sense):
+    """The result of an end left at its OBBT bound (see ``skip``)."""
+    from .search import EndResult
+
+    return EndResult(sense * (box[k, 0] if sense > 0 else box[k, 1]), np.inf, None, 0, 0.0,
+                     "limit")
 
 
 def _info(name, sense, res, bound):
@@ -63,7 +83,7 @@ def _lp_infos(names, box):
 
 
 def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes=2000,
-                  time_limit=None, deadline=None, n_jobs=1) -> IntervalResult:
+                  time_limit=None, deadline=None, n_jobs=1, skip=None) -> IntervalResult:
     """Certified intervals of ``[theta, m_l, c_l, m_r, c_r]`` over the one-record set.
 
     Parameters
@@ -77,6 +97,10 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     max_nodes, time_limit : per interval end; ``deadline``: absolute :func:`time.time`.
     n_jobs : int
         Interval ends searched in parallel (joblib).
+    skip : callable or None
+        ``skip(k, sense, bound) -> bool``: an end whose OBBT bound makes the search
+        pointless (e.g. it is at an assumed a priori limit, so it will be reported as not
+        identified) keeps that certified bound, status "limit", without a search.
 
     Raises
     ------
@@ -92,17 +116,24 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     if method == "lp":
         return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
                               infos=_lp_infos(names, box), method="lp",
-                              time=time.perf_counter() - t0, root_box=box)
-    pool = _pool(problem, points)
+                              time=time.perf_counter() - t0, root_box=box,
+                              details=RecordDetails(len(leaves), _stopped(deadline)))
+    pool = _pool(problem, points, deadline=deadline)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
-    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs]
+    skipped = {(k, s) for k, s in jobs
+               if skip is not None and skip(k, s, box[k, 0] if s > 0 else box[k, 1])}
+    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs
+            if (k, s) not in skipped]
     if n_jobs == 1:
-        results = [_end_job(*a) for a in args]
+        found = [_end_job(*a) for a in args]
     else:
         from joblib import Parallel, delayed
 
-        results = Parallel(n_jobs=n_jobs)(delayed(_end_job)(*a) for a in args)
+        found = Parallel(n_jobs=n_jobs)(delayed(_end_job)(*a) for a in args)
+    found = iter(found)
+    results = [_not_searched(box, k, s) if (k, s) in skipped else next(found)
+               for k, s in jobs]
     bounds = box[: problem.p + 4].copy()
     infos = []
     for (k, s), res in zip(jobs, results, strict=True):
@@ -113,4 +144,9 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
             bounds[k, 1] = min(bounds[k, 1], b)
         infos.append(_info(names[k], s, res, bounds[k, 0 if s > 0 else 1]))
     return IntervalResult(tuple(names), bounds, infos=tuple(infos), method="exact",
-                          time=time.perf_counter() - t0, root_box=box, pool=tuple(pool))
+                          time=time.perf_counter() - t0, root_box=box, pool=tuple(pool),
+                          details=RecordDetails(len(leaves), _stopped(deadline)))
+
+
+def _stopped(deadline) -> bool:
+    return deadline is not None and time.time() > deadline

@@ -198,11 +198,15 @@ def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None):
 
 def _initial_eta(problem, v):
     """A noise sequence to linearise around: the stage-2 fixed-theta LP's witness (or 0)."""
+    from ..exceptions import SolverError
     from ..relaxations.problem import check_theta
 
     p = problem.p
     x = _clamped_play(problem, v)
-    chk = check_theta(problem.eiv_problem(x), v[:p])
+    try:
+        chk = check_theta(problem.eiv_problem(x), v[:p])
+    except SolverError:  # HiGHS could not decide that LP (e.g. far-off values): start at 0
+        return np.zeros(problem.N)
     return chk.eta
 
 

@@ -73,11 +73,14 @@ def reversal_summary(u) -> dict:
     return {"down": down, "up": up, "monotone": down == 0.0 or up == 0.0}
 
 
-def unidentified(u, names, bounds, prior, assumed) -> list[tuple[str, str]]:
+def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False
+                 ) -> list[tuple[str, str]]:
     """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
 
     ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)
-    array marking the prior limits that are assumptions (not the chapter's model).
+    array marking the prior limits that are assumptions (not the chapter's model);
+    ``stopped_by_time``: the time limit stopped the search (then that is the cause named,
+    not the input).
     """
     rev = reversal_summary(u)
     out = []
@@ -88,12 +91,17 @@ def unidentified(u, names, bounds, prior, assumed) -> list[tuple[str, str]]:
             lim = prior[i, j]
             if abs(bounds[i, j] - lim) > 1e-6 * max(1.0, abs(lim)):
                 continue
-            if rev["monotone"]:
+            if stopped_by_time:
+                cause = ("the time limit stopped the search before the record bounded it "
+                         "(raise total_time_limit)")
+            elif rev["monotone"]:
                 cause = ("the input never reverses, so only one line of the backlash is "
                          "ever active")
             elif name.startswith("c") or name.startswith("m"):
-                cause = (f"the input never moves back by more than the dead band (largest "
-                         f"reversals: {rev['down']:.4g} down, {rev['up']:.4g} up)")
+                cause = (f"the relaxation does not bound it below the assumed limit: the "
+                         f"input may never move back by more than the dead band (largest "
+                         f"reversals: {rev['down']:.4g} down, {rev['up']:.4g} up), or the "
+                         f"search needs more time")
             else:
                 cause = "the record does not excite this parameter"
             out.append((name, cause))

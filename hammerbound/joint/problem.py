@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..exceptions import DataValidationError, ParameterValidationError
+from ..exceptions import DataValidationError, ParameterValidationError, SolverError
 from ..relaxations.problem import EIVProblem, b_lags_of, check_theta
 from ..systems.models import GAMMA_NAMES
 from .modes import play
@@ -168,7 +168,10 @@ def verify_point(problem: RecordProblem, vector, tol=None) -> Witness | None:
     if not _steady_ok(problem, gamma, tol):
         return None
     x = play(problem.u, ml, cl, mr, cr, z0)
-    chk = check_theta(problem.eiv_problem(x), theta, tol)
+    try:
+        chk = check_theta(problem.eiv_problem(x), theta, tol)
+    except SolverError:  # the LP could not be decided: the point is not verified
+        return None
     if not chk.feasible:
         return None
     return Witness(theta.copy(), np.asarray(gamma, dtype=float).copy(), z0, x, chk.eta,

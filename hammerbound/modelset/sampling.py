@@ -40,6 +40,7 @@ import numpy as np
 
 from ..exceptions import ParameterValidationError, SolverError
 from ..relaxations.problem import check_theta
+from ..relaxations.witness import WitnessLP, seek_feasible
 
 __all__ = ["BacklashSamples", "CertifiedSamples", "sample_backlash", "sample_eiv"]
 
@@ -100,74 +101,9 @@ class CertifiedSamples:
         return self.theta.shape[0]
 
 
-class _WitnessLP:
-    """The fixed-theta LP of :func:`check_theta` on one warm-started HiGHS instance.
-
-    ``min s`` s.t. ``|M(theta) z - r(theta)| <= s`` over the noise boxes. The returned
-    witness is clipped to the boxes and its residual recomputed here in numpy, exactly as
-    :func:`check_theta` does: acceptance rests on that recomputation, not on the solver.
-    """
-
-    def __init__(self, problem):
-        import highspy
-
-        pr = problem
-        n, k, na = pr.N, pr.n_groups, pr.na
-        m = pr.equation_times.size
-        eta_idx, dx_idx = pr.eta_index(), pr.dx_index()
-        self.problem, self.m, self.nz, self.n = pr, m, n + k, n
-        self.rows = np.concatenate([np.repeat(np.arange(m), na + 1),
-                                    np.repeat(np.arange(m), dx_idx.shape[1])])
-        self.cols = np.concatenate([eta_idx.ravel(), n + dx_idx.ravel()])
-        self.lb = np.concatenate([-pr.deta, -pr.dx_group])
-        self.ub = np.concatenate([pr.deta, pr.dx_group])
-        self.hs = highspy
-        from ..solvers.highs import new_highs
-
-        self.h = new_highs()  # no "threads" option: see _highs.new_highs
-        self.basis = None
-
-    def witness(self, theta):
-        """``(z, relative violation)`` or None when the solver does not return an optimum."""
-        import scipy.sparse as sp
-
-        hs, pr, m, nz = self.hs, self.problem, self.m, self.nz
-        a, b = theta[: pr.na], theta[pr.na :]
-        vals = np.concatenate([np.tile(np.concatenate([[1.0], a]), m), np.tile(-b, m)])
-        M = sp.csr_matrix((vals, (self.rows, self.cols)), shape=(m, nz))
-        r = pr.simulate_noise_free(theta)
-        one = sp.csr_matrix(np.ones((m, 1)))
-        A = sp.vstack([sp.hstack([M, -one]), sp.hstack([M, one])]).tocsc()
-        lp = hs.HighsLp()
-        lp.num_col_, lp.num_row_ = nz + 1, 2 * m
-        c = np.zeros(nz + 1)
-        c[-1] = 1.0
-        lp.col_cost_ = c
-        lp.col_lower_ = np.concatenate([self.lb, [0.0]])
-        lp.col_upper_ = np.concatenate([self.ub, [hs.kHighsInf]])
-        lp.row_lower_ = np.concatenate([np.full(m, -hs.kHighsInf), r])
-        lp.row_upper_ = np.concatenate([r, np.full(m, hs.kHighsInf)])
-        lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
-        lp.a_matrix_.start_ = A.indptr.astype(np.int32)
-        lp.a_matrix_.index_ = A.indices.astype(np.int32)
-        lp.a_matrix_.value_ = A.data
-        self.h.passModel(lp)
-        if self.basis is not None:
-            self.h.setBasis(self.basis)
-        self.h.run()
-        if self.h.getModelStatus() != hs.HighsModelStatus.kOptimal:
-            self.basis = None
-            return None
-        self.basis = self.h.getBasis()
-        z = np.clip(np.asarray(self.h.getSolution().col_value[:nz]), self.lb, self.ub)
-        from ..relaxations.problem import equation_scale
-
-        viol = float(np.max(np.abs(M @ z - r) / equation_scale(pr, theta))) if m else 0.0
-        return z, viol
-
-
 class _Verifier:
-    """Membership with a witness: the warm-started LP above, :func:`check_theta` as fallback.
+    """Membership with a witness: the shared warm-started fixed-theta LP
+    (:class:`~hammerbound.relaxations.witness.WitnessLP`), :func:`check_theta` as fallback.
 
     A candidate is accepted only if the clipped witness reproduces every equation of
     (22.34) to ``FEASIBILITY_RTOL`` times the magnitude of its terms, the gain equality holds
@@ -182,7 +118,7 @@ class _Verifier:
 
         self.tol = FEASIBILITY_RTOL
         try:
-            self.lp = _WitnessLP(problem)
+            self.lp = WitnessLP(problem)
         except Exception:  # noqa: BLE001 - highspy missing: check_theta only
             self.lp = None
 
@@ -241,19 +177,21 @@ def _project(problem, theta):
 
 
 def _seek(problem, box, seeds, ver):
-    """A first feasible point by minimising the violation (the exact method's search)."""
-    try:
-        from ..relaxations.exact.points import _Pool
+    """A first feasible point by minimising the violation of the fixed-theta witness LP
+    (:func:`~hammerbound.relaxations.witness.seek_feasible`, the exact method's search),
+    accepted by ``ver``."""
+    starts = [np.asarray(s, dtype=float) for s in seeds] or [box.mean(axis=1)]
 
-        pool = _Pool(problem)
-        starts = [np.asarray(s, dtype=float) for s in seeds] or [box.mean(axis=1)]
-        pt = pool.seek(starts, box)
+    def accept(theta):
+        chk = ver(theta)
+        return None if chk is None else (np.array(theta, dtype=float), chk)
+
+    try:
+        screen = ver.lp if ver.lp is not None else WitnessLP(problem)
+        hit = seek_feasible(problem, screen, accept, starts, box)
     except Exception:  # noqa: BLE001 - no seed found: the caller raises a clear error
         return []
-    if pt is None:
-        return []
-    chk = ver(pt.theta)
-    return [] if chk is None else [(np.asarray(pt.theta, float), chk)]
+    return [] if hit is None else [hit]
 
 
 def sample_eiv(problem, box, n, *, seeds=(), random_state=None, thin=1, max_shrink=40,

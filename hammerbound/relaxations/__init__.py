@@ -3,7 +3,7 @@
 branch-and-bound (:func:`exact_bounds`), with :func:`check_theta` to verify a point and
 :func:`consistency` to decide whether the set is empty."""
 
-from .exact.bnb import exact_bounds
+from .exact.bnb import SearchOptions, exact_bounds
 from .exact.consistency import Consistency, consistency
 from .lp import lp_bounds
 from .moment import moment_bounds
@@ -17,6 +17,7 @@ __all__ = [
     "FeasibilityCheck",
     "IntervalResult",
     "IntervalSet",
+    "SearchOptions",
     "check_theta",
     "consistency",
     "exact_bounds",

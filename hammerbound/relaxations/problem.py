@@ -441,20 +441,9 @@ def check_theta(problem: EIVProblem, theta, tol: float | None = None, *,
     r = problem.simulate_noise_free(theta)
     m = r.size
     n, k = problem.N, problem.n_groups
-    a = theta[: problem.na]
-    b = theta[problem.na :]
-    rows = np.repeat(np.arange(m), problem.na + 1)
-    eta_cols = problem.eta_index().ravel()
-    eta_vals = np.tile(np.concatenate([[1.0], a]), m)
-    dx_rows = np.repeat(np.arange(m), b.size)
-    dx_cols = problem.dx_index().ravel() + n
-    dx_vals = np.tile(-b, m)
-    # M z = r  with z = [eta; dx]
-    M = sp.csr_matrix(
-        (np.concatenate([eta_vals, dx_vals]), (np.concatenate([rows, dx_rows]),
-         np.concatenate([eta_cols, dx_cols]))),
-        shape=(m, n + k),
-    )
+    from .witness import fixed_theta_matrix
+
+    M = fixed_theta_matrix(problem, theta)  # M z = r  with z = [eta; dx]
     # the LP is solved in scaled units (every error in [-1, 1], every equation divided by
     # the magnitude of its terms), so HiGHS's absolute tolerances act relative to the data
     scale = equation_scale(problem, theta)

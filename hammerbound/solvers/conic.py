@@ -89,6 +89,36 @@ class ConicData:
         return ConicData(self.q, self.q0, self.sense, self.A, self.b, list(self.cones))
 
 
+@dataclass
+class ConicSolution:
+    """Raw outcome of one conic solve (any backend).
+
+    Attributes
+    ----------
+    status : str
+        A constant of :mod:`hammerbound.status` (``OPTIMAL``, ``INACCURATE``,
+        ``INFEASIBLE``, ``LIMIT``, ``FAILED``).
+    native_status : str
+        The solver's own word.
+    x : ndarray, shape (n,) or None
+    z : ndarray, shape (m,) or None
+        Dual vector in the convention of this module.
+    primal_value, dual_value : float
+        ``q'x + q0`` and ``-b'z + q0`` as reported (not guaranteed).
+    iterations : int or None
+    time : float
+    """
+
+    status: str
+    native_status: str
+    x: np.ndarray | None
+    z: np.ndarray | None
+    primal_value: float
+    dual_value: float
+    iterations: int | None
+    time: float
+
+
 # ---------------------------------------------------------------------------------------
 # svec helpers
 # ---------------------------------------------------------------------------------------

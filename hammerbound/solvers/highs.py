@@ -36,7 +36,12 @@ import highspy
 import numpy as np
 import scipy.sparse as sp
 
+from ..status import FAILED, INFEASIBLE, OPTIMAL
 from .safe_lp import certify_infeasible
+
+#: LP status (not an interval-end status): the dual simplex proved the value exceeds the
+#: requested objective bound (the reported bound is rigorous).
+CUTOFF = "cutoff"
 
 EPS = np.finfo(float).eps
 INF = highspy.kHighsInf
@@ -216,7 +221,8 @@ class LPSolve:
 
     Attributes
     ----------
-    status : {"optimal", "infeasible", "cutoff", "failed"}
+    status : {OPTIMAL, INFEASIBLE, CUTOFF, FAILED}
+        Constants of :mod:`hammerbound.status` (and :data:`CUTOFF`).
         ``"infeasible"`` only with a certificate; ``"cutoff"`` means the dual simplex
         proved the value exceeds the requested objective bound (``bound`` is rigorous).
     bound : float
@@ -544,11 +550,11 @@ class HighsLP:
         """
         h = self.h
         if np.any(self.lb > self.ub):
-            return LPSolve("infeasible", np.inf, np.nan, None, 0)
+            return LPSolve(INFEASIBLE, np.inf, np.nan, None, 0)
         st, note = self._run()
         it = int(h.getInfo().simplex_iteration_count)
         if st is None:
-            return LPSolve("failed", -np.inf, np.nan, None, it, note=note, refused=True)
+            return LPSolve(FAILED, -np.inf, np.nan, None, it, note=note, refused=True)
         res = self._result(st, it)
         res.note = note
         return res
@@ -568,20 +574,20 @@ class HighsLP:
                 self._unscaled, self.rescaled = False, True
                 h.setOptionValue("simplex_scale_strategy", 2)  # HiGHS's default
                 return self.solve()
-            return LPSolve("optimal", bound, val, x, it, r)
+            return LPSolve(OPTIMAL, bound, val, x, it, r)
         if st == MS.kObjectiveBound:
             sol = h.getSolution()
             y = np.asarray(sol.row_dual)
             b = self.bound_from(y) if sol.dual_valid else -np.inf
-            return LPSolve("cutoff", b, np.nan, None, it)
+            return LPSolve(CUTOFF, b, np.nan, None, it)
         if st == MS.kInfeasible:
             if self._certify_infeasible():
-                return LPSolve("infeasible", np.inf, np.nan, None, it)
-            return LPSolve("failed", -np.inf, np.nan, None, it)
+                return LPSolve(INFEASIBLE, np.inf, np.nan, None, it)
+            return LPSolve(FAILED, -np.inf, np.nan, None, it)
         # anything else: whatever duals exist still give a valid (maybe weak) bound
         try:
             sol = h.getSolution()
             b = self.bound_from(np.asarray(sol.row_dual)) if sol.dual_valid else -np.inf
         except Exception:  # pragma: no cover
             b = -np.inf
-        return LPSolve("failed", b, np.nan, None, it)
+        return LPSolve(FAILED, b, np.nan, None, it)

@@ -24,6 +24,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
+from ..status import FAILED, INFEASIBLE, OPTIMAL
+
 EPS = np.finfo(float).eps
 
 
@@ -97,7 +99,7 @@ def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None,
     b_ub = np.zeros(0) if b_ub is None else np.asarray(b_ub, dtype=float)
     b_eq = np.zeros(0) if b_eq is None else np.asarray(b_eq, dtype=float)
     if np.any(lb > ub):
-        return SafeLPResult("infeasible", np.inf, np.nan, None, "empty variable box")
+        return SafeLPResult(INFEASIBLE, np.inf, np.nan, None, "empty variable box")
     res = linprog(
         c,
         A_ub=A_ub if A_ub.shape[0] else None,
@@ -112,12 +114,12 @@ def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None,
         y_ub = res.ineqlin.marginals if A_ub.shape[0] else np.zeros(0)
         y_eq = res.eqlin.marginals if A_eq.shape[0] else np.zeros(0)
         bnd = dual_bound(c, A_ub, b_ub, A_eq, b_eq, lb, ub, y_ub, y_eq)
-        return SafeLPResult("optimal", bnd, float(res.fun), res.x, res.message)
+        return SafeLPResult(OPTIMAL, bnd, float(res.fun), res.x, res.message)
     if res.status == 2:
         if certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub):
-            return SafeLPResult("infeasible", np.inf, np.nan, None, "certified infeasible")
-        return SafeLPResult("failed", -np.inf, np.nan, None, "infeasibility not certified")
-    return SafeLPResult("failed", -np.inf, np.nan, None, str(res.message))
+            return SafeLPResult(INFEASIBLE, np.inf, np.nan, None, "certified infeasible")
+        return SafeLPResult(FAILED, -np.inf, np.nan, None, "infeasibility not certified")
+    return SafeLPResult(FAILED, -np.inf, np.nan, None, str(res.message))
 
 
 def certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub) -> bool:
@@ -137,4 +139,4 @@ def certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub) -> bool:
          np.column_stack([np.zeros(2 * m_eq), np.concatenate([smax_eq, smax_eq])])]
     )
     res = safe_minimize(c, Aub, b_ub, Aeq, b_eq, bnds)
-    return res.status == "optimal" and res.bound > 0.0
+    return res.status == OPTIMAL and res.bound > 0.0

@@ -74,8 +74,16 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         (default): a plain EIV problem, no gain constraint. Inside
         :class:`HammersteinBacklashIdentifier` stage 2 always uses the normalisation
         ``steady_state_gain=1`` (22.8) that stage 1 assumes.
-    method : {"moment", "lp", "exact"}, default "moment"
-        See the module docstring.
+    method : {"exact", "lp", "moment"}, default "exact"
+        See the module docstring. The default is chosen by measurement
+        (``python -m benchmarks default_method``, ``docs/benchmarks.md``): over six
+        representative records (the chapter example at N = 100 and 300, Delta eta = 0.05
+        and 0.3; second-order and first-order EIV records of N = 150 with errors uniform
+        and exactly at the bound) ``"exact"`` gave the tight intervals in 58 s in total
+        (0.9-36 s per fit, faster than the moment method on 5 of 6), the order-1 moment
+        relaxation intervals 1.06-10x wider in 74 s (2-31 s per fit), ``"lp"`` 2.2-13x
+        wider in under 0.2 s per fit. ``"lp"`` is the fast screening choice; ``"moment"``
+        (the chapter's relaxation) stays fully available.
     relaxation_order : int, default 1
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
@@ -92,8 +100,13 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         parameters x noise), ``"full"`` every monomial of degree <= ``relaxation_order``
         (at least as tight, ~50x slower: 404 s for N = 10). See
         :class:`~hammerbound.relaxations.moment.relaxation.MomentRelaxation`.
-    solver : {"clarabel", "cvxopt", "mosek"}, default "clarabel"
-        Conic backend of the moment method.
+    solver : str, default "clarabel"
+        Conic backend of the moment method, one of
+        :func:`hammerbound.available_solvers` (``"clarabel"``, ``"cvxopt"``; ``"qics"``
+        and ``"mosek"`` when installed, through PICOS; ``pip install 'hammerbound[solvers]'``
+        adds CVXOPT and QICS). An unknown or unavailable
+        name raises :class:`~hammerbound.exceptions.SolverNotAvailableError` at once,
+        naming the available ones.
     solver_options : dict or None
         Native options of the backend (e.g. ``{"max_iter": 200}`` for Clarabel).
     theta_box : array of shape (p, 2) or None
@@ -188,7 +201,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     """
 
     def __init__(self, na=2, nb=2, *, nk=1, output_bound=None, steady_state_gain=None,
-                 method="moment", relaxation_order=1, relaxation_basis="sparse",
+                 method="exact", relaxation_order=1, relaxation_basis="sparse",
                  solver="clarabel", solver_options=None, theta_box=None, tol=1e-4,
                  max_nodes=20000, time_limit=600.0,
                  total_time_limit=None, on_failure="raise", n_jobs=1, progress=False,
@@ -441,10 +454,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                     check_moment_budget,
                     estimate_moment_relaxation,
                 )
-                from ..solvers import get_solver
-
-                backend = get_solver(self.solver)  # fail fast on an unknown/missing solver
-                backend.check_options(self.solver_options)
+                # (solver and options were checked by _check_params, before any work)
                 # memory/time guard before any work (refuses with the estimate, or warns)
                 check_moment_budget(estimate_moment_relaxation(
                     problem, self.relaxation_order, basis=self.relaxation_basis))

@@ -85,3 +85,10 @@ def check_params(est) -> None:
             f"solver_options must be a dict of native solver options or None; got "
             f"{type(est.solver_options).__name__}."
         )
+    if est.method == "moment":
+        # an unknown or unavailable backend (and bad options) are refused before any work,
+        # naming the available backends (not in __init__: scikit-learn estimators validate
+        # in fit, and set_params bypasses __init__)
+        from ..solvers import get_solver
+
+        get_solver(est.solver).check_options(est.solver_options)

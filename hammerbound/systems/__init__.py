@@ -24,9 +24,14 @@ from .models import (
     simulate_backlash,
     steady_state_gain,
 )
+from .records import INPUTS, OrdinaryRecord, ordinary_record, random_steps
 
 __all__ = [
     "GAMMA_NAMES",
+    "INPUTS",
+    "OrdinaryRecord",
+    "ordinary_record",
+    "random_steps",
     "Backlash",
     "ChapterExample",
     "EIVExample",

@@ -47,7 +47,7 @@ def add_parser(sub):
     add_bound_options(p, input_bound=False, steady=True)
     add_model_options(p)
     add_csv_options(p)
-    add_stage2_options(p, method=None, inner_signal=True)
+    add_stage2_options(p, inner_signal=True)
     p.add_argument("--json", action="store_true",
                    help="write the result as JSON to stdout (and nothing else)")
     p.add_argument("--report", default=None, metavar="DIR",
@@ -79,7 +79,6 @@ def run(args) -> int:
             raise UsageError("give either one ordinary record (--record DATA.csv) or the "
                              "PRBS experiment (--prbs PRBS.csv with --steady STEADY.csv), "
                              "not both")
-        args.method = args.method or "exact"
         from .one_record import run_one_record
 
         return run_one_record(args)
@@ -90,7 +89,6 @@ def run(args) -> int:
         raise UsageError("give one ordinary record (--record DATA.csv), or the chapter's "
                          "two experiments: --steady STEADY.csv (steady-state points) and "
                          "--prbs PRBS.csv (the PRBS experiment)")
-    args.method = args.method or "moment"
     return _two_records(args)
 
 

@@ -113,12 +113,10 @@ def add_model_options(p, *, required=False):
                    help="input delay: 0 adds b0, 1 = chapter (default), >1 more delay")
 
 
-def add_stage2_options(p, method="moment", *, inner_signal=False):
+def add_stage2_options(p, method="exact", *, inner_signal=False):
     """Method, relaxation, solver, parallel jobs and the exact method's stopping rules."""
-    default = (f"default {method}" if method else
-               "default: exact for --record, moment for --steady/--prbs")
     p.add_argument("--method", default=method, choices=["lp", "moment", "exact"],
-                   help=f"stage-2 method ({default}; exact gives the tight intervals)")
+                   help=f"stage-2 method (default {method}; exact gives the tight intervals)")
     p.add_argument("--order", type=int, default=1, help="moment relaxation order (default 1)")
     p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
     if inner_signal:

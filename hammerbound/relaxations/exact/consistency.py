@@ -26,10 +26,11 @@ import numpy as np
 from ...exceptions import EmptyFeasibleSetError
 from ..lp import lp_bounds
 from ..problem import EIVProblem
-from .bnb import _search, verified_points
+from .bnb import verified_points
 from .local import restore
 from .obbt import _obbt
 from .points import _Pool
+from .search import search_end
 
 __all__ = ["Consistency", "consistency"]
 
@@ -103,9 +104,9 @@ def consistency(problem: EIVProblem, *, time_limit: float = 60.0,
     if left <= 0:
         return done("undecided", "limit", message=f"time limit ({time_limit:g} s) reached")
     # a tolerance this large ends the tree at its first verified point
-    out = _search(problem, box, 0, 1.0, [], roots.get((0, 1.0)), tol=1e12,
-                  max_nodes=max_nodes, time_limit=left, progress=False, position=0,
-                  deadline=deadline)
+    out = search_end(problem, box, 0, 1.0, [], roots.get((0, 1.0)), tol=1e12,
+                     max_nodes=max_nodes, time_limit=left, progress=False, position=0,
+                     deadline=deadline)
     if out.bound == np.inf:
         return done("empty", "branch-and-bound", nodes=out.nodes,
                     message="every node of the McCormick relaxation certified infeasible")

@@ -302,8 +302,8 @@ def polish(problem: EIVProblem, points, *, margin: float = POLISH_MARGIN,
     """
     import dataclasses
 
-    from .points import _Point
     from ..problem import check_theta
+    from .points import _Point
 
     points = list(points)
     if not any(pt is not None for pt in points):

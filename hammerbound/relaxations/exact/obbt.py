@@ -39,6 +39,17 @@ def _highs_inf():
     return INF
 
 
+def warm_start(lp, basis) -> bool:
+    """Warm start ``lp`` from ``basis``: a picklable :meth:`._highs.HighsLP.get_basis`
+    (from a worker) or an in-process :meth:`._highs.HighsLP.snapshot` (cheaper: no
+    conversion element by element), or None (nothing to do)."""
+    if basis is None:
+        return False
+    if isinstance(basis, tuple):
+        return lp.set_basis(basis)
+    return lp.restore(basis)
+
+
 def _relaxation(problem, box, ws):
     """The full McCormick relaxation (``ws`` None) or one on the working set ``ws``."""
     if ws is None:
@@ -64,13 +75,14 @@ def _solve(relax, screen=None):
     return res
 
 
-def _obbt_task(problem, box, tasks, bases, deadline=None, ws=None):
+def _obbt_task(problem, box, tasks, bases, deadline=None, ws=None, picklable=True):
     """Solve the OBBT LPs ``tasks`` (list of (k, sense)) on one McCormick model.
 
-    Returns a list of ``(bound, theta (p,) or None, x or None, basis)`` where ``bound``
-    is a rigorous lower bound of ``min sense * theta_k`` over the relaxation (``-inf``
-    for a task skipped or cut short at ``deadline``, a :func:`time.time` timestamp), and
-    the working set at the end (None without one).
+    The bases returned are picklable (for joblib workers) or, with ``picklable=False``
+    (serial runs), in-process snapshots. Returns a list of ``(bound, theta (p,) or None,
+    x or None, basis)`` where ``bound`` is a rigorous lower bound of ``min sense * theta_k``
+    over the relaxation (``-inf`` for a task skipped or cut short at ``deadline``, a
+    :func:`time.time` timestamp), and the working set at the end (None without one).
     """
     relax = _relaxation(problem, box, ws)
     screen = None if ws is None else _Screen(problem, working_set=True)
@@ -85,15 +97,19 @@ def _obbt_task(problem, box, tasks, bases, deadline=None, ws=None):
         c = np.zeros(relax.ncol)
         c[k] = s
         relax.lp.set_cost(c)
-        if basis is not None and ws is None:
-            relax.lp.set_basis(basis)
+        if ws is None:
+            warm_start(relax.lp, basis)
         r = _solve(relax, screen)
         if r.status == "infeasible":
             out.append((np.inf, None, None, r.iterations))
             continue
         out.append((r.bound, None if r.x is None else r.x.copy(),
-                    relax.lp.get_basis() if ws is None else None, r.iterations))
+                    _basis(relax.lp, picklable) if ws is None else None, r.iterations))
     return out, (None if ws is None else relax.equations)
+
+
+def _basis(lp, picklable):
+    return lp.get_basis() if picklable else lp.snapshot()
 
 
 def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, deadline=None,
@@ -130,7 +146,7 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
         old = box.copy()
         if nj == 1:
             res, ws_new = _obbt_task(problem, box, tasks, [bases[t] for t in tasks], deadline,
-                                     ws)
+                                     ws, picklable=parallel is not None)
             res = dict(zip(tasks, res, strict=True))
             ws_all = [ws_new]
         else:

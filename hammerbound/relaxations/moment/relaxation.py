@@ -39,6 +39,7 @@ from ...solvers.conic import (
     repair_dual,
     verified_lower_bound,
 )
+from ...status import BOX, FAILED, INACCURATE, INFEASIBLE, LIMIT, OPTIMAL, RELAXATION
 from ..problem import EIVProblem
 from ..result import BoundInfo, DualCertificate, IntervalResult, MomentDetails
 from .basis import (  # noqa: F401 - re-exported for compatibility
@@ -221,9 +222,9 @@ class MomentRelaxation:
 # ---------------------------------------------------------------------------------------
 
 
-def _solve_group(data: ConicData, xub, jobs, solver: str, solver_options: dict | None):
-    """Worker: solve several objectives on one conic data set and certify each."""
-    backend = get_solver(solver)
+def _solve_group(data: ConicData, xub, jobs, backend, solver_options: dict | None):
+    """Worker: solve several objectives on one conic data set and certify each (``backend``
+    is the registry's object, passed as it is: no lookup or licence check in a worker)."""
     out = []
     try:
         inst = backend.conic(data, solver_options)
@@ -277,7 +278,9 @@ def moment_bounds(
         The EIV problem (22.34).
     order : int, default 2
         Relaxation order ``delta``.
-    solver : {"clarabel", "cvxopt", "mosek"}
+    solver : str, default "clarabel"
+        A conic backend of :func:`~hammerbound.solvers.available_solvers`
+        (``"clarabel"``, ``"cvxopt"``, ``"qics"``, ``"mosek"``).
     solver_options : dict, optional
         Native solver options (e.g. ``{"max_iter": 50}`` for Clarabel).
     n_jobs : int, default 1
@@ -290,11 +293,12 @@ def moment_bounds(
         (``certified=False``: the bound is still guaranteed, by the fallback's certificate)
         or raise :class:`SolverError`.
     fallback : ndarray, shape (p, 2), optional
-        Certified outer bounds already known (e.g. the polytopic LP result): every reported
-        interval is intersected with it, and it is what ``on_failure="box"`` falls back to.
-        Default: ``theta_box`` when one is given (the estimator passes the LP bounds),
-        else the polytopic LP bounds computed here, so a failed certificate never reports
-        the (wider) a priori box where the LP bound is tighter.
+        Certified outer bounds already known: every reported interval is intersected with
+        them, and an end whose certificate is not tighter (or missing, with
+        ``on_failure="box"``) reports the fallback end. Default: the polytopic LP bounds
+        (``lp`` when given, else computed here), intersected with ``theta_box`` when one
+        is given, so no end is ever wider than the LP bound, nor from the a priori box
+        where the LP bound is tighter.
     max_work : float, optional
         Size budget ``rows x moments`` of the relaxation, checked *before* it is built
         (:mod:`.moment_size`); default ``MOMENT_MAX_WORK = 2.5e8`` (about 1 GB and ten
@@ -316,10 +320,14 @@ def moment_bounds(
     -------
     IntervalResult
         ``bounds`` shape ``(p, 2)``; ``infos`` holds ``2 p`` :class:`BoundInfo` (p0 min,
-        p0 max, ...) with their dual ``certificate``; method ``"moment"``; an end that
-        coincides with ``problem.theta_box`` has status ``BOX``; ``lp`` is the LP result
-        used (given or computed here, else None); ``details`` has the relaxation's size
-        and build time (:class:`~hammerbound.relaxations.result.MomentDetails`).
+        p0 max, ...) with their dual ``certificate``; method ``"moment"``. Each end's
+        status says where its value comes from: the moment certificate when it is tighter
+        than the fallback (``OPTIMAL``, or ``INACCURATE`` / ``LIMIT`` when the solver
+        stopped early and the bound comes from its dual), else the fallback end:
+        ``RELAXATION`` (the LP bound) or ``BOX`` (only where the fallback end is
+        ``problem.theta_box`` itself). ``lp`` is the LP result used (given or computed
+        here, else None); ``details`` has the relaxation's size and build time
+        (:class:`~hammerbound.relaxations.result.MomentDetails`).
 
     Raises
     ------
@@ -358,13 +366,17 @@ def moment_bounds(
         size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
         check_moment_budget(size, max_work=max_work)
     if fallback is None:
-        if theta_box is not None:
-            fallback = np.asarray(theta_box, dtype=float)
-        else:
+        # the polytopic LP bound is cheap and certified: a moment end is never reported
+        # wider than it (nor from the a priori box where the LP bound is tighter)
+        if lp is None:
             from ..lp import lp_bounds
 
             lp = lp_bounds(problem, check_box=False)
-            fallback = lp.bounds
+        fallback = lp.bounds
+        if theta_box is not None:  # both are certified outer bounds: keep the tighter ends
+            tb = np.asarray(theta_box, dtype=float)
+            fallback = np.column_stack([np.maximum(fallback[:, 0], tb[:, 0]),
+                                        np.minimum(fallback[:, 1], tb[:, 1])])
     fallback = np.asarray(fallback, dtype=float)
     if fallback.shape != (problem.p, 2):
         raise ParameterValidationError(
@@ -386,13 +398,13 @@ def moment_bounds(
         # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
         opts = {**opts, "max_threads": 1}
     if n_jobs == 1:
-        results = _solve_group(data, relax.xub, jobs, backend.name, opts)
+        results = _solve_group(data, relax.xub, jobs, backend, opts)
     else:
         from joblib import Parallel, delayed
 
         groups = [jobs[i::n_jobs] for i in range(n_jobs)]
         parts = Parallel(n_jobs=n_jobs)(
-            delayed(_solve_group)(data, relax.xub, g, backend.name, opts) for g in groups
+            delayed(_solve_group)(data, relax.xub, g, backend, opts) for g in groups
         )
         results = [r for part in parts for r in part]
     results.sort(key=lambda r: r[0])
@@ -401,57 +413,23 @@ def moment_bounds(
     infos = []
     for (jid, sol, vb, err), (k, sense, _q, _q0) in zip(results, objs, strict=True):
         assert jid == len(infos)
-        # monotone knowledge: never wider than the a priori box or the fallback bounds
-        lo_box = max(box[k, 0], fallback[k, 0])
-        hi_box = min(box[k, 1], fallback[k, 1])
-        if vb is not None and np.isfinite(vb.bound):
-            # vb.bound <= min of (+-theta_k); add a rounding margin for the sign flip
-            lb = vb.bound - 2 * EPS * abs(vb.bound)
-            val = lb if sense == "min" else -lb
-            certified = True
-        else:
-            val = lo_box if sense == "min" else hi_box
-            certified = False
-        if sense == "min":
-            bnd = max(val, lo_box)
-        else:
-            bnd = min(val, hi_box)
-        status = "failed" if sol is None else sol.status
-        if not certified and on_failure == "raise":
+        if (vb is None or not np.isfinite(vb.bound)) and on_failure == "raise":
+            status = FAILED if sol is None else sol.status
             raise SolverError(
                 f"{backend.name}: could not certify the {sense} of {names[k]} "
                 f"(status {status}{': ' + err if err else ''}); try another solver, "
                 "tighter tolerances or on_failure='box'."
             )
-        sv = np.nan
-        if sol is not None and np.isfinite(sol.primal_value):
-            sv = sol.primal_value if sense == "min" else -sol.primal_value
-        cert = None
-        if vb is not None:
-            cert = DualCertificate(vb.dual_value if sense == "min" else -vb.dual_value,
-                                   vb.psd_correction, vb.residual_correction,
-                                   vb.cone_correction)
-        msg = err
-        if sol is not None:
-            msg = f"{backend.name}: {sol.native_status}" + (f"; {err}" if err else "")
-        if not certified:
-            msg += "; no certificate, the fallback (LP / a priori box) end reported"
-        infos.append(
-            BoundInfo(
-                param=names[k], sense=sense, bound=float(bnd), solver_value=float(sv),
-                status=status, certified=certified,
-                time=float(sol.time) if sol is not None else 0.0,
-                iterations=None if sol is None else sol.iterations, message=msg,
-                certificate=cert,
-            )
-        )
-        bounds[k, 0 if sense == "min" else 1] = bnd
-    from ..lp import end_statuses
-
+        info = _end_info(names[k], sense, sol, vb, err, backend.name,
+                         (max(box[k, 0], fallback[k, 0]), min(box[k, 1], fallback[k, 1])),
+                         problem.theta_box[k])
+        infos.append(info)
+        bounds[k, 0 if sense == "min" else 1] = info.bound
     return IntervalResult(
         param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="moment",
         time=time.perf_counter() - t_start,
-        status=end_statuses(names, infos, bounds, problem.theta_box), lp=lp,
+        status=tuple((infos[2 * k].status, infos[2 * k + 1].status) for k in range(len(names))),
+        lp=lp,
         details=MomentDetails(
             order=relax.order, basis=relax.basis, solver=backend.name,
             n_moments=relax.n_moments, n_psd_blocks=relax.n_psd_blocks,
@@ -460,6 +438,52 @@ def moment_bounds(
             eliminated=None if relax.pop.elim is None else names[relax.pop.elim],
             n_rows=relax.data.m),
     )
+
+
+def _end_info(name, sense, sol, vb, err, solver, known, a_priori) -> BoundInfo:
+    """One end of a moment interval, labelled by where its value comes from.
+
+    ``known`` = (lower, upper) certified outer bounds already known for the parameter (the
+    polytopic LP bound, within the a priori box); ``a_priori`` its a priori box
+    (``problem.theta_box``). The end is the moment certificate when it is tighter than
+    ``known`` (status of the solve: ``OPTIMAL``, else ``INACCURATE`` / ``LIMIT``: the bound
+    comes from the dual), else the known end: ``BOX`` when that end is the a priori box
+    itself, ``RELAXATION`` (the LP bound) otherwise. Never wider than ``known``.
+    """
+    lo, hi = known
+    certified = vb is not None and bool(np.isfinite(vb.bound))
+    val = np.nan
+    if certified:
+        # vb.bound <= min of (+-theta_k); add a rounding margin for the sign flip
+        lb = vb.bound - 2 * EPS * abs(vb.bound)
+        val = lb if sense == "min" else -lb
+    tighter = certified and (val > lo if sense == "min" else val < hi)
+    if tighter:
+        bnd = float(val)
+        status = sol.status if sol.status in (OPTIMAL, LIMIT, INFEASIBLE) else INACCURATE
+    else:
+        bnd = float(lo if sense == "min" else hi)
+        w = max(1.0, a_priori[1] - a_priori[0])
+        at_box = (bnd <= a_priori[0] + 1e-9 * w) if sense == "min" else (
+            bnd >= a_priori[1] - 1e-9 * w)
+        status = BOX if at_box else RELAXATION
+    sv = np.nan
+    if sol is not None and np.isfinite(sol.primal_value):
+        sv = sol.primal_value if sense == "min" else -sol.primal_value
+    cert = None
+    if vb is not None:
+        cert = DualCertificate(vb.dual_value if sense == "min" else -vb.dual_value,
+                               vb.psd_correction, vb.residual_correction, vb.cone_correction)
+    msg = err if sol is None else f"{solver}: {sol.native_status}" + (f"; {err}" if err else "")
+    if not tighter:
+        why = ("its certificate" + (f" ({val:.6g})" if certified else "") + " is not tighter"
+               if certified else "no certificate")
+        msg += (f"; {why}: the {'a priori box' if status == BOX else 'LP bound'} end "
+                "is reported")
+    return BoundInfo(
+        param=name, sense=sense, bound=bnd, solver_value=float(sv), status=status,
+        certified=certified, time=float(sol.time) if sol is not None else 0.0,
+        iterations=None if sol is None else sol.iterations, message=msg, certificate=cert)
 
 
 def relaxation_size(n_vars_clique: int, order: int) -> int:

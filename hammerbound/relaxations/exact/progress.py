@@ -1,0 +1,77 @@
+"""Progress of the exact method's interval ends on stderr (:class:`_GapBar`): a tqdm bar on
+a terminal, plain lines otherwise. Stdout is never written."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+
+class _GapBar:
+    """Progress of one interval end: the fraction of its initial certified gap closed.
+
+    The gap is "best verified value minus certified outer bound" (before a verified point
+    exists, the width of the root box in ``theta_k`` stands for the value); the search is
+    done when the gap is below ``tol``, so 100 % means done. On a terminal a tqdm bar whose
+    postfix shows the gap, the nodes and the time left before the time limit stops the
+    search; otherwise (a pipe, a file) plain lines without cursor codes: one every
+    :data:`_LINE_EVERY` seconds and one when the end is done.
+    """
+
+    def __init__(self, label, position, gap0, stop_at):
+        import sys
+
+        self.gap0 = max(float(gap0), 1e-300)
+        self.stop_at = stop_at
+        self.shown = 0.0
+        self.label = label
+        self.t0 = self.last = time.perf_counter()
+        self.state = (0.0, float(gap0), 0)
+        self.bar = None
+        isatty = getattr(sys.stderr, "isatty", None)
+        if callable(isatty) and isatty():
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=100.0, position=position, leave=False, desc=label,
+                            bar_format="{desc}: {percentage:3.0f}% of gap closed |{bar}| "
+                                       "{elapsed} {postfix}")
+
+    def update(self, gap, target, nodes):
+        gap = max(float(gap), 0.0)
+        done = 1.0 - max(gap - target, 0.0) / max(self.gap0 - target, 1e-300)
+        pct = 100.0 * min(max(done, 0.0), 1.0)
+        self.state = (pct, gap, nodes)
+        if self.bar is None:
+            if time.perf_counter() - self.last >= _LINE_EVERY:
+                self._line("searching")
+            return
+        left = self.stop_at - time.perf_counter()
+        self.bar.set_postfix_str(f"gap {gap:.3g}, {nodes} nodes, stops within {max(left, 0):.0f} s"
+                                 if np.isfinite(left) else f"gap {gap:.3g}, {nodes} nodes",
+                                 refresh=False)
+        if pct > self.shown:
+            self.bar.update(pct - self.shown)
+            self.shown = pct
+        else:
+            self.bar.update(0)
+
+    def _line(self, what):
+        import sys
+
+        pct, gap, nodes = self.state
+        self.last = time.perf_counter()
+        print(f"exact {self.label}: {what}, {pct:.0f}% of gap closed, gap {gap:.3g}, "
+              f"{nodes} nodes, {self.last - self.t0:.1f} s", file=sys.stderr, flush=True)
+
+    def close(self):
+        if self.bar is None:
+            self._line("finished")
+        else:
+            self.bar.close()
+
+
+#: seconds between progress lines of an interval end when stderr is not a terminal
+_LINE_EVERY = 10.0
+
+

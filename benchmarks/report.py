@@ -16,9 +16,11 @@ import numpy as np
 try:
     from benchmarks import _common as C
     from benchmarks import default_method
+    from benchmarks import report_one_record as R1
 except ImportError:  # run as a script
     import _common as C
     import default_method
+    import report_one_record as R1
 
 OUT = C.ROOT / "docs" / "benchmarks.md"
 NOTES = C.HERE / "report_notes.md"
@@ -832,6 +834,12 @@ def main(argv=None):
            section_stage1_extremal(), notes_section("stage1-extremal-findings"),
            "## 4. Monte Carlo coverage\n", notes_section("coverage-intro"), section_coverage(),
            notes_section("coverage-findings"),
+           "## 4b. One ordinary record (issue 26)\n", notes_section("one-record-intro"),
+           "### Soundness\n", R1.section_soundness(), "### Tightness against the two-stage "
+           "method\n", R1.section_tightness(), "### Speed\n", R1.section_speed(),
+           notes_section("one-record-findings"),
+           "### Real plant data: 80 valve loops\n", notes_section("valve-intro"),
+           R1.section_valve(), notes_section("valve-findings"),
            "## 5. Guaranteed model set (robust control)\n", section_modelset(),
            notes_section("modelset-findings"),
            "### Uncertainty weights by order\n", notes_section("weights-intro"),

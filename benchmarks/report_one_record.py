@@ -1,0 +1,147 @@
+"""The one-record sections of docs/benchmarks.md (issue 26): soundness, tightness, speed,
+and the valve loops (read by benchmarks/report.py; every number from benchmarks/results/)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:
+    from benchmarks import _common as C
+except ImportError:  # run as a script
+    import _common as C
+
+PARAMS = ("ml", "cl", "mr", "cr", "a1", "a2", "b1", "b2")
+
+
+def _json(name):
+    p = C.RESULTS / name
+    return C.read_json(p) if p.exists() else None
+
+
+def _table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def _env(j):
+    e = j.get("environment") or {}
+    return (f"_Run {e.get('date')}, {e.get('cpu_count')} CPUs, load average at start "
+            f"{(e.get('loadavg_at_start') or ['?'])[0]} (shared machine)._")
+
+
+def section_soundness():
+    parts = []
+    for tag in ("", "_quick"):
+        j = _json(f"one_record_soundness{tag}.json")
+        if not j or not j["rows"]:
+            continue
+        rows = j["rows"]
+        groups = {}
+        for r in rows:
+            groups.setdefault((r["N"], r["method"], r["signal"]), []).append(r)
+        body = []
+        for (N, m, sig), rs in sorted(groups.items()):
+            sec = [r["seconds"] for r in rs if "seconds" in r]
+            body.append([N, m, sig, len(rs), sum(r.get("inside") is True for r in rs),
+                         sum("error" in r for r in rs),
+                         sum(r.get("infinite_ends", 0) > 0 for r in rs),
+                         sum(r.get("witnesses", 0) for r in rs),
+                         sum(r.get("witnesses_failed", 0) for r in rs),
+                         f"{np.median(sec):.1f}" if sec else "–",
+                         f"{np.max(sec):.1f}" if sec else "–"])
+        levels = sorted({r["deta"] for r in rows})
+        lim = sorted({r.get("end_time_limit") for r in rows if r["method"] == "exact"} - {None})
+        parts.append(
+            f"Plan `one_record_soundness{tag}`: {len(rows)} runs (output bounds {levels}, "
+            "noise uniform and exactly at ±bound, seeds per configuration as run"
+            + (f"; exact runs stopped at {lim} s per interval end, status \"limit\"" if lim
+               else "") + "). Truth inside = all 8 intervals hold the chapter's parameters "
+            "(infinite ends count as inside; runs with any are counted); witnesses are "
+            "checked by `benchmarks/_record_sim.py` (own play operator and recursion, own LP: "
+            "noise within the bound + 1e-7, unit gain within 1e-6).\n\n"
+            + _table(["N", "method", "signal", "runs", "truth inside", "errors",
+                      "runs with infinite ends", "witnesses", "witnesses failed",
+                      "median s", "max s"], body) + "\n\n" + _env(j))
+        bad = [r for r in rows if r.get("inside") is not True]
+        if bad:
+            parts.append(f"**{len(bad)} runs with the truth outside or an error:** " + "; ".join(
+                f"{r['signal']} N={r['N']} Δη={r['deta']} {r['noise']} seed {r['seed']} "
+                f"{r['method']}: {r.get('error') or r.get('outside')}" for r in bad[:10]))
+    return "\n\n".join(parts) + "\n" if parts else ""
+
+
+def section_tightness():
+    parts = []
+    for tag in ("", "_quick"):
+        j = _json(f"one_record_tightness{tag}.json")
+        if not j or not j["rows"]:
+            continue
+        rows = j["rows"]
+        body = []
+        for key in sorted({(r["deta"], r["method"]) for r in rows}):
+            rs = [r for r in rows if (r["deta"], r["method"]) == key]
+            two = np.median([r["two_stage_width"] for r in rs], axis=0)
+            one = np.median([r["one_record_width"] for r in rs], axis=0)
+            for k, p in enumerate(PARAMS):
+                ratio = one[k] / two[k] if two[k] > 0 else np.inf
+                body.append([key[0], key[1], p, len(rs), f"{two[k]:.4g}", f"{one[k]:.4g}",
+                             f"{ratio:.3g}"])
+        r0 = rows[0]
+        inside = (sum(r["two_stage_inside"] for r in rows), sum(r["one_record_inside"]
+                                                                  for r in rows))
+        parts.append(
+            f"Plan `one_record_tightness{tag}`: two-stage = `hb.chapter_example` with M = "
+            f"{r0['M']} amplitudes (2M = {2 * r0['M']} steady-state points) and a PRBS of "
+            f"N = {r0['N_prbs']}; one record = a random-step record of {2 * r0['M'] + r0['N_prbs']}"
+            f" samples; same output bound and method. Median width over seeds; ratio = one "
+            f"record / two-stage (issue goal: θ ≤ 1, backlash ≤ 2). Truth inside: two-stage "
+            f"{inside[0]}/{len(rows)}, one record {inside[1]}/{len(rows)}.\n\n"
+            + _table(["Δη", "method", "parameter", "seeds", "two-stage width",
+                      "one-record width", "ratio"], body) + "\n\n" + _env(j))
+    return "\n\n".join(parts) + "\n" if parts else ""
+
+
+def section_speed():
+    parts = []
+    for tag in ("", "_quick"):
+        j = _json(f"one_record_speed{tag}.json")
+        if not j or not j["rows"]:
+            continue
+        body = [[r["N"], r["method"], r["n_jobs"], f"{r['seconds']:.1f}",
+                 ", ".join(r["statuses"]), "yes" if r["inside"] else "**no**", r["loadavg"]]
+                for r in j["rows"]]
+        parts.append(_table(["N", "method", "jobs", "wall s", "statuses", "truth inside",
+                             "load"], body) + "\n\n" + _env(j))
+    return "\n\n".join(parts) + "\n" if parts else "_No results (`--part speed` not run)._\n"
+
+
+def section_valve():
+    j = _json("valve_loops.json")
+    if not j or not j.get("rows"):
+        return ""
+    rows = j["rows"]
+    conf = j.get("confusion") or {}
+    calls = ("stiction", "no stiction", "degenerate", "error")
+    body = [[lab] + [conf.get(f"{lab}|{c}", 0) for c in calls] for lab in ("stiction",
+                                                                           "no stiction")]
+    out = [f"{len(rows)} of 80 loops analysed (random order, seed 0), wall time "
+           f"{j.get('wall_s', float('nan')):.0f} s for this run. Confusion table (rows: the "
+           "experts' folder labels; columns: the rule's call):\n",
+           _table(["label \\ call", *calls], body)]
+    det = []
+    for r in sorted(rows, key=lambda r: r["key"]):
+        bl = r.get("backlash") or {}
+        det.append([r["key"], r.get("label", "?"), r["call"], r.get("nk", "–"),
+                    f"{r['lin_lo']:.3g}–{r['lin_hi']:.3g}" if "lin_lo" in r else "–",
+                    f"{r['delta_star']:.3g}" if "delta_star" in r else "–",
+                    bl.get("set", "–"),
+                    f"{bl['deadband_lower']:.3g}" if "deadband_lower" in bl else "–",
+                    f"{r['op_range']:.3g}" if "op_range" in r else "–",
+                    f"{r.get('seconds', 0):.0f}", (r.get("why") or "")[:60]])
+    out.append("\nPer loop (linear bound bracket and δ* in PV standard deviations; dead band "
+               "lower bound and OP range in OP units):\n")
+    out.append(_table(["loop", "label", "call", "nk*", "linear bound", "δ*", "set at δ*",
+                       "dead band ≥", "OP range", "s", "note"], det))
+    out.append("\n" + _env(j))
+    return "\n".join(out) + "\n"

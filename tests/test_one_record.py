@@ -123,14 +123,16 @@ def test_truth_inside_lp_longer_records(noise, deta):
 
 @pytest.mark.deep
 @pytest.mark.parametrize("noise", ["bound", "uniform"])
-@pytest.mark.parametrize("limit", [0.5, None])
+@pytest.mark.parametrize("limit", [0.5, 5.0])
 def test_exact_truth_inside_and_witnesses_verified_independently(noise, limit):
-    """Exact method (each end stopped after 0.5 s, status "limit" -- a certified outer
-    bound -- with the witnesses found so far; or to the tolerance). Deep: 4 min under
-    load for the 0.5 s variant."""
+    """Exact method (each end stopped after 0.5 s or 5 s, status "limit" -- a certified
+    outer bound -- with the witnesses found so far). Deep: 4 min under load for the 0.5 s
+    variant."""
     u = steps(40, seed=5, hold=(3, 8))
     y = record(u, 0.05, noise, seed=5)
-    kw = {} if limit is None else {"time_limit": limit, "max_nodes": 4}
+    # each end bounded in time (a search to the tolerance can take long on this record:
+    # the a priori box admits far-off dead bands); status "limit" is a certified bound
+    kw = {"time_limit": limit, "max_nodes": 4 if limit < 1 else 200}
     f, _ = fit(u, y, 0.05, method="exact", **kw)
     b = bounds_of(f)
     assert np.all(b[:, 0] <= TRUTH) and np.all(TRUTH <= b[:, 1]), (b, TRUTH)

@@ -28,11 +28,11 @@ from conftest import THETA_TRUE, make_eiv_problem, min_error_scale
 
 from hammerbound import LinearEIVSetEstimator
 from hammerbound.exceptions import SolverError
-from hammerbound.solvers import highs as _highs
 from hammerbound.relaxations.exact import mccormick
 from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.problem import check_theta, unit_scale
+from hammerbound.solvers import highs as _highs
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("HAMMERBOUND_SHARED_DATA", ROOT.parent / "shared" / "data"))

@@ -13,8 +13,8 @@ from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound.app.cli import main
-from hammerbound.exceptions import DataValidationError, DataWarning
 from hammerbound.data.timebase import time_unit_of, uniform_step
+from hammerbound.exceptions import DataValidationError, DataWarning
 
 
 def write(path, header, cols, fmt="%.10g"):

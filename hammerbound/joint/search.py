@@ -25,6 +25,7 @@ import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError
 from .local import restore, walk
+from .prior import reversal_summary
 from .problem import RecordProblem, Witness
 from .relaxation import build_relaxation, solve_lp
 
@@ -36,6 +37,9 @@ _SPLIT_CLIP = 0.1
 # point took 1745 LPs, most of them shrinking boxes by a few per cent per round)
 LEAF_ROUNDS = 6
 LEAF_SHRINK = 0.05
+# the partition of the backlash box stops splitting at this many boxes (a record that
+# cannot tell the slopes or gaps apart would otherwise give parts**4 of them)
+MAX_PARTS = 48
 
 
 @dataclass
@@ -158,7 +162,7 @@ def _tighten(problem, box, cols):
 def _partition(problem, prior, parts, deadline):
     """Boxes covering the set whose backlash widths are at most ``1/parts`` of the prior's
     (each tightened in ``a``, ``z0``, ``m`` and ``c`` by the relaxation; boxes certified
-    empty are dropped)."""
+    empty are dropped; past ``MAX_PARTS`` boxes the rest are kept as they are)."""
     p = problem.p
     cols = (p, p + 1, p + 2, p + 3)
     res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
@@ -174,7 +178,7 @@ def _partition(problem, prior, parts, deadline):
         except EmptyFeasibleSetError:
             continue
         w = np.array([b[k, 1] - b[k, 0] for k in cols])
-        if np.any(w > res):
+        if np.any(w > res) and len(out) + len(queue) + 2 <= MAX_PARTS:
             j = cols[int(np.argmax(w / res))]
             lo, hi = b.copy(), b.copy()
             lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
@@ -199,6 +203,8 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     Raises EmptyFeasibleSetError when every box is empty.
     """
     prior = problem.box if box is None else np.asarray(box, dtype=float)
+    if reversal_summary(problem.u)["monotone"]:
+        parts = 1  # one line only is ever active: nothing can tell the dead bands apart
     out = []
     for b in _partition(problem, prior, parts, deadline):
         try:  # the search of each end does the rest: OBBT rounds stop once they pay little

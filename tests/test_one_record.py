@@ -123,11 +123,11 @@ def test_truth_inside_lp_longer_records(noise, deta):
 
 @pytest.mark.deep
 @pytest.mark.parametrize("noise", ["bound", "uniform"])
-@pytest.mark.parametrize("limit", [0.5, 5.0])
+@pytest.mark.parametrize("limit", [0.5])
 def test_exact_truth_inside_and_witnesses_verified_independently(noise, limit):
-    """Exact method (each end stopped after 0.5 s or 5 s, status "limit" -- a certified
-    outer bound -- with the witnesses found so far). Deep: 4 min under load for the 0.5 s
-    variant."""
+    """Exact method (each end stopped after 0.5 s, status "limit" -- a certified outer
+    bound -- with the witnesses found so far). Deep: 4 min under load. (Longer limits
+    take minutes per fit on this record: the search of far-off dead bands, issue 26.)"""
     u = steps(40, seed=5, hold=(3, 8))
     y = record(u, 0.05, noise, seed=5)
     # each end bounded in time (a search to the tolerance can take long on this record:

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..systems.models import play_lines
+
 __all__ = ["INIT", "LEFT", "RIGHT", "AMBIG", "Ambiguous", "InnerStructure", "inner_structure",
            "line_range"]
 
@@ -195,20 +197,7 @@ def play(u, ml, cl, mr, cr, z0) -> np.ndarray:
     """The play operator from ``x_0 = z0`` (inside the band ``[R_0, L_0]``): the point
     evaluation the symbolic pass stands for (used for witnesses and local search)."""
     u = np.asarray(u, dtype=float)
-    out = np.empty(u.size)
-    x = float(z0)
-    R = (mr * (u - cr)).tolist()
-    L = (ml * (u + cl)).tolist()
-    for t in range(u.size):
-        r = R[t]
-        if x < r:
-            x = r
-        else:
-            lv = L[t]
-            if x > lv:
-                x = lv
-        out[t] = x
-    return out
+    return play_lines(mr * (u - cr), ml * (u + cl), z0)
 
 
 def branch_forms(u, ml, cl, mr, cr, z0) -> tuple[np.ndarray, np.ndarray]:

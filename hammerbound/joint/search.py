@@ -140,25 +140,6 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
     return box
 
 
-def _tighten(problem, box, cols):
-    """Certified bounds of the box rows ``cols`` from one LP relaxation (None: empty)."""
-    rel = build_relaxation(problem, box)
-    box = box.copy()
-    for k in cols:
-        for sense in (1.0, -1.0):
-            c = np.zeros(rel.lp.c.size)
-            c[rel.box_cols[k]] = sense
-            rel.lp.set_cost(c)
-            res = solve_lp(rel.lp)
-            if res.status == "infeasible":
-                return None
-            if sense > 0:
-                box[k, 0] = max(box[k, 0], res.bound)
-            else:
-                box[k, 1] = min(box[k, 1], -res.bound)
-    return None if np.any(box[:, 0] > box[:, 1]) else box
-
-
 def _partition(problem, prior, parts, deadline):
     """Boxes covering the set whose backlash widths are at most ``1/parts`` of the prior's
     (each tightened in ``a``, ``z0``, ``m`` and ``c`` by the relaxation; boxes certified

@@ -30,6 +30,7 @@ __all__ = [
     "HammersteinSystem",
     "as_polynomials",
     "normalize_gain",
+    "play_lines",
     "simulate_backlash",
     "steady_state_gain",
 ]
@@ -123,13 +124,18 @@ def simulate_backlash(u, ml, cl, mr, cr, x0: float = 0.0) -> np.ndarray:
         )
     if not np.isfinite(x0):
         raise ParameterValidationError("x0 must be finite.")
-    x = np.empty_like(u)
+    return play_lines(R, L, x0)
+
+
+def play_lines(R, L, x0: float) -> np.ndarray:
+    """The play operator on given line values: ``x_t = max(R_t, min(L_t, x_{t-1}))`` from
+    ``x_{-1} = x0`` (no checks: :func:`simulate_backlash` is the checked entry point)."""
     prev = float(x0)
     # the play operator is an inherently sequential recursion; a plain loop over floats is
     # ~10x faster than numpy indexing per step and handles N = 1e6 in well under a second.
-    Ll, Rl = L.tolist(), R.tolist()
-    out = [0.0] * u.size
-    for t in range(u.size):
+    Ll, Rl = np.asarray(L, dtype=float).tolist(), np.asarray(R, dtype=float).tolist()
+    out = [0.0] * len(Rl)
+    for t in range(len(Rl)):
         r = Rl[t]
         if prev < r:
             prev = r
@@ -138,8 +144,7 @@ def simulate_backlash(u, ml, cl, mr, cr, x0: float = 0.0) -> np.ndarray:
             if prev > lv:
                 prev = lv
         out[t] = prev
-    x[:] = out
-    return x
+    return np.array(out, dtype=float)
 
 
 def as_polynomials(G) -> tuple[np.ndarray, np.ndarray]:

@@ -39,20 +39,11 @@ __all__ = ["JointRelaxation", "build_relaxation", "solve_lp"]
 
 
 def solve_lp(lp):
-    """Solve with a certified bound; an LP that HiGHS refuses to run is solved again from
-    scratch, and if it is refused again it gives no bound (``-inf``, status "failed"):
-    never a wrong one."""
-    from ..exceptions import SolverError
-    from ..solvers.highs import LPSolve
+    """Solve with a certified bound. An LP that HiGHS refuses is recovered inside
+    :meth:`~hammerbound.solvers.highs.HighsLP.solve` (from scratch, primal simplex, IPM);
+    refused every time it gives no bound (``-inf``, status "failed"): never a wrong one."""
+    return lp.solve()
 
-    try:
-        return lp.solve()
-    except SolverError:
-        lp.h.clearSolver()
-        try:
-            return lp.solve()
-        except SolverError:
-            return LPSolve("failed", -np.inf, np.nan, None, 0)
 
 def round_down(v):
     """Outward (downward) rounding of computed data; exact zeros stay zero (rounding 0

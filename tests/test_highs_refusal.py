@@ -52,12 +52,12 @@ def _refuse_node_lps(monkeypatch, every: int, attempts: int | None):
     solve, run = _highs.HighsLP.solve, _highs.HighsLP._run_highs
     state = {"solves": 0, "refused": 0}
 
-    def counting_solve(self):
+    def counting_solve(self, **kw):
         if getattr(self, "refuse_in_test", False):
             state["solves"] += 1
             self.left_to_refuse = (np.inf if attempts is None else attempts) \
                 if state["solves"] % every == 0 else 0
-        return solve(self)
+        return solve(self, **kw)
 
     def refusing_run(self):
         if getattr(self, "left_to_refuse", 0) > 0:

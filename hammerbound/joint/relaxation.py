@@ -38,11 +38,12 @@ from .problem import RecordProblem
 __all__ = ["JointRelaxation", "build_relaxation", "solve_lp"]
 
 
-def solve_lp(lp):
-    """Solve with a certified bound. An LP that HiGHS refuses is recovered inside
-    :meth:`~hammerbound.solvers.highs.HighsLP.solve` (from scratch, primal simplex, IPM);
-    refused every time it gives no bound (``-inf``, status "failed"): never a wrong one."""
-    return lp.solve()
+def solve_lp(lp, primal=False):
+    """Solve with a certified bound (``primal``: after a change of the cost only). An LP
+    that HiGHS refuses is recovered inside :meth:`~hammerbound.solvers.highs.HighsLP.solve`
+    (from scratch, primal simplex, IPM); refused every time it gives no bound (``-inf``,
+    status "failed"): never a wrong one."""
+    return lp.solve(primal=primal)
 
 
 def round_down(v):

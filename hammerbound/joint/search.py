@@ -40,6 +40,8 @@ LEAF_SHRINK = 0.05
 # the partition of the backlash box stops splitting at this many boxes (a record that
 # cannot tell the slopes or gaps apart would otherwise give parts**4 of them)
 MAX_PARTS = 48
+# the local search of an end backs off to at most one search per this many nodes
+MAX_SEARCH_SPACING = 64
 
 
 @dataclass
@@ -87,7 +89,7 @@ def _tighten_one(problem, box, k):
         c = np.zeros(rel.lp.c.size)
         c[rel.box_cols[k]] = sense
         rel.lp.set_cost(c)
-        res = solve_lp(rel.lp)
+        res = solve_lp(rel.lp, primal=sense < 0)  # the second solve: only the cost changed
         if res.status == "infeasible":
             return None, points
         if sense > 0:
@@ -299,6 +301,7 @@ class _EndSearch:
         self.end0 = hull[k, 0] if sense > 0 else -hull[k, 1]
         self.pc = _Pseudocosts(hull.shape[0])
         self.heap, self.count, self.nodes, self.searches = [], 0, 0, 1
+        self.spacing, self.next_search = 1, 0
         self.pruned = np.inf  # smallest certified bound of a node dropped for its bound
         for b in leaves:
             self.push(b[k, 0] if sense > 0 else -b[k, 1], b, None, None)
@@ -331,13 +334,20 @@ class _EndSearch:
         return node_bound, x, nb, box
 
     def local_search(self, x):
-        """A verified point from a node LP point (at most one search per 4 nodes)."""
+        """A verified point from a node LP point. The searches back off geometrically
+        while they find nothing better (the spacing doubles after each miss and returns to
+        one node after a hit): on the chapter's record at N = 300 the incumbent of an end
+        rarely moves after the root, and every search costs about two node LPs."""
         if x is None or self.sense * x[self.k] >= self.inc.value - self.gap_tol():
             return
-        if 4 * self.searches > self.nodes + 4:
+        if self.nodes < self.next_search:
             return
         self.searches += 1
-        self.inc.offer(restore(self.pr, x, self.pr.box, max_iter=8))
+        if self.inc.offer(restore(self.pr, x, self.pr.box, max_iter=8)):
+            self.spacing = 1
+        else:
+            self.spacing = min(2 * self.spacing, MAX_SEARCH_SPACING)
+        self.next_search = self.nodes + self.spacing
 
     def branch(self, node_bound, x, nb, box, strong=False):
         """Split the node; at the root, solve both children of every variable first."""

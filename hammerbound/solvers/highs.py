@@ -538,8 +538,13 @@ class HighsLP:
             out.append("non-finite matrix or cost values")
         return "; ".join(out)
 
-    def solve(self) -> LPSolve:
+    def solve(self, *, primal=False) -> LPSolve:
         """Solve from the current basis and return a rigorous bound (see module docstring).
+
+        ``primal=True`` runs the primal simplex, for a re-solve after a change of the cost
+        only: the last optimal basis stays primal feasible (measured on the one-record
+        relaxation at N = 300: OBBT's second solve of a row about 1.6x faster than with
+        the default dual simplex).
 
         An LP that HiGHS refuses (``run()`` returns an error before any result, e.g. its
         dual ratio test fails on a near-singular warm-start basis) is re-solved from
@@ -551,7 +556,14 @@ class HighsLP:
         h = self.h
         if np.any(self.lb > self.ub):
             return LPSolve(INFEASIBLE, np.inf, np.nan, None, 0)
-        st, note = self._run()
+        if primal:
+            h.setOptionValue("simplex_strategy", 4)
+        try:
+            st, note = self._run()
+        finally:
+            if primal:
+                h.setOptionValue("simplex_strategy", self._options.get(
+                    "simplex_strategy", HIGHS_DEFAULTS["simplex_strategy"]))
         it = int(h.getInfo().simplex_iteration_count)
         if st is None:
             return LPSolve(FAILED, -np.inf, np.nan, None, it, note=note, refused=True)

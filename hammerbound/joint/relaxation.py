@@ -59,6 +59,13 @@ def round_up(v):
     return np.where(v == 0.0, 0.0, _round_up(v))
 
 
+#: HiGHS options of every relaxation LP. Without presolve an infeasible LP ends in the
+#: dual simplex with a dual ray (a certificate at no extra cost) and a node stopped by its
+#: cutoff keeps valid duals; with presolve, HiGHS often found infeasibility there, without a
+#: ray, and the certificate took a phase-1 LP. Measured on the chapter's record at N = 300
+#: (c_r max, 323 nodes): 31.7 s with presolve, 21.9 s without, same bound.
+LP_OPTIONS = {"presolve": "off"}
+
 # positions of the inner variables in beta
 B_ML, B_DL, B_MR, B_DR, B_Z0 = range(5)
 
@@ -283,7 +290,7 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None,
     _steady_rows(rows, problem, beta_cols)
     A, rl, ru = rows.matrix(ncol)
     lb, ub = np.concatenate(lo), np.concatenate(hi)
-    lp = HighsLP(A, rl, ru, lb, ub, options=options)
+    lp = HighsLP(A, rl, ru, lb, ub, options={**LP_OPTIONS, **(options or {})})
     return JointRelaxation(lp, box_cols, beta_cols, st,
                            {"prod": col_prod, "eta": col_eta, "q": col_q})
 

@@ -57,13 +57,19 @@ class EndResult:
     status: str
 
 
-def _solve(problem, box, col, sense, basis=None):
-    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis."""
+def _solve(problem, box, col, sense, basis=None, cutoff=None):
+    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis.
+
+    ``cutoff``: the dual simplex may stop once its certified bound exceeds it (status
+    "cutoff", no point): a node that cannot beat the incumbent, or is infeasible, is then
+    dropped without solving it to the end or certifying its infeasibility by a ray."""
     rel = build_relaxation(problem, box)
     lp = rel.lp
     c = np.zeros(lp.c.size)
     c[rel.box_cols[col]] = sense
     lp.set_cost(c)
+    if cutoff is not None and np.isfinite(cutoff):
+        lp.set_cutoff(cutoff)
     if basis is not None and basis[0].size == lp.c.size and basis[1].size == lp.A.shape[0]:
         lp.set_basis(basis)
     res = solve_lp(lp)
@@ -320,7 +326,8 @@ class _EndSearch:
             box = _cap(box, self.k, self.sense, self.inc.value)
             if box is None:
                 return None
-        res, x, nb, rel = _solve(self.pr, box, self.k, self.sense, basis)
+        res, x, nb, rel = _solve(self.pr, box, self.k, self.sense, basis,
+                                 cutoff=self.inc.value - self.gap_tol())
         self.nodes += 1
         if res.status == "infeasible":
             return None

@@ -12,7 +12,11 @@ from sklearn.base import clone
 
 import hammerbound as hb
 from hammerbound import LinearEIVSetEstimator
-from hammerbound.exceptions import RelaxationTooLargeError, SearchLimitWarning
+from hammerbound.exceptions import (
+    ParameterValidationError,
+    RelaxationTooLargeError,
+    SearchLimitWarning,
+)
 from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.moment import size as moment_size
 from hammerbound.relaxations.moment.relaxation import MomentRelaxation, moment_bounds
@@ -155,14 +159,41 @@ def test_high_order_refuses_before_forming_any_monomial(monkeypatch):
         est.fit(x, y)
 
 
-def test_moment_guard_warns_between_the_budgets(monkeypatch):
+def test_moment_guard_warns_between_the_budgets():
     pr = _problem(12)
     size = moment_size.estimate_moment_relaxation(pr, 1)
-    monkeypatch.setattr(moment_size, "MOMENT_WARN_WORK", size.work / 2)
     with pytest.warns(RuntimeWarning, match="large moment relaxation"):
-        moment_bounds(pr, order=1)
-    with pytest.raises(RelaxationTooLargeError):
+        moment_bounds(pr, order=1, warn_work=size.work / 2)
+    with pytest.raises(RelaxationTooLargeError, match=r"\(max_work; raise it"):
         moment_bounds(pr, order=1, max_work=size.work / 2)
+
+
+def test_moment_budget_is_an_estimator_option():
+    """The budget is a constructor parameter (get_params/clone/set_params), not a module
+    global: below the estimate the fit refuses naming the option, inf lifts the refusal."""
+    x, y = chapter_record(12)
+    pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, steady_state_gain=1.0)
+    work = moment_size.estimate_moment_relaxation(pr, 1).work
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="moment",
+                                relaxation_max_work=work / 2)
+    assert est.get_params()["relaxation_max_work"] == work / 2
+    assert LinearEIVSetEstimator().relaxation_max_work == moment_size.MOMENT_MAX_WORK
+    with pytest.raises(RelaxationTooLargeError, match=r"\(relaxation_max_work; raise it"):
+        clone(est).fit(x, y)
+    assert clone(est).set_params(relaxation_max_work=float("inf")).fit(x, y).contains(THETA)
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), "big", True, None])
+def test_moment_budget_option_is_validated(bad):
+    x, y = chapter_record(12)
+    est = LinearEIVSetEstimator(output_bound=0.05, method="moment", relaxation_max_work=bad)
+    with pytest.raises(ParameterValidationError, match="relaxation_max_work must be a number"):
+        est.fit(x, y)
+    if bad is not None:  # (None: the default budgets of moment_bounds)
+        pr = EIVProblem(y, x, 0.0, 0.05, 2, 2)
+        for name in ("max_work", "warn_work"):
+            with pytest.raises(ParameterValidationError, match=f"{name} must be a number"):
+                moment_bounds(pr, order=1, **{name: bad})
 
 
 def _scaled_record(scale):

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bound_status", "bound_text", "interval_frame", "interval_records", "interval_text"]
+__all__ = ["bound_text", "interval_frame", "interval_records", "interval_text"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
@@ -19,29 +19,6 @@ def bound_text(bound) -> str:
     v = np.asarray(bound, dtype=float)
     lo, hi = float(np.min(v)), float(np.max(v))
     return f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g} (per sample)"
-
-
-def bound_status(names, infos=(), box_limited=()) -> list[str]:
-    """Deprecated (removed in 0.3.0): use ``IntervalSet.status_text()`` (e.g.
-    ``est.intervals_.status_text()``). The status column for ``names``, the ends' statuses
-    from ``infos`` and ``"a2 upper"`` labels in ``box_limited`` set by the a priori box."""
-    import warnings
-
-    from .results import IntervalSet
-    from .status import BOX, OPTIMAL
-
-    warnings.warn("hammerbound.tables.bound_status is deprecated and will be removed in "
-                  "0.3.0; use IntervalSet.status_text() (e.g. est.intervals_.status_text()).",
-                  DeprecationWarning, stacklevel=2)
-    status = [[OPTIMAL, OPTIMAL] for _ in names]
-    where = {n: k for k, n in enumerate(names)}
-    for info in infos:
-        status[where[info.param]][0 if info.sense == "min" else 1] = info.status
-    for k, name in enumerate(names):
-        for e, end in enumerate(("lower", "upper")):
-            if f"{name} {end}" in box_limited:
-                status[k][e] = BOX
-    return IntervalSet(names, np.zeros((len(names), 2)), status).status_text()
 
 
 def interval_records(names, bounds, status=None) -> list[dict]:

@@ -80,16 +80,3 @@ __all__ = [
     "register",
 ]
 
-
-def __getattr__(name):
-    # deprecated in 0.2.0, removed in 0.3.0: the CLI lives in the application layer
-    if name == "diagnose_cli_main":
-        import warnings
-
-        warnings.warn("hammerbound.discrepancy.diagnose_cli_main is deprecated (removed in "
-                      "0.3.0); use hammerbound.app.cli.diagnose_cli_main or the "
-                      "`hammerbound diagnose` command.", DeprecationWarning, stacklevel=2)
-        from ..app.cli import diagnose_cli_main
-
-        return diagnose_cli_main
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

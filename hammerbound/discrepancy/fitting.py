@@ -66,7 +66,7 @@ def _lp_solve(c, A, b, bounds):
     """``min c x`` s.t. ``A x <= b`` and box ``bounds`` (scipy's HiGHS; no certification).
 
     Not ``highspy``: a solve through highspy in the same process was seen to make later
-    stage-2 LPs (scipy's HiGHS) report unbounded sets (tests/test_cli.py after a
+    stage-2 LPs (scipy's HiGHS) report unbounded sets (tests/app/test_cli.py after a
     diagnosis), so the search keeps to scipy's build.
     """
     from scipy.optimize import linprog

@@ -38,6 +38,7 @@ from ..exceptions import (
     UnboundedSetError,
 )
 from ..modelset.estimator import ModelSetMixin
+from ..relaxations.moment.size import MOMENT_MAX_WORK
 from ..relaxations.problem import EIVProblem
 from ..stage1.feasible_set import FeasibleSet
 from ..status import BOX
@@ -90,10 +91,15 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         cost. Order 2 (term-sparse basis, ``relaxation_basis="sparse"``) equals the exact
         intervals within 1e-3 of their width on the chapter example and takes minutes at
         N = 100 (see ``docs/benchmarks.md``). The relaxation's size is estimated before it
-        is built: above ``rows x moments = 8e8`` (order 1 at N ~ 1500, order 2 at
-        N ~ 150) the fit raises :class:`~hammerbound.exceptions.RelaxationTooLargeError`
-        (use ``"lp"`` or ``"exact"``), above ``2e7`` it warns (module
+        is built: above ``relaxation_max_work`` the fit raises
+        :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or
+        ``"exact"``), above ``rows x moments = 2e7`` it warns (module
         :mod:`hammerbound.relaxations.moment.size`).
+    relaxation_max_work : float, default 8e8
+        Size budget ``rows x moments`` of the moment relaxation, checked before it is built
+        (default :data:`~hammerbound.relaxations.moment.size.MOMENT_MAX_WORK`: order 1 at
+        N ~ 1500, order 2 at N ~ 150); ``float("inf")`` lifts the refusal. Raise it only
+        when the estimated time and memory in the refusal are acceptable.
     relaxation_basis : {"sparse", "full"}, default "sparse"
         Monomial basis of the moment matrices (order >= 2; both coincide at order 1):
         ``"sparse"`` uses ``1, theta, e, theta e`` (the equations are bilinear in
@@ -202,8 +208,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
 
     def __init__(self, na=2, nb=2, *, nk=1, output_bound=None, steady_state_gain=None,
                  method="exact", relaxation_order=1, relaxation_basis="sparse",
-                 solver="clarabel", solver_options=None, theta_box=None, tol=1e-4,
-                 max_nodes=20000, time_limit=600.0,
+                 relaxation_max_work=MOMENT_MAX_WORK, solver="clarabel", solver_options=None,
+                 theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
                  total_time_limit=None, on_failure="raise", n_jobs=1, progress=False,
                  noise_bound=DEPRECATED, b0=DEPRECATED):
         self.na = na
@@ -214,6 +220,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         self.method = method
         self.relaxation_order = relaxation_order
         self.relaxation_basis = relaxation_basis
+        self.relaxation_max_work = relaxation_max_work
         self.solver = solver
         self.solver_options = solver_options
         self.theta_box = theta_box
@@ -457,7 +464,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 # (solver and options were checked by _check_params, before any work)
                 # memory/time guard before any work (refuses with the estimate, or warns)
                 check_moment_budget(estimate_moment_relaxation(
-                    problem, self.relaxation_order, basis=self.relaxation_basis))
+                    problem, self.relaxation_order, basis=self.relaxation_basis),
+                    max_work=float(self.relaxation_max_work), option="relaxation_max_work")
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 # the LP bounds are the a priori box and the fallback; kept as res.lp

@@ -10,6 +10,7 @@ import numpy as np
 from .._compat import is_given, warn_renamed
 from ..data.validation import as_real
 from ..exceptions import ParameterValidationError
+from ..relaxations.moment.size import check_work
 
 __all__ = ["METHODS", "check_params"]
 
@@ -72,6 +73,7 @@ def check_params(est) -> None:
         raise ParameterValidationError(
             f"relaxation_basis must be 'sparse' or 'full'; got {est.relaxation_basis!r}."
         )
+    check_work("relaxation_max_work", est.relaxation_max_work)
     as_real("steady_state_gain", est.steady_state_gain, nonzero=True, or_none=True,
             example="1.0")
     if not (isinstance(est.tol, numbers.Real) and est.tol > 0):

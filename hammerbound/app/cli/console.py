@@ -33,7 +33,8 @@ _TERMS = [
     (r"\boutput_bound\b", "--output-bound"),
     (r"\binput_bound=", "--input-bound "),
     (r"\binput_bound\b", "--input-bound"),
-    (r" \(hammerbound\.relaxations\.moment\.size\.MOMENT_MAX_WORK\)", ""),
+    # (the command line has no flag for the moment size budget)
+    (r" \(\w*max_work; raise it to build anyway\)", ""),
     (r"\(bound_info_ gives each end's status and certified gap\)",
      "(the status column gives each end's status; --json its details)"),
 ]

@@ -263,6 +263,7 @@ def moment_bounds(
     on_failure: str = "box",
     fallback=None,
     max_work: float | None = None,
+    warn_work: float | None = None,
     basis: str = "sparse",
     lp: IntervalResult | None = None,
 ) -> IntervalResult:
@@ -301,10 +302,12 @@ def moment_bounds(
         where the LP bound is tighter.
     max_work : float, optional
         Size budget ``rows x moments`` of the relaxation, checked *before* it is built
-        (:mod:`.moment_size`); default ``MOMENT_MAX_WORK = 2.5e8`` (about 1 GB and ten
-        minutes of build time; order 1 with ``na = nb = 2`` reaches it at N ~ 900).
-        Above ``MOMENT_WARN_WORK = 2e7`` a :class:`RuntimeWarning` is issued; ``inf``
-        skips the check (and the warning).
+        (:mod:`hammerbound.relaxations.moment.size`); default ``MOMENT_MAX_WORK = 8e8``
+        (order 1 with ``na = nb = 2`` reaches it at N ~ 1500, sparse order 2 at N ~ 150);
+        ``inf`` skips the check (and the warning).
+    warn_work : float, optional
+        Above this ``rows x moments`` a :class:`RuntimeWarning` says the relaxation will
+        take minutes; default ``MOMENT_WARN_WORK = 2e7``.
     basis : {"sparse", "full"}, default "sparse"
         Monomial basis of the moment matrices (see :class:`MomentRelaxation`). Order 1:
         both are the same. Order 2: ``"sparse"`` (``1, theta, e, theta e`` per clique) is
@@ -339,8 +342,17 @@ def moment_bounds(
         The relaxation's estimated size exceeds ``max_work`` (the message gives the
         estimate and the alternatives ``method="lp"`` / ``"exact"``).
     """
-    from .size import check_moment_budget, estimate_moment_relaxation
+    from .size import (
+        MOMENT_WARN_WORK,
+        check_moment_budget,
+        check_work,
+        estimate_moment_relaxation,
+    )
 
+    if max_work is not None:
+        max_work = check_work("max_work", max_work)
+    if warn_work is not None:
+        warn_work = check_work("warn_work", warn_work, default=MOMENT_WARN_WORK)
     if on_failure not in ("box", "raise"):
         raise ParameterValidationError("on_failure must be 'box' or 'raise'.")
     if basis not in BASES:
@@ -364,7 +376,7 @@ def moment_bounds(
     if int(order) == order and order >= 1 and not max_work == np.inf:
         # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
         size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
-        check_moment_budget(size, max_work=max_work)
+        check_moment_budget(size, max_work=max_work, warn_work=warn_work)
     if fallback is None:
         # the polytopic LP bound is cheap and certified: a moment end is never reported
         # wider than it (nor from the a priori box where the LP bound is tighter)

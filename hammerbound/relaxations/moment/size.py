@@ -12,8 +12,9 @@ polynomial is formed) and :func:`check_moment_budget` refuses
 (:class:`~hammerbound.exceptions.RelaxationTooLargeError`) or warns against the module
 budgets below.
 
-Budgets (change them at module level, e.g. ``moment_size.MOMENT_MAX_WORK = float("inf")``
-to lift the refusal):
+Default budgets (constants; a call changes them through its options, never by patching
+the module: ``LinearEIVSetEstimator(relaxation_max_work=...)``,
+``moment_bounds(..., max_work=..., warn_work=...)``; ``float("inf")`` lifts the refusal):
 
 ``MOMENT_WARN_WORK = 2e7``
     ``rows x moments`` above which a :class:`RuntimeWarning` says the relaxation will take
@@ -28,17 +29,18 @@ to lift the refusal):
 from __future__ import annotations
 
 import itertools
+import numbers
 import warnings
 from dataclasses import dataclass
 from math import comb
 
 import numpy as np
 
-from ...exceptions import RelaxationTooLargeError
+from ...exceptions import ParameterValidationError, RelaxationTooLargeError
 from ..problem import EIVProblem
 
 __all__ = ["MOMENT_MAX_WORK", "MOMENT_WARN_WORK", "MomentSize", "check_moment_budget",
-           "estimate_moment_relaxation"]
+           "check_work", "estimate_moment_relaxation"]
 
 #: ``rows x moments`` above which building the relaxation is refused.
 MOMENT_MAX_WORK = 8.0e8
@@ -245,9 +247,23 @@ def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None,
                       basis="full" if d >= 2 else "sparse")
 
 
+def check_work(name: str, value, default: float = MOMENT_MAX_WORK) -> float:
+    """A size budget ``rows x moments``: a number > 0 (``inf`` allowed), else
+    :class:`~hammerbound.exceptions.ParameterValidationError` naming the option."""
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) \
+            and value > 0:  # (NaN fails "> 0")
+        return float(value)
+    raise ParameterValidationError(
+        f"{name} must be a number > 0 (a budget on rows x moments of the moment relaxation, "
+        f"default {default:.3g}; float('inf') lifts it); got {value!r}.")
+
+
 def check_moment_budget(size: MomentSize, max_work: float | None = None,
-                        warn_work: float | None = None) -> None:
+                        warn_work: float | None = None, *, option: str = "max_work") -> None:
     """Refuse or warn when a relaxation of ``size`` exceeds the budgets.
+
+    ``option`` is the name of the caller's option that sets ``max_work`` (the refusal names
+    it, so a user knows what to raise).
 
     Raises
     ------
@@ -259,10 +275,10 @@ def check_moment_budget(size: MomentSize, max_work: float | None = None,
     if size.work > max_work:
         raise RelaxationTooLargeError(
             f"the moment relaxation is too large: {size.describe()}, above the budget "
-            f"rows x moments <= {max_work:.3g} (hammerbound.relaxations.moment.size."
-            "MOMENT_MAX_WORK). Use method='lp' (polytopic outer bounds, seconds) or "
-            "method='exact' (tight bounds; bound its time with total_time_limit), a shorter "
-            "record, or a lower relaxation_order.")
+            f"rows x moments <= {max_work:.3g} ({option}; raise it to build anyway). Use "
+            "method='lp' (polytopic outer bounds, seconds) or method='exact' (tight bounds; "
+            "bound its time with total_time_limit), a shorter record, or a lower "
+            "relaxation_order.")
     if size.work > warn_work:
         warnings.warn(
             f"large moment relaxation: {size.describe()}. method='lp' or method='exact' "

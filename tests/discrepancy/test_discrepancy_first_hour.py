@@ -1,0 +1,301 @@
+"""Discrepancy diagnosis, issue 29: items 11 (a-d), 5 (IOData) and 4 (``max_effects``).
+
+The data are simulated here (the tests' own play operator from oracles.py, scipy's lfilter,
+numpy's clip), never with the package's simulators; the noise is uniform inside the bound
+or exactly at +-bound.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import subprocess
+import sys
+
+import control
+import numpy as np
+import pytest
+from oracles import A_TRUE, B_TRUE, GAMMA_TRUE, hammerstein
+from scipy.signal import lfilter
+
+from hammerbound import IOData
+from hammerbound.discrepancy import diagnose, locate
+from hammerbound.exceptions import DataValidationError, ParameterValidationError
+from hammerbound.systems import HammersteinSystem
+from hammerbound.systems.experiments import chapter_system
+from hammerbound.tolerances import FEASIBILITY_RTOL
+
+
+def _chapter(u):
+    """The chapter's system (section 22.5): its backlash followed by B/A of unit gain."""
+    return hammerstein(u, GAMMA_TRUE, B_TRUE, A_TRUE)
+
+
+def _noise(n, bound, mode, seed):
+    rng = np.random.default_rng(seed)
+    if mode == "uniform":
+        return rng.uniform(-bound, bound, n)
+    return bound * rng.choice([-1.0, 1.0], n)  # every sample exactly at +-bound
+
+
+def _consistent(y, pred, bound):
+    """The package's consistency rule, written out: inside the band up to the outward
+    tolerance 1e-9 (|y| + |yhat| + bound)."""
+    return bool(np.all(np.abs(y - pred) <= bound + FEASIBILITY_RTOL * (np.abs(y) + np.abs(pred)
+                                                                     + bound)))
+
+
+# ------------------------------------------------------------------ 11a: output saturation
+SAT_NB, SAT_LIMIT = 0.05, 0.7
+# steps of the chapter system that clip at both limits (within its well-posed input range
+# u < 2.84, where its backlash lines cross) and levels that stay inside them
+SAT_U = np.repeat([0.0, 1.0, 2.5, 1.5, -1.5, -3.5, 0.5, 2.5, -3.5, -2.0, 0.0], 12)
+
+
+def _clipped(mode, seed=0):
+    w = _chapter(SAT_U)
+    # the sensor clips, then the reading is noisy: readings at a limit spread +-NB around
+    # it, more than the former 2 % at-limit margin (0.028 of the range 1.4)
+    y = np.clip(w, -SAT_LIMIT, SAT_LIMIT) + _noise(SAT_U.size, SAT_NB, mode, seed)
+    at = np.abs(w) >= SAT_LIMIT
+    assert np.sum(w >= SAT_LIMIT) >= 10 and np.sum(w <= -SAT_LIMIT) >= 10
+    assert np.max(np.abs(np.abs(y[at]) - SAT_LIMIT)) > 0.03  # beyond the old margin
+    return y
+
+
+@pytest.mark.parametrize("mode", ["uniform", "at_bound"])
+def test_output_saturation_found_when_the_noise_exceeds_the_old_margin(mode):
+    y = _clipped(mode)
+    rep = diagnose(chapter_system(), SAT_U, y, SAT_NB, candidates=["output_saturation"])
+    assert not rep.consistent_before
+    assert rep.effect == "output_saturation", rep.summary()
+    lo, hi = rep.candidate("output_saturation").value
+    # the limits are determined up to the noise bound (readings are limit + noise)
+    assert abs(lo + SAT_LIMIT) <= SAT_NB and abs(hi - SAT_LIMIT) <= SAT_NB
+    if mode == "at_bound":  # every clipped reading is limit +-NB: only the truth reaches NB
+        assert lo == pytest.approx(-SAT_LIMIT, abs=1e-6)
+        assert hi == pytest.approx(SAT_LIMIT, abs=1e-6)
+    pred = rep.refined_model.predict(SAT_U)
+    assert _consistent(y, pred, SAT_NB) and rep.consistent_after
+    assert np.max(np.abs(y - pred)) == pytest.approx(rep.gap_after, rel=1e-12)
+
+
+def test_output_saturation_found_among_all_candidates():
+    # the issue's call: candidates="all" on the chapter system (None before the fix)
+    y = _clipped("uniform", seed=1)
+    rep = diagnose(chapter_system(), SAT_U, y, SAT_NB, candidates="all")
+    assert rep.effect == "output_saturation", rep.summary()
+    assert rep.consistent_after and rep.combinations == ()
+
+
+@pytest.mark.parametrize("mode", ["uniform", "at_bound"])
+def test_output_saturation_no_false_alarm_on_unclipped_records(mode):
+    u = 0.15 * SAT_U  # the output stays inside +-0.7
+    w = _chapter(u)
+    assert np.max(np.abs(w)) < SAT_LIMIT - 2 * SAT_NB
+    eta = _noise(u.size, SAT_NB, mode, 2)
+    rep = diagnose(chapter_system(), u, w + eta, SAT_NB, candidates=["output_saturation"])
+    assert rep.consistent_before and rep.effect is None
+    # another effect is missing (one sample of delay): the clip does not explain it
+    yd = np.r_[0.0, w[:-1]] + eta
+    rep = diagnose(chapter_system(), u, yd, SAT_NB, candidates=["output_saturation", "delay"])
+    assert rep.effect == "delay", rep.summary()
+    assert not rep.candidate("output_saturation").consistent
+
+
+# ------------------------------------------------------------------ 11b: total delay
+# a model with a direct term; the truth acts 4 samples after the input
+DT_A = np.array([1.0, -1.2, 0.5])
+DT_MODEL = control.tf([0.3, 0.2, 0.1], DT_A, True)
+DT_TRUE_B = np.array([0.0, 0.0, 0.0, 0.0, 0.2, 0.1])
+
+
+# seeds 0, 4 (uniform) and 0, 1 (at the bound) were reported as d = 3 before (B[3] ~ 0);
+# seed 2 found d = 4 directly
+@pytest.mark.parametrize("seed, mode", [(0, "uniform"), (4, "uniform"), (2, "uniform"),
+                                        (0, "at_bound"), (1, "at_bound")])
+def test_delay_is_the_total_delay_of_the_refit(seed, mode):
+    bound = 0.02
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, 40), 6)
+    y = lfilter(DT_TRUE_B, DT_A, u) + _noise(u.size, 0.95 * bound if mode == "uniform" else bound,
+                                            mode, seed)
+    rep = diagnose(DT_MODEL, u, y, bound, candidates=["delay"])
+    assert rep.effect == "delay" and rep.consistent_after, rep.summary()
+    B = rep.refined_model.B
+    d = rep.candidate("delay").value
+    # the reported delay is the refit's: the first non-zero coefficient of B
+    assert d == int(np.flatnonzero(B)[0]) == 4
+    assert np.all(B[:4] == 0.0)
+    assert B[4:6] == pytest.approx(DT_TRUE_B[4:6], abs=0.01)
+    assert dict(rep.refined_model.effects)["delay"] == 4.0
+    assert "delay (d = 4)" in rep.message
+    assert _consistent(y, rep.refined_model.predict(u), bound)
+
+
+# ------------------------------------------------------------------ 11c: asym_backlash
+def _asym_data(seed=0, bound=0.01):
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, 25), 6)
+    e = rng.uniform(-0.9 * bound, 0.9 * bound, u.size)
+    e[u.size // 3], e[2 * u.size // 3] = bound, -bound  # two samples exactly at the bound
+    return u, _chapter(u) + e, bound
+
+
+def test_asym_backlash_reported_in_the_chapters_convention_and_to_hammerstein():
+    u, y, bound = _asym_data()
+    G = control.tf(B_TRUE, A_TRUE, True)  # the linear block: the backlash is missing
+    rep = diagnose(G, u, y, bound, candidates=["asym_backlash"])
+    assert rep.effect == "asym_backlash", rep.summary()
+    ml, cl, mr, cr = rep.candidate("asym_backlash").value
+    assert ml == pytest.approx(GAMMA_TRUE[0], rel=0.02) and mr == pytest.approx(GAMMA_TRUE[2],
+                                                                              rel=0.02)
+    assert cl == pytest.approx(GAMMA_TRUE[1], abs=0.005)
+    assert cr == pytest.approx(GAMMA_TRUE[3], abs=0.005)
+    hs = rep.refined_model.to_hammerstein()
+    assert isinstance(hs, HammersteinSystem)
+    assert hs.backlash.gamma == pytest.approx([ml, cl, mr, cr], rel=1e-14)
+    assert np.sum(hs.B) / np.sum(hs.A) == pytest.approx(1.0, rel=1e-12)  # (22.8)
+    np.testing.assert_array_equal(hs.A, A_TRUE)
+    assert hs.B == pytest.approx(B_TRUE, rel=0.02, abs=0.01)
+    # re-simulated, the system is the refined model and explains the data
+    sim = hs.simulate(u)
+    np.testing.assert_allclose(sim, rep.refined_model.predict(u), rtol=0, atol=1e-12)
+    assert _consistent(y, sim, bound)
+    # and on a new input it stays close to the truth (own simulation)
+    u2 = np.repeat(np.random.default_rng(7).uniform(-1, 1, 30), 5)
+    assert np.max(np.abs(hs.simulate(u2) - _chapter(u2))) < 3 * bound
+
+
+def test_asym_backlash_negative_gain_keeps_the_normalised_slopes():
+    # a linear block of negative static gain cannot give the gain to the slopes (> 0)
+    u, y, bound = _asym_data(seed=1)
+    G = control.tf(-B_TRUE, A_TRUE, True)
+    rep = diagnose(G, u, -y, bound, candidates=["asym_backlash"])
+    assert rep.effect == "asym_backlash", rep.summary()
+    ml, _, mr, _ = rep.candidate("asym_backlash").value
+    assert (ml + mr) / 2 == pytest.approx(1.0, rel=1e-12)
+    hs = rep.refined_model.to_hammerstein()
+    assert hs.backlash.gamma == pytest.approx(rep.candidate("asym_backlash").value, rel=1e-14)
+    np.testing.assert_allclose(hs.simulate(u), rep.refined_model.predict(u), rtol=0,
+                               atol=1e-12)
+
+
+# ------------------------------------------------------------------ 11d: progress
+def _progress_data():
+    A, B = np.array([1.0, -1.2, 0.5]), np.array([0.0, 0.2, 0.1])
+    rng = np.random.default_rng(6)
+    u = np.repeat(rng.uniform(-1, 1, 20), 6)
+    y = hammerstein(u, (1.0, 0.1, 1.0, 0.1), B, A) + rng.uniform(-0.019, 0.019, u.size)
+    return control.tf(B, A, True), u, y
+
+
+def test_progress_lines_on_stderr_never_stdout(capsys):
+    G, u, y = _progress_data()
+    rep = diagnose(G, u, y, 0.02, candidates=["offset", "backlash"], progress=True)
+    out, err = capsys.readouterr()
+    assert out == ""
+    lines = err.splitlines()
+    assert lines[0].startswith("diagnose: single candidates 1/2: offset: error ")
+    assert "backlash: error" in lines[1] and "(consistent)" in lines[1]
+    # the LP count shown last is the report's
+    assert lines[-1].split("[")[1].startswith(f"{rep.n_fits} LPs")
+    assert "\r" not in err and "\x1b" not in err  # stderr is not a terminal here
+    diagnose(G, u, y, 0.02, candidates=["offset", "backlash"])  # default: silent
+    assert capsys.readouterr() == ("", "")
+
+
+def test_progress_bars_on_a_terminal(monkeypatch, capsys):
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    term = Terminal()
+    monkeypatch.setattr(sys, "stderr", term)
+    G, u, y = _progress_data()
+    diagnose(G, u, y, 0.02, candidates=["offset", "backlash"], progress=True)
+    text = term.getvalue()
+    assert "diagnose: single candidates" in text and "2/2" in text and "\r" in text
+    assert capsys.readouterr().out == ""
+
+
+def _cli(tmp_path, *args):
+    G, u, y = _progress_data()
+    csv = tmp_path / "d.csv"
+    csv.write_text("u,y\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(u, y,
+                                                                            strict=True)))
+    return subprocess.run(
+        [sys.executable, "-m", "hammerbound", "diagnose", str(csv), "--num", "0 0.2 0.1",
+         "--den", "1 -1.2 0.5", "--output-bound", "0.02", *args],
+        capture_output=True, text=True, timeout=600)
+
+
+def test_cli_progress_goes_to_stderr(tmp_path):
+    r = _cli(tmp_path, "--candidates", "offset,backlash", "--json", "--progress")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)  # stdout is the report only
+    assert report["effect"] == "backlash"
+    assert "diagnose: single candidates 2/2: backlash" in r.stderr
+    assert "\r" not in r.stderr and "\x1b" not in r.stderr  # a pipe: plain lines
+
+
+# ------------------------------------------------------------------ 4: max_effects
+def test_max_effects_beyond_three_refused():
+    G, u, y = _progress_data()
+    for bad in (4, 0):
+        with pytest.raises(ParameterValidationError, match="max_effects must be"):
+            diagnose(G, u, y, 0.02, max_effects=bad)
+    with pytest.raises(ParameterValidationError, match="1, 2 or 3"):
+        diagnose(G, u, y, 0.02, max_effects=4)
+
+
+def test_cli_max_effects_beyond_three_refused(tmp_path):
+    r = _cli(tmp_path, "--max-effects", "4")
+    assert r.returncode == 2 and r.stdout == ""
+    assert "--max-effects" in r.stderr and "choose from 1, 2, 3" in r.stderr
+
+
+# ------------------------------------------------------------------ 5: IOData
+def test_diagnose_and_locate_accept_iodata():
+    G = control.tf([0.0, 0.5], [1.0, -0.5], 0.1)
+    u = np.repeat(np.random.default_rng(0).uniform(-1, 1, 20), 5)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], u) + 0.3
+    data = IOData(u, y, dt=0.1, input_name="voltage", input_unit="V")
+    rep = diagnose(G, data, output_bound=0.01, candidates=["offset", "delay"])
+    ref = diagnose(G, u, y, output_bound=0.01, candidates=["offset", "delay"])
+    assert rep.effect == ref.effect == "offset"
+    assert rep.gap_before == ref.gap_before and rep.gap_after == ref.gap_after
+    assert rep.refined_model.dt == 0.1 and rep.refined_model.linear.dt == 0.1
+    assert rep.data is data and rep.to_dict()["refined_model"]["dt"] == 0.1
+    fig = rep.plot()
+    assert fig.axes[0].get_ylabel() == "input voltage [V]"
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    dis = locate(G, data, output_bound=0.01)
+    assert dis.gap == pytest.approx(locate(G, u, y, 0.01).gap, rel=1e-12)
+    # dt from the data when the model has none
+    G1 = control.tf([0.0, 0.5], [1.0, -0.5], True)
+    assert diagnose(G1, data, output_bound=0.01, candidates=["offset"]).refined_model.dt == 0.1
+
+
+@pytest.mark.parametrize("call, error, words", [
+    (lambda G, d, u, y: diagnose(G, d, 0.01), DataValidationError,
+     "output bound goes by keyword"),
+    (lambda G, d, u, y: diagnose(G, d, y, 0.01), DataValidationError, "without y"),
+    (lambda G, d, u, y: diagnose(G, u, d, output_bound=0.01), DataValidationError,
+     "in place of u"),
+    (lambda G, d, u, y: diagnose(G, u, output_bound=0.01), DataValidationError,
+     "y (the measured output) is missing"),
+    (lambda G, d, u, y: diagnose(G, d), ParameterValidationError, "output_bound is required"),
+    (lambda G, d, u, y: locate(G, d, 0.01), DataValidationError, "locate(model, data"),
+    (lambda G, d, u, y: diagnose(control.tf([0.0, 0.5], [1.0, -0.5], 0.2), d,
+                                 output_bound=0.01), ParameterValidationError, "dt = 0.2"),
+])
+def test_iodata_misuse_says_what_to_pass(call, error, words):
+    G = control.tf([0.0, 0.5], [1.0, -0.5], 0.1)
+    u = np.repeat(np.random.default_rng(0).uniform(-1, 1, 20), 5)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], u)
+    with pytest.raises(error) as exc:
+        call(G, IOData(u, y, dt=0.1), u, y)
+    assert words in str(exc.value)

@@ -1,0 +1,121 @@
+"""The symbolic play operator of the one-record method against our own play operator.
+
+:func:`hammerbound.joint.modes.inner_structure` says, for a whole box of backlash
+parameters and first values, which line every sample is on (or that it is ambiguous, with
+an envelope and one-sided rows). Every claim must hold at every point of the box: checked at
+random points with our own play operator (tests/oracles.py, not the package's).
+"""
+
+import numpy as np
+import pytest
+from oracles import play as own_play
+
+from hammerbound.joint.modes import (
+    AMBIG,
+    INIT,
+    LEFT,
+    RIGHT,
+    inner_envelope,
+    inner_structure,
+)
+
+GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
+
+
+def steps(rng, n, lo=-2.0, hi=2.0):
+    u = []
+    while len(u) < n:
+        u += [rng.uniform(lo, hi)] * int(rng.integers(1, 8))
+    return np.array(u[:n])
+
+
+def box_around(rng, rel):
+    g = GAMMA * (1 + rel * rng.uniform(-1, 1, 4))
+    w = rel * GAMMA * rng.uniform(0.0, 1.0, 4)
+    return np.column_stack([g - w, g + w])
+
+
+def random_point(rng, gbox, zbox, u):
+    """A point of the box where the backlash is well-posed on the record (``L_t >= R_t``,
+    the region the method works in) with ``x_0`` in the band at ``u_0``."""
+    g = gbox[:, 0] + rng.uniform(0, 1, 4) * (gbox[:, 1] - gbox[:, 0])
+    ml, cl, mr, cr = g
+    if np.any(ml * (u + cl) < mr * (u - cr)):
+        return None
+    lo, hi = max(zbox[0], mr * (u[0] - cr)), min(zbox[1], ml * (u[0] + cl))
+    if lo > hi:
+        return None
+    return g, lo + rng.uniform() * (hi - lo)
+
+
+def form_value(u, g, z0, kind, src):
+    ml, cl, mr, cr = g
+    if kind == RIGHT:
+        return mr * (u[src] - cr)
+    if kind == LEFT:
+        return ml * (u[src] + cl)
+    return z0
+
+
+@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("rel", [0.0, 0.02, 0.15])
+def test_every_claim_holds_at_random_points_of_the_box(seed, rel):
+    rng = np.random.default_rng(seed)
+    u = steps(rng, 80, -1.5, 1.5)  # mostly well-posed for the wide boxes too
+    gbox = box_around(rng, rel)
+    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
+    mid = 0.5 * (band[0] + band[1])
+    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
+    st = inner_structure(u, np.vstack([gbox, zbox]))
+    lo_env, hi_env = inner_envelope(u, gbox, zbox)
+    checked = 0
+    for _ in range(1000):
+        if checked == 40:
+            break
+        pt = random_point(rng, gbox, zbox, u)
+        if pt is None:
+            continue
+        g, z0 = pt
+        x = own_play(u, *g, z0)
+        scale = 1e-12 * (1 + np.abs(x).max())
+        assert np.all(x >= lo_env - scale) and np.all(x <= hi_env + scale)
+        for t in range(u.size):
+            k, s = int(st.kind[t]), int(st.src[t])
+            if k != AMBIG:
+                assert abs(x[t] - form_value(u, g, z0, k, s)) <= scale, (t, k, s)
+                continue
+            a = st.ambiguous[s]
+            assert a.lo - scale <= x[t] <= a.hi + scale
+            prev = (z0 if a.src_kind == INIT else
+                    form_value(u, g, z0, a.src_kind, a.src) if a.src_kind in (RIGHT, LEFT)
+                    else x[st.ambiguous[a.src].t])
+            if not a.up:
+                assert x[t] <= prev + scale
+            if not a.down:
+                assert x[t] >= prev - scale
+        checked += 1
+    assert checked >= 10
+
+
+def test_a_point_box_has_no_ambiguity_and_reproduces_the_play_operator():
+    rng = np.random.default_rng(3)
+    u = steps(rng, 200)
+    ml, cl, mr, cr = GAMMA
+    z0 = mr * (u[0] - cr)
+    st = inner_structure(u, np.vstack([np.column_stack([GAMMA, GAMMA]), [z0, z0]]))
+    assert st.n_ambiguous == 0
+    x = own_play(u, *GAMMA, z0)
+    vals = [form_value(u, GAMMA, z0, int(k), int(s)) for k, s in zip(st.kind, st.src, strict=True)]
+    np.testing.assert_allclose(vals, x, rtol=0, atol=1e-14)
+
+
+def test_unknown_first_value_collapses_after_a_reversal_wider_than_the_gap():
+    """The envelope is the whole band at the start and a point once the input has gone
+    past both lines (the issue's "it collapses after the input reverses")."""
+    u = np.r_[np.zeros(5), np.full(5, 1.5), np.full(5, -1.5), np.full(5, 0.3)]
+    gbox = np.column_stack([GAMMA, GAMMA])
+    lo, hi = inner_envelope(u, gbox)
+    assert hi[0] - lo[0] > 0.02
+    np.testing.assert_allclose(hi[5:], lo[5:], atol=1e-12)
+    x = own_play(u, *GAMMA, 0.0)
+    np.testing.assert_allclose(lo[5:], x[5:], atol=1e-12)

@@ -40,8 +40,9 @@ class RecordDetails:
     stopped_by_time: bool
 
 
-def _pool(problem, points, limit=24, deadline=None):
-    """Verified points from the last LP points of OBBT (restored to the set)."""
+def _pool(problem, points, limit=8, deadline=None):
+    """Verified points from the last ``limit`` LP points of OBBT (restored to the set;
+    at N = 300 on the chapter's record 24 points cost 11 s; 8 gave the same nodes and widths)."""
     out = []
     for x in points[-limit:]:
         if deadline is not None and time.time() > deadline:

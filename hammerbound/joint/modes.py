@@ -27,10 +27,12 @@ import numpy as np
 
 from ..systems.models import play_lines
 
-__all__ = ["INIT", "LEFT", "RIGHT", "AMBIG", "Ambiguous", "InnerStructure", "inner_structure",
-           "line_range"]
+__all__ = ["INIT", "LEFT", "RIGHT", "AMBIG", "UP", "DOWN", "HOLD", "Ambiguous", "Decided",
+           "InnerStructure", "inner_structure", "line_range"]
 
 INIT, RIGHT, LEFT, AMBIG = 0, 1, 2, 3
+#: branches a sample can be *decided* to take (see :class:`Decided`)
+UP, DOWN, HOLD = "up", "down", "hold"
 # relative margin of the interval decisions (far above rounding, far below any data scale)
 _MARGIN = 1e-12
 
@@ -72,16 +74,33 @@ class Ambiguous:
 
 
 @dataclass(frozen=True)
+class Decided:
+    """A sample whose branch a branch-and-bound node fixes: ``branch`` is ``UP``
+    (``x_t = R_t >= S``), ``DOWN`` (``x_t = L_t <= S``) or ``HOLD`` (``R_t <= S <= L_t``,
+    ``x_t = S``), with ``S`` the state before it (``src_kind, src`` as in
+    :class:`InnerStructure`). Every parameter point takes one of the three (ties take
+    two), so the children of a sample cover the node; the node's relaxation holds the
+    branch's inequalities (:func:`~.relaxation.build_relaxation`)."""
+
+    t: int
+    branch: str
+    src_kind: int
+    src: int
+
+
+@dataclass(frozen=True)
 class InnerStructure:
     """The symbolic inner signal over a box (see the module docstring).
 
     ``kind[t]`` is one of ``INIT, RIGHT, LEFT, AMBIG``; ``src[t]`` the sample ``s`` of
-    ``R(s)``/``L(s)``, the index ``k`` of ``ambiguous[k]``, or -1 for ``INIT``.
+    ``R(s)``/``L(s)``, the index ``k`` of ``ambiguous[k]``, or -1 for ``INIT``;
+    ``decided`` the samples whose branch was given (:class:`Decided`).
     """
 
     kind: np.ndarray
     src: np.ndarray
     ambiguous: tuple
+    decided: tuple = ()
 
     @property
     def n_ambiguous(self) -> int:
@@ -90,16 +109,29 @@ class InnerStructure:
     def key(self) -> tuple:
         """Hashable form (two boxes with equal keys give LPs of the same structure)."""
         return (self.kind.tobytes(), self.src.tobytes(),
-                tuple((a.t, a.src_kind, a.src, a.up, a.down) for a in self.ambiguous))
+                tuple((a.t, a.src_kind, a.src, a.up, a.down) for a in self.ambiguous),
+                tuple((d.t, d.branch, d.src_kind, d.src) for d in self.decided))
 
 
 class _Pass:
     """State of the symbolic forward pass."""
 
-    def __init__(self, u, box):
+    def __init__(self, u, box, decisions=None):
         self.u = u
         self.ml, self.cl, self.mr, self.cr, self.z0 = (tuple(map(float, box[i])) for i in range(5))
         self.amb = []
+        self.decisions = dict(decisions or {})
+        self.decided = []
+
+    def decide(self, t, kind, src):
+        """The state after sample ``t`` on its given branch (recorded for the rows)."""
+        branch = self.decisions[t]
+        self.decided.append(Decided(t, branch, kind, src))
+        if branch == UP:
+            return RIGHT, t
+        if branch == DOWN:
+            return LEFT, t
+        return kind, src
 
     def R(self, t):  # noqa: N802 - the chapter's line names
         return line_range(self.u[t], self.mr, self.cr, -1.0)
@@ -148,6 +180,8 @@ class _Pass:
 
     def step(self, t, kind, src):
         """Branch of sample ``t`` from the state ``(kind, src)``: the new state."""
+        if t in self.decisions:
+            return self.decide(t, kind, src)
         u = self.u
         if kind == RIGHT and u[t] >= u[src]:
             return (RIGHT, t) if u[t] > u[src] else (kind, src)
@@ -170,27 +204,30 @@ class _Pass:
         return AMBIG, len(self.amb) - 1
 
 
-def inner_structure(u, box) -> InnerStructure:
+def inner_structure(u, box, decisions=None) -> InnerStructure:
     """Symbolic play operator over ``box`` (rows ``m_l, c_l, m_r, c_r, z0``; ``z0 = x_0``).
 
     Sound for every parameter in the box with ``L_t >= R_t`` on the record (well-posed):
     a sample is given the form ``R(s)``, ``L(s)`` or ``INIT`` only if the play operator gives
     it for all of them (exact input comparisons, or interval bounds with an outward
-    margin); everything else is ambiguous.
+    margin); everything else is ambiguous. ``decisions`` (``{t: UP | DOWN | HOLD}``, samples
+    whose input changes) fix branches: the structure then stands for the parameters of the
+    box that take them (:class:`Decided`; a decision the box contradicts makes the node's
+    relaxation infeasible, never wrong).
     """
     u = np.asarray(u, dtype=float)
     box = np.asarray(box, dtype=float)
     n = u.size
     kind = np.empty(n, dtype=np.int64)
     src = np.empty(n, dtype=np.int64)
-    ps = _Pass(u, box)
+    ps = _Pass(u, box, decisions)
     state = (INIT, -1)
     kind[0], src[0] = state
     for t in range(1, n):
         if u[t] != u[t - 1]:  # the same input keeps the same value (clamp is idempotent)
             state = ps.step(t, *state)
         kind[t], src[t] = state
-    return InnerStructure(kind, src, tuple(ps.amb))
+    return InnerStructure(kind, src, tuple(ps.amb), tuple(ps.decided))
 
 
 def play(u, ml, cl, mr, cr, z0) -> np.ndarray:

@@ -32,7 +32,7 @@ from ..solvers.highs import HighsLP
 from ..solvers.highs import round_down as _round_down
 from ..solvers.highs import round_up as _round_up
 from ..tolerances import FEASIBILITY_RTOL
-from .modes import AMBIG, INIT, LEFT, RIGHT, InnerStructure, inner_structure, line_range
+from .modes import AMBIG, DOWN, INIT, LEFT, RIGHT, UP, InnerStructure, inner_structure, line_range
 from .problem import RecordProblem
 
 __all__ = ["JointRelaxation", "build_relaxation", "solve_lp"]
@@ -197,15 +197,17 @@ def _scale(problem, box):
     return s + float(np.sum(bmax)) * xmax
 
 
-def build_relaxation(problem: RecordProblem, box, *, structure=None,
+def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=None,
                      options=None) -> JointRelaxation:
-    """The LP relaxation over ``box`` (rows as :attr:`RecordProblem.box`)."""
+    """The LP relaxation over ``box`` (rows as :attr:`RecordProblem.box`); ``decisions``
+    (``{t: branch}``, :func:`~.modes.inner_structure`) restrict it to the parameters that
+    take those branches."""
     box = np.asarray(box, dtype=float)
     p, na, N = problem.p, problem.na, problem.N
     nbc = p - na
     u, y = problem.u, problem.y
     p_ = p
-    st = inner_structure(u, box[p_: p_ + 5]) if structure is None else structure
+    st = inner_structure(u, box[p_: p_ + 5], decisions) if structure is None else structure
     K = st.n_ambiguous
     nbeta = 5 + K
     blo, bhi = _inner_ranges(problem, box, st)
@@ -321,9 +323,29 @@ def _branch_rows(rows, problem, st, bc):
             rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, -np.inf, 0.0)
         if not a.down:  # x_t = max(R_t, S) >= S
             rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, 0.0, np.inf)
+    for d in st.decided:
+        _decision_rows(rows, u[d.t], bc, _state_form(st, u, d.src_kind, d.src), d.branch)
     for uu in (float(u.min()), float(u.max())):  # (m_l - m_r) u + d_l + d_r >= 0
         rows.add(np.zeros(4, dtype=np.int64), [bc[B_ML], bc[B_MR], bc[B_DL], bc[B_DR]],
                  [uu, -uu, 1.0, 1.0], 0.0, np.inf)
+
+
+def _decision_rows(rows, u_t, bc, s_form, branch):
+    """The inequalities of a decided sample (:class:`~.modes.Decided`) with the state ``S``
+    before it (a linear form): ``UP``: ``R_t >= S``; ``DOWN``: ``L_t <= S``; ``HOLD``: both
+    ``R_t <= S`` and ``L_t >= S``."""
+    s_cols = [bc[i] for i, _ in s_form]
+    s_vals = [-c for _, c in s_form]
+    r_cols, r_vals = [bc[B_MR], bc[B_DR], *s_cols], [u_t, -1.0, *s_vals]  # R_t - S
+    l_cols, l_vals = [bc[B_ML], bc[B_DL], *s_cols], [u_t, 1.0, *s_vals]  # L_t - S
+    zr, zl = np.zeros(len(r_cols), dtype=np.int64), np.zeros(len(l_cols), dtype=np.int64)
+    if branch == UP:
+        rows.add(zr, r_cols, r_vals, 0.0, np.inf)
+    elif branch == DOWN:
+        rows.add(zl, l_cols, l_vals, -np.inf, 0.0)
+    else:
+        rows.add(zr, r_cols, r_vals, -np.inf, 0.0)
+        rows.add(zl, l_cols, l_vals, 0.0, np.inf)
 
 
 def _steady_rows(rows, problem, bc):

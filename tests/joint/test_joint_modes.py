@@ -119,3 +119,111 @@ def test_unknown_first_value_collapses_after_a_reversal_wider_than_the_gap():
     np.testing.assert_allclose(hi[5:], lo[5:], atol=1e-12)
     x = own_play(u, *GAMMA, 0.0)
     np.testing.assert_allclose(lo[5:], x[5:], atol=1e-12)
+
+
+def own_branch(x, t):
+    """The branch our own play operator took at sample ``t`` (ties count as holding)."""
+    if x[t] > x[t - 1]:
+        return "up"
+    if x[t] < x[t - 1]:
+        return "down"
+    return "hold"
+
+
+@pytest.mark.parametrize("seed", range(10))
+@pytest.mark.parametrize("rel", [0.02, 0.15])
+def test_decided_samples_hold_at_points_that_take_those_branches(seed, rel):
+    """A branch-and-bound node fixes the branch of ambiguous samples: for a point that
+    takes those branches, every claim of the decided structure holds (forms, envelopes,
+    one-sided rows) and so do the decision's own inequalities; the point's branch is
+    always among the children a node is split into (up / down only where still
+    possible)."""
+    from hammerbound.joint.modes import DOWN, HOLD, UP
+
+    rng = np.random.default_rng(seed)
+    u = steps(rng, 80, -1.5, 1.5)
+    gbox = box_around(rng, rel)
+    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
+    mid = 0.5 * (band[0] + band[1])
+    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
+    box = np.vstack([gbox, zbox])
+    base = inner_structure(u, box)
+    checked = decided = 0
+    for _ in range(2000):
+        if checked == 30:
+            break
+        pt = random_point(rng, gbox, zbox, u)
+        if pt is None:
+            continue
+        g, z0 = pt
+        x = own_play(u, *g, z0)
+        scale = 1e-12 * (1 + np.abs(x).max())
+        # the point's own branches at (a random half of) the ambiguous samples
+        dec = {}
+        for a in base.ambiguous:
+            br = own_branch(x, a.t)
+            assert (br != "up" or a.up) and (br != "down" or a.down), (a, br)
+            if rng.uniform() < 0.5 or not dec:
+                dec[a.t] = {"up": UP, "down": DOWN, "hold": HOLD}[br]
+        st = inner_structure(u, box, dec)
+        ml, cl, mr, cr = g
+        for d in st.decided:
+            prev = x[d.t - 1]
+            R, L = mr * (u[d.t] - cr), ml * (u[d.t] + cl)
+            if d.branch == UP:
+                assert R >= prev - scale
+            elif d.branch == DOWN:
+                assert L <= prev + scale
+            else:
+                assert R <= prev + scale and prev <= L + scale
+            decided += 1
+        for t in range(u.size):
+            k, s = int(st.kind[t]), int(st.src[t])
+            if k != AMBIG:
+                assert abs(x[t] - form_value(u, g, z0, k, s)) <= scale, (t, k, s)
+                continue
+            a = st.ambiguous[s]
+            assert a.lo - scale <= x[t] <= a.hi + scale
+        checked += 1
+    assert checked >= 10
+    if base.ambiguous:
+        assert decided > 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_relaxation_of_the_truths_branches_brackets_the_truth(seed):
+    """The node relaxation with the decided branches of the true system (our own
+    simulation, noise exactly at +-bound) bounds every parameter around the truth."""
+    from oracles import A_TRUE, B_TRUE
+    from scipy.signal import lfilter
+
+    from hammerbound.joint import RecordProblem
+    from hammerbound.joint.modes import DOWN, HOLD, UP
+    from hammerbound.joint.relaxation import build_relaxation
+
+    rng = np.random.default_rng(seed)
+    theta = np.r_[A_TRUE[1:], B_TRUE[1:]]
+    for _ in range(20):  # a record with ambiguous samples over the box
+        u = steps(rng, 120)
+        x = own_play(u, *GAMMA, 0.0)
+        truth = np.r_[theta, GAMMA, x[0]]
+        box = np.column_stack([truth - 0.05 * np.abs(truth) - 1e-3,
+                               truth + 0.05 * np.abs(truth) + 1e-3])
+        st = inner_structure(u, box[4:9])
+        if st.ambiguous:
+            break
+    assert st.ambiguous, "the test wants ambiguous samples"
+    deta = 0.05
+    y = lfilter(B_TRUE, A_TRUE, x) + deta * rng.choice([-1.0, 1.0], u.size)
+    pb = RecordProblem(u, y, np.full(u.size, deta), 2, 2, 1, box)
+    names = {"up": UP, "down": DOWN, "hold": HOLD}
+    dec = {a.t: names[own_branch(x, a.t)] for a in st.ambiguous}
+    rel = build_relaxation(pb, box, decisions=dec)
+    for k in range(9):
+        for sense in (1.0, -1.0):
+            c = np.zeros(rel.lp.c.size)
+            c[rel.box_cols[k]] = sense
+            rel.lp.set_cost(c)
+            res = rel.lp.solve()
+            assert res.status == "optimal", (k, sense, res.status)
+            assert res.bound <= sense * truth[k] + 1e-9, (k, sense, res.bound, truth[k])

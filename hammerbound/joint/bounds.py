@@ -110,7 +110,7 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     """
     t0 = time.perf_counter()
     points = []
-    leaves = outer_leaves(problem, deadline=deadline, on_point=points.append)
+    leaves = outer_leaves(problem, deadline=deadline, on_point=points.append, n_jobs=n_jobs)
     box = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
                            np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]

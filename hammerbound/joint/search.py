@@ -155,37 +155,58 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
     return box
 
 
-def _partition(problem, prior, parts, deadline):
+def _map(fn, items, n_jobs):
+    """``[fn(*a) for a in items]``, over ``n_jobs`` processes (joblib) when that pays."""
+    if n_jobs == 1 or len(items) < 2:
+        return [fn(*a) for a in items]
+    from joblib import Parallel, delayed
+
+    return Parallel(n_jobs=min(n_jobs, len(items)) if n_jobs > 0 else n_jobs)(
+        delayed(fn)(*a) for a in items)
+
+
+def _part_obbt(problem, box, rows, deadline, max_rounds=1, shrink=0.01):
+    """OBBT of one part in a worker: ``(box or None if certified empty, LP points)``."""
+    points = []
+    try:
+        box = obbt(problem, box, max_rounds=max_rounds, shrink=shrink, rows=rows,
+                   deadline=deadline, on_point=points.append)
+    except EmptyFeasibleSetError:
+        return None, points
+    return box, points
+
+
+def _partition(problem, prior, parts, deadline, n_jobs=1):
     """Boxes covering the set whose backlash widths are at most ``1/parts`` of the prior's
     (each tightened in ``a``, ``z0``, ``m`` and ``c`` by the relaxation; boxes certified
-    empty are dropped; past ``MAX_PARTS`` boxes the rest are kept as they are)."""
+    empty are dropped; past ``MAX_PARTS`` boxes the rest are kept as they are). The boxes
+    of one generation are tightened in parallel (``n_jobs``)."""
     p = problem.p
     cols = (p, p + 1, p + 2, p + 3)
+    rows = [*range(problem.na), p + 4, p, p + 2, *cols]
     res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
     queue, out = [prior.copy()], []
     while queue:
-        b = queue.pop()
         if _past(deadline):
-            out.append(b)
-            continue
-        try:
-            b = obbt(problem, b, max_rounds=1,
-                     rows=[*range(problem.na), p + 4, p, p + 2, *cols])
-        except EmptyFeasibleSetError:
-            continue
-        w = np.array([b[k, 1] - b[k, 0] for k in cols])
-        if np.any(w > res) and len(out) + len(queue) + 2 <= MAX_PARTS:
-            j = cols[int(np.argmax(w / res))]
-            lo, hi = b.copy(), b.copy()
-            lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
-            queue.extend([hi, lo])
-        else:
-            out.append(b)
+            return out + queue
+        done = _map(_part_obbt, [(problem, b, rows, deadline) for b in queue], n_jobs)
+        queue = []
+        for b, _points in done:
+            if b is None:
+                continue
+            w = np.array([b[k, 1] - b[k, 0] for k in cols])
+            if np.any(w > res) and len(out) + len(queue) + 2 <= MAX_PARTS:
+                j = cols[int(np.argmax(w / res))]
+                lo, hi = b.copy(), b.copy()
+                lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
+                queue.extend([lo, hi])
+            else:
+                out.append(b)
     return out
 
 
 def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
-                 on_point=None):
+                 on_point=None, n_jobs=1):
     """Certified boxes whose union holds the whole set.
 
     The dead band decides which samples are ambiguous, and a wide dead-band range leaves
@@ -194,20 +215,25 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     tightened by the relaxation (empty boxes are dropped, certified) and the wider ``c``
     is bisected while still too wide; OBBT rounds then drop the boxes that are empty and
     shrink the rest (the leaves). On the chapter's
-    records, boxes of the wrong dead band are certified empty by their first LPs.
+    records, boxes of the wrong dead band are certified empty by their first LPs. The
+    parts are tightened over ``n_jobs`` processes.
 
     Raises EmptyFeasibleSetError when every box is empty.
     """
     prior = problem.box if box is None else np.asarray(box, dtype=float)
     if reversal_summary(problem.u)["monotone"]:
         parts = 1  # one line only is ever active: nothing can tell the dead bands apart
+    # the search of each end does the rest: OBBT rounds stop once they pay little
+    done = _map(_part_obbt, [(problem, b, None, deadline, LEAF_ROUNDS, LEAF_SHRINK)
+                             for b in _partition(problem, prior, parts, deadline, n_jobs)],
+                n_jobs)
     out = []
-    for b in _partition(problem, prior, parts, deadline):
-        try:  # the search of each end does the rest: OBBT rounds stop once they pay little
-            out.append(obbt(problem, b, deadline=deadline, on_point=on_point,
-                            max_rounds=LEAF_ROUNDS, shrink=LEAF_SHRINK))
-        except EmptyFeasibleSetError:
-            continue
+    for b, points in done:
+        if on_point is not None:
+            for x in points:
+                on_point(x)
+        if b is not None:
+            out.append(b)
     if not out:
         raise EmptyFeasibleSetError(
             "no backlash and linear block explain the record within the bounds (the "

@@ -27,8 +27,8 @@ chapter's experiment (``hb.chapter_example``: 2 M steady-state points, M = 50, a
 of N_prbs = 100 samples) vs the one-record path on one random-step record of 2 M + N_prbs
 samples, same output bound, same method (``--method``).
 
-**speed** -- wall time of one fit of a random-step record per N and method, with the
-statuses (``"limit"`` ends are certified outer bounds).
+**speed** -- wall time of one fit of a random-step record per N, output bound, seed and
+method (``--n-jobs`` processes), with the statuses (``"limit"`` ends are certified outer bounds).
 
 The fits call :func:`hammerbound.hammerstein.one_record.fit_one_record`, which is what
 ``HammersteinBacklashIdentifier(procedure="one-record").fit`` runs; the identifier itself
@@ -260,21 +260,31 @@ def tightness_table(rows):
 
 # ------------------------------------------------------------------ speed
 def run_speed(args):
+    """Wall time per (N, output bound, seed, method) on random-step records, with the
+    statuses of the 16 ends, the nodes and the widths (``--time-limit`` bounds each fit:
+    the ends it stops keep certified outer bounds, status "limit")."""
     path = C.RESULTS / f"one_record_speed{args.tag}.json"
     rows = C.read_json(path)["rows"] if path.exists() else []
-    have = {(r["N"], r["method"]) for r in rows}
+    have = {(r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"]) for r in rows}
     env = C.environment()
-    for N, method in itertools.product(args.N, args.methods):
-        if (N, method) in have:
+    for N, deta, seed, method in itertools.product(args.N, args.levels, range(args.seeds),
+                                                   args.methods):
+        if (N, deta, seed, method) in have:
             continue
-        u, y = S.record("steps", N, 0.05, "uniform", 7)
-        b, statuses, _, notid, sec = fit(u, y, 0.05, method, n_jobs=args.n_jobs,
-                                         time_limit=args.time_limit)
-        rows.append({"N": N, "method": method, "n_jobs": args.n_jobs, "seconds": sec,
-                     "statuses": sorted(set(statuses)), "width": (b[:, 1] - b[:, 0]).tolist(),
+        u, y = S.record("steps", N, deta, "uniform", seed)
+        b, statuses, infos, notid, sec = fit(u, y, deta, method, n_jobs=args.n_jobs,
+                                             time_limit=args.time_limit)
+        rows.append({"N": N, "deta": deta, "seed": seed, "method": method,
+                     "n_jobs": args.n_jobs, "seconds": sec,
+                     "statuses": sorted(set(statuses)),
+                     "optimal_ends": sum(s == "optimal" for s in statuses),
+                     "nodes": int(sum(getattr(i, "nodes", 0) or 0 for i in infos)),
+                     "width": (b[:, 1] - b[:, 0]).tolist(),
                      "inside": bool(np.all((TRUTH >= b[:, 0]) & (TRUTH <= b[:, 1]))),
+                     "not_identified": notid,
                      "loadavg": C.loadavg(), "time_limit": args.time_limit})
-        C.log(f"speed N={N} {method}: {sec:.1f} s {sorted(set(statuses))}")
+        C.log(f"speed N={N} deta={deta} seed={seed} {method}: {sec:.1f} s "
+              f"{sorted(set(statuses))}")
         C.write_json({"environment": env, "rows": rows}, path)
 
 
@@ -312,6 +322,8 @@ def main(argv=None):
         run_tightness(args)
     else:
         args.N = args.N or ([300] if args.quick else [300, 1000])
+        args.seeds = args.seeds or (1 if args.quick else 2)
+        args.levels = args.levels or ([0.05] if args.quick else [0.005, 0.05, 0.3])
         args.tag = args.tag or ("_quick" if args.quick else "")
         run_speed(args)
 

@@ -104,15 +104,20 @@ def section_tightness():
 
 def section_speed():
     parts = []
-    for tag in ("", "_quick"):
+    for tag in ("_n300", "_n1000", "", "_quick"):
         j = _json(f"one_record_speed{tag}.json")
         if not j or not j["rows"]:
             continue
-        body = [[r["N"], r["method"], r["n_jobs"], f"{r['seconds']:.1f}",
-                 ", ".join(r["statuses"]), "yes" if r["inside"] else "**no**", r["loadavg"]]
+        body = [[r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"], r["n_jobs"],
+                 f"{r['seconds']:.1f}", ", ".join(r["statuses"]),
+                 r.get("optimal_ends", "–") if r["method"] == "exact" else "–",
+                 r.get("nodes", "–") if r["method"] == "exact" else "–",
+                 "–" if r.get("time_limit") is None else f"{r['time_limit']:g}",
+                 "yes" if r["inside"] else "**no**", r["loadavg"]]
                 for r in j["rows"]]
-        parts.append(_table(["N", "method", "jobs", "wall s", "statuses", "truth inside",
-                             "load"], body) + "\n\n" + _env(j))
+        parts.append(_table(["N", "Δη", "seed", "method", "jobs", "wall s", "statuses",
+                             "optimal ends (of 16)", "nodes", "time limit s",
+                             "truth inside", "load"], body) + "\n\n" + _env(j))
     return "\n\n".join(parts) + "\n" if parts else "_No results (`--part speed` not run)._\n"
 
 

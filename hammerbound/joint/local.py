@@ -28,6 +28,10 @@ from .problem import RecordProblem, Witness, verify_point
 
 __all__ = ["restore", "walk"]
 
+# a step's LP that HiGHS has not solved by then counts as a failed step (the trust region
+# shrinks): seen at N = 300, one step's LP ran for minutes inside the starting pool
+_LP_OPTIONS = {"time_limit": 5.0}
+
 
 class _Linearised:
     """Residuals, Jacobian and branch inequalities at a point, branches fixed."""
@@ -176,7 +180,7 @@ def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None):
     if objective is None:
         c[nv + N] = 1.0
         res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds,
-                      method="highs")
+                      method="highs", options=_LP_OPTIONS)
         if res.status != 0:
             return None
         tau = float(res.x[nv + N])
@@ -190,7 +194,7 @@ def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None):
         c[k] = sense
         bounds[nv + N] = [0.0, 1.0]  # violations held at the current level
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds,
-                  method="highs")
+                  method="highs", options=_LP_OPTIONS)
     if res.status != 0:
         return None
     return lin.v + res.x[:nv], np.clip(res.x[nv: nv + N], -pr.deta, pr.deta)

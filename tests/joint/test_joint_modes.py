@@ -48,6 +48,53 @@ def random_point(rng, gbox, zbox, u):
     return g, lo + rng.uniform() * (hi - lo)
 
 
+def assert_claims(st, u, g, z0, x, scale):
+    """Every claim of the structure ``st`` holds at the point: line forms, envelopes of the
+    ambiguous samples and their one-sided rows."""
+    for t in range(u.size):
+        k, s = int(st.kind[t]), int(st.src[t])
+        if k != AMBIG:
+            assert abs(x[t] - form_value(u, g, z0, k, s)) <= scale, (t, k, s)
+            continue
+        a = st.ambiguous[s]
+        assert a.lo - scale <= x[t] <= a.hi + scale
+        prev = (z0 if a.src_kind == INIT else
+                form_value(u, g, z0, a.src_kind, a.src) if a.src_kind in (RIGHT, LEFT)
+                else x[st.ambiguous[a.src].t])
+        if not a.up:
+            assert x[t] <= prev + scale
+        if not a.down:
+            assert x[t] >= prev - scale
+
+
+def record_and_box(seed, rel):
+    """A random-step record (mostly well-posed for the wide boxes too) and a backlash box
+    of relative width ``rel`` around the chapter's, with a first-value box in the band."""
+    rng = np.random.default_rng(seed)
+    u = steps(rng, 80, -1.5, 1.5)
+    gbox = box_around(rng, rel)
+    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
+    mid = 0.5 * (band[0] + band[1])
+    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
+    return rng, u, gbox, zbox
+
+
+def points(rng, gbox, zbox, u, want, tries):
+    """Up to ``want`` random well-posed points ``(g, z0, x, scale)`` of the box, with our
+    own play operator's inner signal ``x`` and a rounding scale."""
+    found = 0
+    for _ in range(tries):
+        if found == want:
+            return
+        pt = random_point(rng, gbox, zbox, u)
+        if pt is None:
+            continue
+        g, z0 = pt
+        x = own_play(u, *g, z0)
+        found += 1
+        yield g, z0, x, 1e-12 * (1 + np.abs(x).max())
+
+
 def form_value(u, g, z0, kind, src):
     ml, cl, mr, cr = g
     if kind == RIGHT:
@@ -60,39 +107,13 @@ def form_value(u, g, z0, kind, src):
 @pytest.mark.parametrize("seed", range(12))
 @pytest.mark.parametrize("rel", [0.0, 0.02, 0.15])
 def test_every_claim_holds_at_random_points_of_the_box(seed, rel):
-    rng = np.random.default_rng(seed)
-    u = steps(rng, 80, -1.5, 1.5)  # mostly well-posed for the wide boxes too
-    gbox = box_around(rng, rel)
-    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
-    mid = 0.5 * (band[0] + band[1])
-    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
+    rng, u, gbox, zbox = record_and_box(seed, rel)
     st = inner_structure(u, np.vstack([gbox, zbox]))
     lo_env, hi_env = inner_envelope(u, gbox, zbox)
     checked = 0
-    for _ in range(1000):
-        if checked == 40:
-            break
-        pt = random_point(rng, gbox, zbox, u)
-        if pt is None:
-            continue
-        g, z0 = pt
-        x = own_play(u, *g, z0)
-        scale = 1e-12 * (1 + np.abs(x).max())
+    for g, z0, x, scale in points(rng, gbox, zbox, u, 40, 1000):
         assert np.all(x >= lo_env - scale) and np.all(x <= hi_env + scale)
-        for t in range(u.size):
-            k, s = int(st.kind[t]), int(st.src[t])
-            if k != AMBIG:
-                assert abs(x[t] - form_value(u, g, z0, k, s)) <= scale, (t, k, s)
-                continue
-            a = st.ambiguous[s]
-            assert a.lo - scale <= x[t] <= a.hi + scale
-            prev = (z0 if a.src_kind == INIT else
-                    form_value(u, g, z0, a.src_kind, a.src) if a.src_kind in (RIGHT, LEFT)
-                    else x[st.ambiguous[a.src].t])
-            if not a.up:
-                assert x[t] <= prev + scale
-            if not a.down:
-                assert x[t] >= prev - scale
+        assert_claims(st, u, g, z0, x, scale)
         checked += 1
     assert checked >= 10
 
@@ -140,24 +161,11 @@ def test_decided_samples_hold_at_points_that_take_those_branches(seed, rel):
     possible)."""
     from hammerbound.joint.modes import DOWN, HOLD, UP
 
-    rng = np.random.default_rng(seed)
-    u = steps(rng, 80, -1.5, 1.5)
-    gbox = box_around(rng, rel)
-    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
-    mid = 0.5 * (band[0] + band[1])
-    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
+    rng, u, gbox, zbox = record_and_box(seed, rel)
     box = np.vstack([gbox, zbox])
     base = inner_structure(u, box)
     checked = decided = 0
-    for _ in range(2000):
-        if checked == 30:
-            break
-        pt = random_point(rng, gbox, zbox, u)
-        if pt is None:
-            continue
-        g, z0 = pt
-        x = own_play(u, *g, z0)
-        scale = 1e-12 * (1 + np.abs(x).max())
+    for g, z0, x, scale in points(rng, gbox, zbox, u, 30, 2000):
         # the point's own branches at (a random half of) the ambiguous samples
         dec = {}
         for a in base.ambiguous:
@@ -177,13 +185,7 @@ def test_decided_samples_hold_at_points_that_take_those_branches(seed, rel):
             else:
                 assert R <= prev + scale and prev <= L + scale
             decided += 1
-        for t in range(u.size):
-            k, s = int(st.kind[t]), int(st.src[t])
-            if k != AMBIG:
-                assert abs(x[t] - form_value(u, g, z0, k, s)) <= scale, (t, k, s)
-                continue
-            a = st.ambiguous[s]
-            assert a.lo - scale <= x[t] <= a.hi + scale
+        assert_claims(st, u, g, z0, x, scale)
         checked += 1
     assert checked >= 10
     if base.ambiguous:

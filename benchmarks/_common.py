@@ -61,6 +61,19 @@ def loadavg() -> float:
         return float("nan")
 
 
+def chapter_stage2_problem(deta: float, N: int, inner: str):
+    """The stage-2 EIV problem of the chapter example (seed 0) after stage 1 and the LP
+    stage 2, with the inner signal ``inner`` ("independent" or "two-level")."""
+    import hammerbound as hb
+
+    ex = hb.chapter_example(deta, N=N, random_state=0)
+    ident = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(output_bound=deta, method="lp"),
+        inner_signal=inner)
+    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    return ident.linear_.problem_
+
+
 def run_method(example, label: str, *, n_jobs: int = 2, time_limit: float = 600.0,
                u=None, y=None, na: int = 2, nb: int = 2) -> dict:
     """Fit the two-stage identifier with the method ``label`` (a key of METHODS).

@@ -22,19 +22,9 @@ import time
 
 import numpy as np
 
-import hammerbound as hb
 from benchmarks import _common as C
 
 VARIANTS = ("all", "no-local", "no-shared-branching", "no-parent-basis")
-
-
-def _problem(deta, N, inner):
-    ex = hb.chapter_example(deta, N=N, random_state=0)
-    ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(output_bound=deta, method="lp"),
-        inner_signal=inner)
-    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
-    return ident.linear_.problem_
 
 
 #: the search options of each variant (explicit options: they reach joblib workers too)
@@ -61,7 +51,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     rows = []
     for deta in args.levels:
-        problem = _problem(deta, args.N, args.inner)
+        problem = C.chapter_stage2_problem(deta, args.N, args.inner)
         ref = None
         for variant in args.variants:
             load0 = C.loadavg()

@@ -30,21 +30,11 @@ import time
 
 import numpy as np
 
-import hammerbound as hb
 from benchmarks import _common as C
 from benchmarks.exact_scaling import _PeakRSS
 from hammerbound.relaxations import exact_bounds, lp_bounds
 
 TOL = 1e-4
-
-
-def _problem(N, deta, inner):
-    ex = hb.chapter_example(deta, N=N, random_state=0)
-    ident = hb.HammersteinBacklashIdentifier(
-        hb.BacklashSetEstimator(deta), hb.LinearEIVSetEstimator(output_bound=deta, method="lp"),
-        inner_signal=inner)
-    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
-    return ident.linear_.problem_
 
 
 def _timed(fn):
@@ -120,7 +110,7 @@ def main(argv=None) -> int:
     rows = []
     name = f"exact_ratio{'_' + args.tag if args.tag else ''}.json"
     for inner, N, deta in _plan(args):
-        problem = _problem(N, deta, inner)
+        problem = C.chapter_stage2_problem(deta, N, inner)
         load0 = C.loadavg()
         _, row = _row(problem, args.n_jobs, args.repeat)
         row = {"inner_signal": inner, "N": N, "delta_eta": deta, "n_jobs": args.n_jobs,

@@ -75,8 +75,7 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None):
     c = np.zeros(lp.c.size)
     c[rel.box_cols[col]] = sense
     lp.set_cost(c)
-    if cutoff is not None and np.isfinite(cutoff):
-        lp.set_cutoff(cutoff)
+    lp.set_cutoff(cutoff)  # None or not finite: no cutoff
     if basis is not None and basis[0].size == lp.c.size and basis[1].size == lp.A.shape[0]:
         lp.set_basis(basis)
     res = solve_lp(lp)

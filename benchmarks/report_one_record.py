@@ -98,8 +98,21 @@ def section_tightness():
             f"record / two-stage (issue goal: θ ≤ 1, backlash ≤ 2). Truth inside: two-stage "
             f"{inside[0]}/{len(rows)}, one record {inside[1]}/{len(rows)}.\n\n"
             + _table(["Δη", "method", "parameter", "seeds", "two-stage width",
-                      "one-record width", "ratio"], body) + "\n\n" + _env(j))
+                      "one-record width", "ratio"], body) + "\n\n" + _limits(rows) + _env(j))
     return "\n\n".join(parts) + "\n" if parts else ""
+
+
+def _limits(rows):
+    """Which exact one-record fits a time limit stopped (their stopped ends keep certified
+    outer bounds, so their widths are upper bounds of the exact widths)."""
+    ex = [r for r in rows if r["method"] == "exact"]
+    if not ex:
+        return ""
+    full = sum(r.get("one_record_optimal_ends", 0) == 16 for r in ex)
+    lims = sorted({r.get("time_limit") for r in ex} - {None})
+    return (f"Exact one-record fits with all 16 ends optimal: {full} of {len(ex)}"
+            + (f" (time limit {', '.join(f'{v:g}' for v in lims)} s per fit; the other "
+               "fits' stopped ends are certified outer bounds)" if lims else "") + ".\n\n")
 
 
 def section_speed():

@@ -64,7 +64,13 @@ def round_up(v):
 #: cutoff keeps valid duals; with presolve, HiGHS often found infeasibility there, without a
 #: ray, and the certificate took a phase-1 LP. Measured on the chapter's record at N = 300
 #: (c_r max, 323 nodes): 31.7 s with presolve, 21.9 s without, same bound.
-LP_OPTIONS = {"presolve": "off"}
+#: Each LP also stops after LP_TIME_LIMIT seconds (its bound then comes from whatever duals
+#: it has, maybe none: the caller keeps the box it had). Seen on a valve loop of 108
+#: samples: one relaxation LP ran for over 15 minutes in a worker process (the same loop
+#: took 112 s in all in a fresh process, where the deadline had stopped the search at
+#: another box). One LP takes 0.03 s at N = 300 and 0.3-1 s at N = 1000.
+LP_TIME_LIMIT = 60.0
+LP_OPTIONS = {"presolve": "off", "time_limit": LP_TIME_LIMIT}
 
 # positions of the inner variables in beta
 B_ML, B_DL, B_MR, B_DR, B_Z0 = range(5)

@@ -28,7 +28,7 @@ from .local import restore, walk
 from .modes import DOWN, HOLD, UP
 from .prior import reversal_summary
 from .problem import RecordProblem, Witness
-from .relaxation import build_relaxation, solve_lp
+from .relaxation import LP_TIME_LIMIT, build_relaxation, solve_lp
 from .windows import window_problem, windows
 
 __all__ = ["EndResult", "obbt", "outer_leaves", "search_end"]
@@ -69,13 +69,14 @@ class EndResult:
     status: str
 
 
-def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None):
-    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis.
+def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, deadline=None):
+    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis;
+    the LP stops at ``deadline`` (keeping the bound it certifies).
 
     ``cutoff``: the dual simplex may stop once its certified bound exceeds it (status
     "cutoff", no point): a node that cannot beat the incumbent, or is infeasible, is then
     dropped without solving it to the end or certifying its infeasibility by a ray."""
-    rel = build_relaxation(problem, box, decisions=decisions)
+    rel = build_relaxation(problem, box, decisions=decisions, options=_lp_options(deadline))
     lp = rel.lp
     c = np.zeros(lp.c.size)
     c[rel.box_cols[col]] = sense
@@ -96,10 +97,18 @@ def _obbt_order(problem):
     return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
 
 
-def _tighten_one(problem, box, k):
-    """Certified bounds of row ``k`` from one relaxation (None: certified empty); each
-    LP point goes to ``on_point``."""
-    rel = build_relaxation(problem, box)
+def _lp_options(deadline):
+    """HiGHS options of an LP solved before ``deadline``: it stops there (or after
+    :data:`~.relaxation.LP_TIME_LIMIT`), keeping a certified (maybe weaker) bound."""
+    if deadline is None:
+        return None
+    return {"time_limit": float(min(LP_TIME_LIMIT, max(0.1, deadline - time.time())))}
+
+
+def _tighten_one(problem, box, k, deadline=None):
+    """Certified bounds of row ``k`` from one relaxation (None: certified empty) and the
+    LP points; the LPs stop at ``deadline`` (keeping the bounds they certify)."""
+    rel = build_relaxation(problem, box, options=_lp_options(deadline))
     out = box[k].copy()
     points = []
     for sense in (1.0, -1.0):
@@ -141,7 +150,7 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
         for k in order:
             if _past(deadline):  # every row so far is certified: stop here
                 return box
-            row, points = _tighten_one(problem, box, k)
+            row, points = _tighten_one(problem, box, k, deadline)
             if row is None:
                 raise EmptyFeasibleSetError(
                     "no backlash and linear block explain the record within the bounds "
@@ -375,6 +384,7 @@ class _EndSearch:
     def __init__(self, problem, leaves, k, sense, start, tol, max_nodes, stop):
         self.pr, self.k, self.sense, self.tol = problem, k, sense, tol
         self.max_nodes, self.stop = max_nodes, stop
+        self.deadline = stop if np.isfinite(stop) else None  # for the node LPs
         self.inc = _Incumbent(problem, k, sense, start)
         hull = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
                                 np.max([b[:, 1] for b in leaves], axis=0)])
@@ -402,7 +412,8 @@ class _EndSearch:
             if box is None:
                 return None
         res, x, nb, rel = _solve(self.pr, box, self.k, self.sense, basis,
-                                 cutoff=self.inc.value - self.gap_tol(), decisions=decisions)
+                                 cutoff=self.inc.value - self.gap_tol(), decisions=decisions,
+                                 deadline=self.deadline)
         self.nodes += 1
         if res.status == "infeasible":
             return None
@@ -450,7 +461,8 @@ class _EndSearch:
             if box[j, 1] - box[j, 0] <= 1e-9 * self.root_w[j]:
                 continue
             for side, child in enumerate(_children(box, j, x)):
-                res, *_ = _solve(self.pr, child, self.k, self.sense, nb)
+                res, *_ = _solve(self.pr, child, self.k, self.sense, nb,
+                                 deadline=self.deadline)
                 gain = np.inf if res.status == "infeasible" else res.bound - node_bound
                 self.pc.add(j, side, min(gain, 10 * abs(node_bound) + 1.0))
 

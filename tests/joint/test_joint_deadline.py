@@ -1,0 +1,52 @@
+"""An LP of the one-record search stopped by a deadline keeps a certified bound, never a
+wrong one (hammerbound.joint.search._tighten_one with a deadline)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from oracles import play
+
+from hammerbound.joint import RecordProblem, default_gamma_box, record_box
+from hammerbound.joint.relaxation import LP_TIME_LIMIT
+from hammerbound.joint.search import _lp_options, _tighten_one
+
+GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
+
+
+def _problem(N=400, deta=0.05, seed=0):
+    rng = np.random.default_rng(seed)
+    u = []
+    while len(u) < N:
+        u += [rng.uniform(-2, 2)] * int(rng.integers(3, 21))
+    u = np.array(u[:N])
+    x = play(u, *GAMMA)
+    w = np.zeros(N)
+    for t in range(2, N):
+        w[t] = 2.15 * x[t - 1] - 1.09 * x[t - 2] + 0.76 * w[t - 1] - 0.82 * w[t - 2]
+    y = w + deta * rng.choice([-1.0, 1.0], N)
+    return RecordProblem(u, y, deta, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, deta)))
+
+
+def test_lp_options_follow_the_deadline_and_the_cap():
+    assert _lp_options(None) is None
+    assert _lp_options(time.time() + 1e6)["time_limit"] == LP_TIME_LIMIT
+    assert 0.0 < _lp_options(time.time() + 2.0)["time_limit"] <= 2.0
+    assert _lp_options(time.time() - 5.0)["time_limit"] > 0.0  # never 0 (HiGHS: no limit)
+
+
+def test_an_lp_stopped_by_the_deadline_keeps_an_outer_bound():
+    pr = _problem()
+    box = pr.box.copy()
+    stopped = 0
+    for k in (0, 1, pr.p + 1, pr.p + 3):
+        full, _ = _tighten_one(pr, box, k)
+        cut, _ = _tighten_one(pr, box, k, deadline=time.time() + 1e-4)
+        assert cut is not None and full is not None
+        # stopped early: never tighter than the LP solved to the end (rounding aside)
+        tol = 1e-9 * max(1.0, float(np.max(np.abs(full))))
+        assert cut[0] <= full[0] + tol and cut[1] >= full[1] - tol
+        assert box[k, 0] <= cut[0] and cut[1] <= box[k, 1]
+        stopped += bool(cut[1] - cut[0] > full[1] - full[0] + tol)
+    assert stopped  # the deadline did stop LPs

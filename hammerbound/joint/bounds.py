@@ -2,8 +2,8 @@
 
 :func:`record_bounds` runs the whole method on a :class:`~.problem.RecordProblem`:
 
-1. OBBT from the a priori box (:func:`.search.obbt`): certified bounds on every parameter
-   from the LP relaxation alone (``method="lp"`` stops here);
+1. OBBT over parts of the a priori box (:func:`.tighten.outer_leaves`): certified bounds
+   on every parameter from the LP relaxation alone (``method="lp"`` stops here);
 2. verified points from the last OBBT round's LP points (:func:`.local.restore`);
 3. branch-and-bound per interval end (:func:`.search.search_end`), the ends in parallel
    with joblib (``n_jobs``).
@@ -26,7 +26,8 @@ from ..relaxations.result import BoundInfo, IntervalResult
 from ..status import RELAXATION
 from .local import restore
 from .problem import RecordProblem
-from .search import outer_leaves, search_end
+from .search import search_end
+from .tighten import outer_leaves
 
 __all__ = ["RecordDetails", "record_bounds"]
 

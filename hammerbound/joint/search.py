@@ -1,12 +1,12 @@
-"""Guaranteed intervals of the one-record set: OBBT, then branch-and-bound per interval end.
+"""Branch-and-bound per interval end of the one-record set (after :mod:`.tighten`).
 
 For every parameter of ``[theta, m_l, c_l, m_r, c_r]`` and both senses the exact extreme
 over the one-record set (:mod:`.problem`) is bracketed by
 
 * a **certified outer bound**: the smallest certified LP bound (:mod:`.relaxation`) over the
   open leaves of a branch-and-bound tree on the box of ``[theta, gamma, z0]``; the tree
-  starts from the a priori box shrunk by optimality-based bound tightening (OBBT), which
-  also bounds the parameters the data determine from far outside (the RLT rows);
+  starts from the leaves of :func:`~.tighten.outer_leaves` (the a priori box cut into
+  parts and shrunk by optimality-based bound tightening, OBBT);
 * an **inner value**: the parameter at the best point that :func:`~.problem.verify_point`
   accepts (a simulation of the backlash and the fixed-theta LP of stage 2), found by the
   local search of :mod:`.local` from relaxation points.
@@ -23,29 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import EmptyFeasibleSetError
 from .local import restore, walk
 from .modes import DOWN, HOLD, UP
-from .prior import reversal_summary
 from .problem import RecordProblem, Witness
-from .relaxation import LP_TIME_LIMIT, build_relaxation, solve_lp
-from .windows import window_problem, windows
+from .relaxation import build_relaxation, solve_lp
+from .tighten import _lp_options
 
-__all__ = ["EndResult", "obbt", "outer_leaves", "search_end"]
+__all__ = ["EndResult", "search_end"]
 
 _SPLIT_CLIP = 0.1
-# OBBT of the leaves: at most this many rounds, and stop when a round shrinks no width by
-# more than this fraction (measured on the chapter's record at N = 120: to the 1 % fixed
-# point took 1745 LPs, most of them shrinking boxes by a few per cent per round)
-LEAF_ROUNDS = 6
-LEAF_SHRINK = 0.05
-# on a long record, the partition tightens its boxes over the windows only (one round) and
-# the leaves get LEAF_ROUNDS rounds over the windows before those over the whole record
-# (:mod:`.windows`; measured on the chapter's random-step record, N = 1000, Delta eta =
-# 0.05, method "lp", one core: 230 s without windows, 138 s with, the same widths to 1e-5)
-# the partition of the backlash box stops splitting at this many boxes (a record that
-# cannot tell the slopes or gaps apart would otherwise give parts**4 of them)
-MAX_PARTS = 48
 # a node with ambiguous samples is split on one of them (decided branches) before its box
 SAMPLE = "sample"  # origin of a child split on a sample (no pseudocost)
 # steps of the walk of an end's starting point towards the end (measured at N = 300 on the
@@ -87,200 +73,6 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, de
     res = solve_lp(lp)
     x = None if res.x is None else res.x[rel.box_cols]
     return res, x, (lp.get_basis() if res.status == "optimal" else None), rel
-
-
-def _obbt_order(problem):
-    """OBBT order: the linear block's poles (set by the output's own dynamics), the first
-    inner value and the dead band (which decide the samples' branches), then the slopes
-    and the ``b_j`` (which the first ones make tight)."""
-    p, na = problem.p, problem.na
-    return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
-
-
-def _lp_options(deadline):
-    """HiGHS options of an LP solved before ``deadline``: it stops there (or after
-    :data:`~.relaxation.LP_TIME_LIMIT`), keeping a certified (maybe weaker) bound."""
-    if deadline is None:
-        return None
-    return {"time_limit": float(min(LP_TIME_LIMIT, max(0.1, deadline - time.time())))}
-
-
-def _tighten_one(problem, box, k, deadline=None):
-    """Certified bounds of row ``k`` from one relaxation (None: certified empty) and the
-    LP points; the LPs stop at ``deadline`` (keeping the bounds they certify)."""
-    rel = build_relaxation(problem, box, options=_lp_options(deadline))
-    out = box[k].copy()
-    points = []
-    for sense in (1.0, -1.0):
-        c = np.zeros(rel.lp.c.size)
-        c[rel.box_cols[k]] = sense
-        rel.lp.set_cost(c)
-        res = solve_lp(rel.lp, primal=sense < 0)  # the second solve: only the cost changed
-        if res.status == "infeasible":
-            return None, points
-        if sense > 0:
-            out[0] = max(out[0], res.bound)
-        else:
-            out[1] = min(out[1], -res.bound)
-        if res.x is not None:
-            points.append(res.x[rel.box_cols])
-    return (None if out[0] > out[1] else out), points
-
-
-def _past(deadline) -> bool:
-    return deadline is not None and time.time() > deadline
-
-
-def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
-         on_point=None, rows=None):
-    """Shrink the box by OBBT rounds until a round shrinks no width by more than
-    ``shrink`` (relative). Sequential: the relaxation is rebuilt after each row, so what one
-    row's bounds decide (e.g. the branch of a sample) helps the next. Every bound is
-    certified; ``on_point(x)`` sees each LP point.
-
-    Raises
-    ------
-    EmptyFeasibleSetError
-        An LP of the relaxation is certified infeasible: no parameters explain the record.
-    """
-    box = problem.box.copy() if box is None else np.array(box, dtype=float)
-    order = _obbt_order(problem) if rows is None else list(rows)
-    for _ in range(max_rounds):
-        old = box.copy()
-        for k in order:
-            if _past(deadline):  # every row so far is certified: stop here
-                return box
-            row, points = _tighten_one(problem, box, k, deadline)
-            if row is None:
-                raise EmptyFeasibleSetError(
-                    "no backlash and linear block explain the record within the bounds "
-                    "(the relaxation of the one-record set is certified infeasible).")
-            box[k] = row
-            if on_point is not None:
-                for x in points:
-                    on_point(x)
-        w_old = old[:, 1] - old[:, 0]
-        w_new = box[:, 1] - box[:, 0]
-        if np.all(w_old - w_new <= shrink * np.maximum(w_old, 1e-300)):
-            break
-        if _past(deadline):
-            break
-    return box
-
-
-def _map(fn, items, n_jobs):
-    """``[fn(*a) for a in items]``, over ``n_jobs`` processes (joblib) when that pays."""
-    if n_jobs == 1 or len(items) < 2:
-        return [fn(*a) for a in items]
-    from joblib import Parallel, delayed
-
-    return Parallel(n_jobs=min(n_jobs, len(items)) if n_jobs > 0 else n_jobs)(
-        delayed(fn)(*a) for a in items)
-
-
-def _window_obbt(problem, box, rows, deadline, max_rounds, shrink):
-    """``box`` tightened by OBBT over the record's windows (:mod:`.windows`), or None
-    when a window certifies it empty."""
-    p = problem.p
-    for s, e in windows(problem):
-        wp = window_problem(problem, box, s, e)
-        try:
-            wb = obbt(wp, wp.box, max_rounds=max_rounds, shrink=shrink, rows=rows,
-                      deadline=deadline)
-        except EmptyFeasibleSetError:
-            return None
-        box = box.copy()
-        box[: p + 4] = wb[: p + 4]
-        if s == 0:
-            box[p + 4] = wb[p + 4]
-    return box
-
-
-def _part_obbt(problem, box, rows, deadline, max_rounds=1, shrink=0.01, window_rounds=0,
-               full=True):
-    """OBBT of one part in a worker: ``(box or None if certified empty, LP points)``;
-    first ``window_rounds`` rounds over the windows of a long record, then (``full``, and
-    always for a record too short for windows) over the whole record."""
-    points = []
-    if window_rounds and windows(problem):
-        box = _window_obbt(problem, box, rows, deadline, window_rounds, shrink)
-        if box is None or not full:
-            return box, points
-    try:
-        box = obbt(problem, box, max_rounds=max_rounds, shrink=shrink, rows=rows,
-                   deadline=deadline, on_point=points.append)
-    except EmptyFeasibleSetError:
-        return None, points
-    return box, points
-
-
-def _partition(problem, prior, parts, deadline, n_jobs=1):
-    """Boxes covering the set whose backlash widths are at most ``1/parts`` of the prior's
-    (each tightened in ``a``, ``z0``, ``m`` and ``c`` by the relaxation; boxes certified
-    empty are dropped; past ``MAX_PARTS`` boxes the rest are kept as they are). The boxes
-    of one generation are tightened in parallel (``n_jobs``)."""
-    p = problem.p
-    cols = (p, p + 1, p + 2, p + 3)
-    rows = [*range(problem.na), p + 4, p, p + 2, *cols]
-    res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
-    queue, out = [prior.copy()], []
-    while queue:
-        if _past(deadline):
-            return out + queue
-        done = _map(_part_obbt, [(problem, b, rows, deadline, 1, 0.01, 1, False)
-                                 for b in queue], n_jobs)
-        queue = []
-        for b, _points in done:
-            if b is None:
-                continue
-            w = np.array([b[k, 1] - b[k, 0] for k in cols])
-            if np.any(w > res) and len(out) + len(queue) + 2 <= MAX_PARTS:
-                j = cols[int(np.argmax(w / res))]
-                lo, hi = b.copy(), b.copy()
-                lo[j, 1] = hi[j, 0] = 0.5 * (b[j, 0] + b[j, 1])
-                queue.extend([lo, hi])
-            else:
-                out.append(b)
-    return out
-
-
-def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
-                 on_point=None, n_jobs=1):
-    """Certified boxes whose union holds the whole set.
-
-    The dead band decides which samples are ambiguous, and a wide dead-band range leaves
-    the relaxation too weak to bound anything. So the widths of ``c_l`` and ``c_r`` are
-    first brought below ``1/parts`` of their a priori range: each box's ``c`` bounds are
-    tightened by the relaxation (empty boxes are dropped, certified) and the wider ``c``
-    is bisected while still too wide; OBBT rounds then drop the boxes that are empty and
-    shrink the rest (the leaves). On the chapter's
-    records, boxes of the wrong dead band are certified empty by their first LPs. The
-    parts are tightened over ``n_jobs`` processes. On a long record the parts are
-    tightened over its windows only, and the leaves over its windows before the whole
-    record (:mod:`.windows`: every window is a relaxation, at a fraction of the cost).
-
-    Raises EmptyFeasibleSetError when every box is empty.
-    """
-    prior = problem.box if box is None else np.asarray(box, dtype=float)
-    if reversal_summary(problem.u)["monotone"]:
-        parts = 1  # one line only is ever active: nothing can tell the dead bands apart
-    # the search of each end does the rest: OBBT rounds stop once they pay little
-    done = _map(_part_obbt, [(problem, b, None, deadline, LEAF_ROUNDS, LEAF_SHRINK,
-                              LEAF_ROUNDS)
-                             for b in _partition(problem, prior, parts, deadline, n_jobs)],
-                n_jobs)
-    out = []
-    for b, points in done:
-        if on_point is not None:
-            for x in points:
-                on_point(x)
-        if b is not None:
-            out.append(b)
-    if not out:
-        raise EmptyFeasibleSetError(
-            "no backlash and linear block explain the record within the bounds (the "
-            "relaxation is certified infeasible on every part of the a priori box).")
-    return out
 
 
 def _children(box, j, x):

@@ -1,5 +1,5 @@
 """An LP of the one-record search stopped by a deadline keeps a certified bound, never a
-wrong one (hammerbound.joint.search._tighten_one with a deadline)."""
+wrong one (hammerbound.joint.tighten._tighten_one with a deadline)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from oracles import play
 
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
 from hammerbound.joint.relaxation import LP_TIME_LIMIT
-from hammerbound.joint.search import _lp_options, _tighten_one
+from hammerbound.joint.tighten import _lp_options, _tighten_one
 
 GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
 

@@ -13,7 +13,7 @@ from oracles import play
 
 from hammerbound.exceptions import EmptyFeasibleSetError
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
-from hammerbound.joint.search import _window_obbt, obbt
+from hammerbound.joint.tighten import _window_obbt, obbt
 from hammerbound.joint.windows import window_problem, windows
 
 GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])

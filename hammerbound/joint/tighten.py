@@ -46,7 +46,7 @@ def _obbt_order(problem):
     return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
 
 
-def _lp_options(deadline):
+def lp_options(deadline):
     """HiGHS options of an LP solved before ``deadline``: it stops there (or after
     :data:`~.relaxation.LP_TIME_LIMIT`), keeping a certified (maybe weaker) bound."""
     if deadline is None:
@@ -57,7 +57,7 @@ def _lp_options(deadline):
 def _tighten_one(problem, box, k, deadline=None):
     """Certified bounds of row ``k`` from one relaxation (None: certified empty) and the
     LP points; the LPs stop at ``deadline`` (keeping the bounds they certify)."""
-    rel = build_relaxation(problem, box, options=_lp_options(deadline))
+    rel = build_relaxation(problem, box, options=lp_options(deadline))
     out = box[k].copy()
     points = []
     for sense in (1.0, -1.0):

@@ -10,7 +10,7 @@ from oracles import play
 
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
 from hammerbound.joint.relaxation import LP_TIME_LIMIT
-from hammerbound.joint.tighten import _lp_options, _tighten_one
+from hammerbound.joint.tighten import _tighten_one, lp_options
 
 GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
 
@@ -30,10 +30,10 @@ def _problem(N=400, deta=0.05, seed=0):
 
 
 def test_lp_options_follow_the_deadline_and_the_cap():
-    assert _lp_options(None) is None
-    assert _lp_options(time.time() + 1e6)["time_limit"] == LP_TIME_LIMIT
-    assert 0.0 < _lp_options(time.time() + 2.0)["time_limit"] <= 2.0
-    assert _lp_options(time.time() - 5.0)["time_limit"] > 0.0  # never 0 (HiGHS: no limit)
+    assert lp_options(None) is None
+    assert lp_options(time.time() + 1e6)["time_limit"] == LP_TIME_LIMIT
+    assert 0.0 < lp_options(time.time() + 2.0)["time_limit"] <= 2.0
+    assert lp_options(time.time() - 5.0)["time_limit"] > 0.0  # never 0 (HiGHS: no limit)
 
 
 def test_an_lp_stopped_by_the_deadline_keeps_an_outer_bound():

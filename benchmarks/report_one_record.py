@@ -143,8 +143,10 @@ def section_valve():
     calls = ("stiction", "no stiction", "degenerate", "error")
     body = [[lab] + [conf.get(f"{lab}|{c}", 0) for c in calls] for lab in ("stiction",
                                                                            "no stiction")]
-    out = [f"{len(rows)} of 80 loops analysed (random order, seed 0), wall time "
-           f"{j.get('wall_s', float('nan')):.0f} s for this run. Confusion table (rows: the "
+    sec = [r["seconds"] for r in rows if "seconds" in r]
+    out = [f"{len(rows)} of 80 loops analysed (random order, seed 0), "
+           + (f"median {np.median(sec):.0f} s per loop (max {max(sec):.0f} s). " if sec else "")
+           + "Confusion table (rows: the "
            "experts' folder labels; columns: the rule's call):\n",
            _table(["label \\ call", *calls], body)]
     det = []

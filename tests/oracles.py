@@ -50,6 +50,26 @@ def play(u, ml, cl, mr, cr, x0=0.0):
     return out
 
 
+def random_steps(N, rng, hold=(3, 20)):
+    """Random-step input: levels uniform in [-2, 2], each held ``hold`` samples."""
+    u = []
+    while len(u) < N:
+        u += [rng.uniform(-2, 2)] * int(rng.integers(hold[0], hold[1] + 1))
+    return np.array(u[:N])
+
+
+def one_record(N, deta, noise, seed):
+    """A random-step record of the chapter's system (backlash ``GAMMA_TRUE``, then
+    ``B/A`` at rest from ``x = 0``): ``(u, y, x)``; noise ``"uniform"`` in the bound or
+    ``"bound"`` (exactly at +-deta, random signs)."""
+    rng = np.random.default_rng(seed)
+    u = random_steps(N, rng)
+    x = play(u, *GAMMA_TRUE)
+    eta = (rng.uniform(-deta, deta, N) if noise == "uniform"
+           else deta * rng.choice([-1.0, 1.0], N))
+    return u, lfilter(B_TRUE, A_TRUE, x) + eta, x
+
+
 def hammerstein(u, gamma, b, a, x0=0.0):
     """Noise-free output of the backlash ``gamma = (m_l, c_l, m_r, c_r)`` followed by
     ``B/A`` (coefficients in ``scipy.signal.lfilter`` order), at rest."""

@@ -6,26 +6,15 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from oracles import play
+from oracles import one_record
 
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
 from hammerbound.joint.relaxation import LP_TIME_LIMIT
 from hammerbound.joint.tighten import _tighten_one, lp_options
 
-GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
-
 
 def _problem(N=400, deta=0.05, seed=0):
-    rng = np.random.default_rng(seed)
-    u = []
-    while len(u) < N:
-        u += [rng.uniform(-2, 2)] * int(rng.integers(3, 21))
-    u = np.array(u[:N])
-    x = play(u, *GAMMA)
-    w = np.zeros(N)
-    for t in range(2, N):
-        w[t] = 2.15 * x[t - 1] - 1.09 * x[t - 2] + 0.76 * w[t - 1] - 0.82 * w[t - 2]
-    y = w + deta * rng.choice([-1.0, 1.0], N)
+    u, y, _ = one_record(N, deta, "bound", seed)
     return RecordProblem(u, y, deta, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, deta)))
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from oracles import play
+from oracles import one_record
 
 from hammerbound.exceptions import EmptyFeasibleSetError
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
@@ -17,25 +17,7 @@ from hammerbound.joint.tighten import _window_obbt, obbt
 from hammerbound.joint.windows import window_problem, windows
 
 GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
-A = np.array([1.0, -0.76, 0.82])
-B = np.array([0.0, 2.15, -1.09])
 THETA = np.array([-0.76, 0.82, 2.15, -1.09])
-
-
-def _record(N, deta, noise, seed):
-    rng = np.random.default_rng(seed)
-    u = []
-    while len(u) < N:
-        u += [rng.uniform(-2, 2)] * int(rng.integers(3, 21))
-    u = np.array(u[:N])
-    x = play(u, *GAMMA)
-    w = np.zeros(N)
-    for t in range(N):
-        w[t] = sum(B[j] * x[t - j] for j in (1, 2) if t >= j) \
-            - sum(A[i] * w[t - i] for i in (1, 2) if t >= i)
-    eta = (rng.uniform(-deta, deta, N) if noise == "uniform"
-           else deta * rng.choice([-1.0, 1.0], N))
-    return u, w + eta, x
 
 
 def _problem(u, y, deta, gamma_box=None):
@@ -44,7 +26,7 @@ def _problem(u, y, deta, gamma_box=None):
 
 
 def test_windows_cover_every_equation_and_short_records_are_not_split():
-    u, y, _ = _record(1000, 0.05, "uniform", 0)
+    u, y, _ = one_record(1000, 0.05, "uniform", 0)
     pr = _problem(u, y, 0.05)
     assert windows(_problem(u[:200], y[:200], 0.05)) == []
     for length in (100, 300, 333):
@@ -59,7 +41,7 @@ def test_windows_cover_every_equation_and_short_records_are_not_split():
 
 @pytest.mark.parametrize("noise", ["bound", "uniform"])
 def test_every_window_holds_the_truth(noise):
-    u, y, x = _record(240, 0.05, noise, 1)
+    u, y, x = one_record(240, 0.05, noise, 1)
     # a narrow backlash box: the band at u_0 then misses the later windows' inner values
     pr = _problem(u, y, 0.05, np.column_stack([0.8 * GAMMA, 1.2 * GAMMA]))
     truth = np.concatenate([THETA, GAMMA])
@@ -74,7 +56,7 @@ def test_every_window_holds_the_truth(noise):
 
 
 def test_window_obbt_of_a_long_record_holds_the_truth_and_tightens():
-    u, y, x = _record(480, 0.05, "bound", 2)
+    u, y, x = one_record(480, 0.05, "bound", 2)
     pr = _problem(u, y, 0.05)
     assert len(windows(pr)) >= 2
     box = _window_obbt(pr, pr.box, None, None, 2, 0.01)
@@ -85,7 +67,7 @@ def test_window_obbt_of_a_long_record_holds_the_truth_and_tightens():
 
 
 def test_a_window_that_no_parameters_explain_certifies_the_box_empty():
-    u, y, _ = _record(480, 0.05, "uniform", 3)
+    u, y, _ = one_record(480, 0.05, "uniform", 3)
     y = y.copy()
     y[300:] += np.linspace(0.0, 40.0, 180) ** 2  # the second window explodes
     pr = _problem(u, y, 0.05)

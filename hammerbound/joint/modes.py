@@ -28,7 +28,7 @@ import numpy as np
 from ..systems.models import play_lines
 
 __all__ = ["INIT", "LEFT", "RIGHT", "AMBIG", "UP", "DOWN", "HOLD", "Ambiguous", "Decided",
-           "InnerStructure", "inner_structure", "line_range"]
+           "InnerStructure", "band_range", "inner_structure", "line_range"]
 
 INIT, RIGHT, LEFT, AMBIG = 0, 1, 2, 3
 #: branches a sample can be *decided* to take (see :class:`Decided`)
@@ -44,6 +44,14 @@ def line_range(u, m, c, sign):
     lo, hi = min(v), max(v)
     pad = _MARGIN * (abs(lo) + abs(hi) + abs(u) * max(m) + 1e-300)
     return lo - pad, hi + pad
+
+
+def band_range(u, gamma_box) -> tuple[float, float]:
+    """Where an inner value can be at input ``u`` for every backlash in ``gamma_box``
+    (rows ``m_l, c_l, m_r, c_r``): from the lowest right line ``R`` to the highest left
+    line ``L`` (the play operator keeps every value in the band ``[R, L]``)."""
+    g = np.asarray(gamma_box, dtype=float)
+    return line_range(u, g[2], g[3], -1.0)[0], line_range(u, g[0], g[1], 1.0)[1]
 
 
 @dataclass(frozen=True)
@@ -272,7 +280,7 @@ def inner_envelope(u, gamma_box, z0=None) -> tuple[np.ndarray, np.ndarray]:
     L = [line_range(v, g[0], g[1], 1.0) for v in u.tolist()]
     lo = np.empty(u.size)
     hi = np.empty(u.size)
-    a, b = (R[0][0], L[0][1]) if z0 is None else (float(z0[0]), float(z0[1]))
+    a, b = band_range(float(u[0]), g) if z0 is None else (float(z0[0]), float(z0[1]))
     for t in range(u.size):
         a = max(R[t][0], min(L[t][0], a))
         b = max(R[t][1], min(L[t][1], b))

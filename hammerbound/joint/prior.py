@@ -25,7 +25,7 @@ from math import comb
 import numpy as np
 
 from ..exceptions import ParameterValidationError
-from .modes import line_range
+from .modes import band_range
 
 __all__ = ["GammaPrior", "default_gamma_box", "record_box", "reversal_summary", "unidentified"]
 
@@ -51,10 +51,7 @@ def record_box(na, b_count, u, gamma_box, theta_box=None, b_bound=DEFAULT_B_BOUN
         rows += [(-b_bound, b_bound)] * b_count
         theta_box = np.asarray(rows, dtype=float).reshape(-1, 2)
     g = np.asarray(gamma_box, dtype=float)
-    u0 = float(u[0])
-    z_lo = line_range(u0, g[2], g[3], -1.0)[0]
-    z_hi = line_range(u0, g[0], g[1], 1.0)[1]
-    return np.vstack([theta_box, g, [[z_lo, z_hi]]])
+    return np.vstack([theta_box, g, [band_range(float(u[0]), g)]])
 
 
 def reversal_summary(u) -> dict:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .modes import line_range
+from .modes import band_range
 from .problem import RecordProblem
 
 __all__ = ["WINDOW", "window_problem", "windows"]
@@ -55,9 +55,7 @@ def window_problem(problem: RecordProblem, box, s: int, e: int) -> RecordProblem
     box = np.array(box, dtype=float)
     p = problem.p
     if s > 0:
-        g = box[p: p + 4]
-        u_s = float(problem.u[s])
-        box[p + 4] = [line_range(u_s, g[2], g[3], -1.0)[0], line_range(u_s, g[0], g[1], 1.0)[1]]
+        box[p + 4] = band_range(float(problem.u[s]), box[p: p + 4])
     return RecordProblem(problem.u[s:e], problem.y[s:e], problem.deta[s:e], problem.na,
                          problem.nb, problem.nk, box, steady=problem.steady,
                          gain=problem.gain)

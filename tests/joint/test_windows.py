@@ -1,7 +1,7 @@
 """Windows of a long record (hammerbound.joint.windows): every window is a relaxation.
 
-Truths are simulated with the oracles' play operator and an own linear recursion; noise is
-exactly at +-bound (random signs) or uniform. A window's OBBT box must hold the truth's
+Truths are simulated by the oracles (``one_record``: own play operator, scipy's lfilter);
+noise is exactly at +-bound (random signs) or uniform. A window's OBBT box must hold the truth's
 parameters and, for a window that starts later, the truth's inner value where it starts.
 """
 
@@ -9,15 +9,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from oracles import one_record
+from oracles import GAMMA_TRUE, THETA_TRUE, one_record
 
 from hammerbound.exceptions import EmptyFeasibleSetError
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
 from hammerbound.joint.tighten import _window_obbt, obbt
 from hammerbound.joint.windows import window_problem, windows
 
-GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
-THETA = np.array([-0.76, 0.82, 2.15, -1.09])
+GAMMA = np.asarray(GAMMA_TRUE)
 
 
 def _problem(u, y, deta, gamma_box=None):
@@ -44,7 +43,7 @@ def test_every_window_holds_the_truth(noise):
     u, y, x = one_record(240, 0.05, noise, 1)
     # a narrow backlash box: the band at u_0 then misses the later windows' inner values
     pr = _problem(u, y, 0.05, np.column_stack([0.8 * GAMMA, 1.2 * GAMMA]))
-    truth = np.concatenate([THETA, GAMMA])
+    truth = np.concatenate([THETA_TRUE, GAMMA])
     for s, e in windows(pr, 80):
         wp = window_problem(pr, pr.box, s, e)
         assert wp.box[-1, 0] <= x[s] <= wp.box[-1, 1]  # the band at u_s holds x_s
@@ -60,7 +59,7 @@ def test_window_obbt_of_a_long_record_holds_the_truth_and_tightens():
     pr = _problem(u, y, 0.05)
     assert len(windows(pr)) >= 2
     box = _window_obbt(pr, pr.box, None, None, 2, 0.01)
-    truth = np.concatenate([THETA, GAMMA, [x[0]]])
+    truth = np.concatenate([THETA_TRUE, GAMMA, [x[0]]])
     assert np.all(box[:, 0] <= truth) and np.all(truth <= box[:, 1])
     w0, w1 = pr.box[:, 1] - pr.box[:, 0], box[:, 1] - box[:, 0]
     assert np.all(w1[:2] < 0.1 * w0[:2])  # the poles are bounded by the windows

@@ -12,6 +12,7 @@ record is tightened over its windows first (:mod:`.windows`).
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 
@@ -176,8 +177,9 @@ def _partition(problem, prior, parts, deadline, n_jobs=1):
     while queue:
         if _past(deadline):
             return out + queue
-        done = _map(_part_obbt, [(problem, b, rows, deadline, 1, 0.01, 1, False)
-                                 for b in queue], n_jobs)
+        # one round per generation, over the windows only on a long record
+        part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False)
+        done = _map(part, [(problem, b, rows, deadline) for b in queue], n_jobs)
         queue = []
         for b, _points in done:
             if b is None:
@@ -214,10 +216,10 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     if reversal_summary(problem.u)["monotone"]:
         parts = 1  # one line only is ever active: nothing can tell the dead bands apart
     # the search of each end does the rest: OBBT rounds stop once they pay little
-    done = _map(_part_obbt, [(problem, b, None, deadline, LEAF_ROUNDS, LEAF_SHRINK,
-                              LEAF_ROUNDS)
-                             for b in _partition(problem, prior, parts, deadline, n_jobs)],
-                n_jobs)
+    leaf = partial(_part_obbt, max_rounds=LEAF_ROUNDS, shrink=LEAF_SHRINK,
+                   window_rounds=LEAF_ROUNDS)
+    done = _map(leaf, [(problem, b, None, deadline)
+                       for b in _partition(problem, prior, parts, deadline, n_jobs)], n_jobs)
     out = []
     for b, points in done:
         if on_point is not None:

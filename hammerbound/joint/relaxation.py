@@ -70,7 +70,7 @@ def round_up(v):
 #: took 112 s in all in a fresh process, where the deadline had stopped the search at
 #: another box). One LP takes 0.03 s at N = 300 and 0.3-1 s at N = 1000.
 LP_TIME_LIMIT = 60.0
-LP_OPTIONS = {"presolve": "off", "time_limit": LP_TIME_LIMIT}
+LP_OPTIONS = {"presolve": "off"}
 
 # positions of the inner variables in beta
 B_ML, B_DL, B_MR, B_DR, B_Z0 = range(5)
@@ -204,10 +204,11 @@ def _scale(problem, box):
 
 
 def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=None,
-                     options=None) -> JointRelaxation:
+                     options=None, deadline=None) -> JointRelaxation:
     """The LP relaxation over ``box`` (rows as :attr:`RecordProblem.box`); ``decisions``
     (``{t: branch}``, :func:`~.modes.inner_structure`) restrict it to the parameters that
-    take those branches."""
+    take those branches. Each solve stops after :data:`LP_TIME_LIMIT` s or at ``deadline``
+    (:func:`time.time` stamp), keeping the bound its duals certify."""
     box = np.asarray(box, dtype=float)
     p, na, N = problem.p, problem.na, problem.N
     nbc = p - na
@@ -298,7 +299,8 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
     _steady_rows(rows, problem, beta_cols)
     A, rl, ru = rows.matrix(ncol)
     lb, ub = np.concatenate(lo), np.concatenate(hi)
-    lp = HighsLP(A, rl, ru, lb, ub, options={**LP_OPTIONS, **(options or {})})
+    lp = HighsLP(A, rl, ru, lb, ub, options={**LP_OPTIONS, **(options or {})},
+                 run_limit=LP_TIME_LIMIT, deadline=deadline)
     return JointRelaxation(lp, box_cols, beta_cols, st,
                            {"prod": col_prod, "eta": col_eta, "q": col_q})
 

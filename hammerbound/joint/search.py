@@ -27,7 +27,6 @@ from .local import restore, walk
 from .modes import DOWN, HOLD, UP
 from .problem import RecordProblem, Witness
 from .relaxation import build_relaxation, solve_lp
-from .tighten import lp_options
 
 __all__ = ["EndResult", "search_end"]
 
@@ -62,7 +61,7 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, de
     ``cutoff``: the dual simplex may stop once its certified bound exceeds it (status
     "cutoff", no point): a node that cannot beat the incumbent, or is infeasible, is then
     dropped without solving it to the end or certifying its infeasibility by a ray."""
-    rel = build_relaxation(problem, box, decisions=decisions, options=lp_options(deadline))
+    rel = build_relaxation(problem, box, decisions=decisions, deadline=deadline)
     lp = rel.lp
     c = np.zeros(lp.c.size)
     c[rel.box_cols[col]] = sense

@@ -19,7 +19,7 @@ import numpy as np
 from ..exceptions import EmptyFeasibleSetError
 from .prior import reversal_summary
 from .problem import RecordProblem
-from .relaxation import LP_TIME_LIMIT, build_relaxation, solve_lp
+from .relaxation import build_relaxation, solve_lp
 from .windows import window_problem, windows
 
 __all__ = ["obbt", "outer_leaves"]
@@ -47,18 +47,10 @@ def _obbt_order(problem):
     return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
 
 
-def lp_options(deadline):
-    """HiGHS options of an LP solved before ``deadline``: it stops there (or after
-    :data:`~.relaxation.LP_TIME_LIMIT`), keeping a certified (maybe weaker) bound."""
-    if deadline is None:
-        return None
-    return {"time_limit": float(min(LP_TIME_LIMIT, max(0.1, deadline - time.time())))}
-
-
 def _tighten_one(problem, box, k, deadline=None):
     """Certified bounds of row ``k`` from one relaxation (None: certified empty) and the
     LP points; the LPs stop at ``deadline`` (keeping the bounds they certify)."""
-    rel = build_relaxation(problem, box, options=lp_options(deadline))
+    rel = build_relaxation(problem, box, deadline=deadline)
     out = box[k].copy()
     points = []
     for sense in (1.0, -1.0):

@@ -78,6 +78,9 @@ class WitnessLP:
         else:
             self.in_set = np.ones(m, dtype=bool)
         self._struct = None
+        #: :func:`time.time` stamp at which a screening LP stops (None: only the run
+        #: limit); a stopped LP screens nothing (violation +inf)
+        self.deadline = None
         self.h = new_highs()  # no "threads" option: see solvers.highs.new_highs
         self.bases = {}
         self._last = None
@@ -104,7 +107,8 @@ class WitnessLP:
         if self._last is not None and np.array_equal(self._last[0], theta):
             return self._last[1]
         v = self._violation(theta)
-        self._last = (theta.copy(), v)
+        # an LP stopped by its deadline (+inf) is not remembered: it says nothing of theta
+        self._last = (theta.copy(), v) if np.isfinite(v) else None
         return v
 
     def binding(self, theta) -> np.ndarray:
@@ -174,7 +178,8 @@ class WitnessLP:
         self.bases[keep] = solve_colwise(
             self.h, st, np.concatenate([vals, vals, st["ones"]]), c, self.lb, self.ub,
             np.concatenate([np.full(m, -hs.kHighsInf), r]),
-            np.concatenate([r, np.full(m, hs.kHighsInf)]), self.bases.get(keep))
+            np.concatenate([r, np.full(m, hs.kHighsInf)]), self.bases.get(keep),
+            deadline=self.deadline)
         if self.bases[keep] is None:
             return np.inf
         v = float(self.h.getInfo().objective_function_value)
@@ -237,18 +242,28 @@ def seek_feasible(problem: EIVProblem, screen: WitnessLP, accept, starts, box, m
     plus the distance outside ``box``, in the coordinates of the gain hyperplane; the
     first screened point that ``accept(theta)`` accepts (anything but None, e.g. a
     :func:`check_theta`-based verifier) is returned as ``accept``'s result. The search
-    gives up (returns None) at ``deadline`` (a :func:`time.time` timestamp), if given.
+    gives up (returns None) at ``deadline`` (a :func:`time.time` timestamp), if given;
+    the screening LPs stop there too.
     """
-    from scipy.optimize import minimize
-
     pr = problem
     g = pr.gain_row()
-    p = pr.p
     if g is None:
-        basis = np.eye(p)
+        basis = np.eye(pr.p)
     else:
         # orthonormal basis of {d : g . d = 0}
         basis = np.linalg.svd(g[0][None, :])[2][1:].T
+    old = screen.deadline
+    if deadline is not None:  # the screening LPs stop there too
+        screen.deadline = deadline if old is None else min(old, deadline)
+    try:
+        return _nelder_mead_starts(pr, screen, accept, starts, box, basis, max_evals, deadline)
+    finally:
+        screen.deadline = old
+
+
+def _nelder_mead_starts(pr, screen, accept, starts, box, basis, max_evals, deadline):
+    """:func:`seek_feasible`'s search from each start in turn (see there)."""
+    from scipy.optimize import minimize
 
     class _Found(Exception):
         pass

@@ -30,6 +30,7 @@ import contextlib
 import os
 import sys
 import threading
+import time
 from dataclasses import dataclass
 
 import highspy
@@ -45,6 +46,14 @@ CUTOFF = "cutoff"
 
 EPS = np.finfo(float).eps
 INF = highspy.kHighsInf
+
+#: Longest one ``run()`` of a HiGHS instance may take in hammerbound (s) when its caller
+#: asks for no shorter limit (:func:`limit_run`). A run stopped there keeps the bound its
+#: duals certify (maybe none), and every caller then keeps the bound it already had. Seen
+#: in worker processes: one stage-2 screening LP (the witness search of a valve loop, with
+#: a 3 s budget) and one one-record relaxation LP ran for 14-15 min; both kinds normally
+#: take well under a second.
+RUN_TIME_LIMIT = 120.0
 
 _BANNER_LOCK = threading.Lock()
 _BANNER_DONE = False
@@ -135,6 +144,24 @@ def new_highs(options=None):
 
 
 silence_highs_banner()
+
+
+def limit_run(h, seconds=None, deadline=None) -> float:
+    """Let the next ``run()`` of the HiGHS instance ``h`` stop after ``seconds`` (default
+    and most :data:`RUN_TIME_LIMIT`) or at ``deadline`` (a :func:`time.time` stamp),
+    whichever comes first; returns the seconds allowed.
+
+    HiGHS compares its ``time_limit`` option with the run time accumulated over *all* runs
+    of the instance, so a plain ``time_limit`` on a persistent instance caps the sum of its
+    solves; the limit is set relative to :meth:`getRunTime` instead. The option is
+    reserved for this function: :class:`HighsLP` refuses it among its options.
+    """
+    left = RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
+    if deadline is not None:
+        left = min(left, float(deadline) - time.time())
+    left = max(left, 1e-3)
+    h.setOptionValue("time_limit", float(h.getRunTime() + left))
+    return left
 
 
 def row_dual_bound(c, A, rl, ru, lb, ub, y, *, with_reduced=False):
@@ -304,9 +331,27 @@ class HighsLP:
     c : ndarray, shape (n,), optional
     options : dict, optional
         Extra HiGHS options (name -> value), e.g. simplex pricing for repeated warm starts.
+        Not ``time_limit``: use ``run_limit`` and ``deadline``.
+    run_limit : float, optional
+        Seconds one solve may take (default and at most :data:`RUN_TIME_LIMIT`); a solve
+        stopped there returns status ``"failed"`` with the bound its duals certify.
+    deadline : float, optional
+        :func:`time.time` stamp at which every solve stops (same outcome). Both are
+        attributes and may be changed between solves.
+
+    Raises
+    ------
+    ValueError
+        ``options`` holds ``time_limit``, or HiGHS rejected an option.
     """
 
-    def __init__(self, A, rl, ru, lb, ub, c=None, options=None):
+    def __init__(self, A, rl, ru, lb, ub, c=None, options=None, *, run_limit=None,
+                 deadline=None):
+        if "time_limit" in (options or {}):
+            raise ValueError("HighsLP: pass run_limit= (seconds per solve) or deadline= "
+                             "(time.time() stamp) instead of the HiGHS option time_limit, "
+                             "which counts the time of all solves of the instance")
+        self.run_limit, self.deadline = run_limit, deadline
         A = sp.csc_matrix(A, dtype=float)
         A.sort_indices()
         self.A = A
@@ -492,7 +537,9 @@ class HighsLP:
         return certify_infeasible(A_ub, b_ub, A[eq], self.rl[eq], self.lb, self.ub)
 
     def _run_highs(self):
-        """One ``run()`` of HiGHS: ``(run status, model status)`` (a seam for tests)."""
+        """One ``run()`` of HiGHS, stopped at :attr:`run_limit` or :attr:`deadline`
+        (:func:`limit_run`): ``(run status, model status)`` (a seam for tests)."""
+        limit_run(self.h, self.run_limit, self.deadline)
         run = self.h.run()
         return run, self.h.getModelStatus()
 

@@ -9,8 +9,8 @@ import numpy as np
 from oracles import one_record
 
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box
-from hammerbound.joint.relaxation import LP_TIME_LIMIT
-from hammerbound.joint.tighten import _tighten_one, lp_options
+from hammerbound.joint.relaxation import LP_TIME_LIMIT, build_relaxation
+from hammerbound.joint.tighten import _tighten_one
 
 
 def _problem(N=400, deta=0.05, seed=0):
@@ -18,11 +18,12 @@ def _problem(N=400, deta=0.05, seed=0):
     return RecordProblem(u, y, deta, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, deta)))
 
 
-def test_lp_options_follow_the_deadline_and_the_cap():
-    assert lp_options(None) is None
-    assert lp_options(time.time() + 1e6)["time_limit"] == LP_TIME_LIMIT
-    assert 0.0 < lp_options(time.time() + 2.0)["time_limit"] <= 2.0
-    assert lp_options(time.time() - 5.0)["time_limit"] > 0.0  # never 0 (HiGHS: no limit)
+def test_every_relaxation_lp_carries_the_cap_and_the_deadline():
+    pr = _problem(N=60)
+    stop = time.time() + 100.0
+    lp = build_relaxation(pr, pr.box, deadline=stop).lp
+    assert lp.run_limit == LP_TIME_LIMIT and lp.deadline == stop
+    assert build_relaxation(pr, pr.box).lp.deadline is None
 
 
 def test_an_lp_stopped_by_the_deadline_keeps_an_outer_bound():

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ...solvers.highs import new_highs
+from ...solvers.highs import limit_run, new_highs
 from ..problem import EIVProblem
 
 
@@ -53,11 +53,14 @@ def colwise_values(st: dict, vals) -> np.ndarray:
     return np.bincount(st["pos"], weights=np.asarray(vals)[st["order"]], minlength=st["nnz"])
 
 
-def solve_colwise(h, st: dict, vals, cost, col_lo, col_hi, row_lo, row_hi, basis=None):
+def solve_colwise(h, st: dict, vals, cost, col_lo, col_hi, row_lo, row_hi, basis=None, *,
+                  deadline=None):
     """Pass the LP ``min cost'z, row_lo <= A z <= row_hi, col_lo <= z <= col_hi`` with ``A``
     of the pattern ``st`` (:func:`colwise_structure`) and entry values ``vals`` to the HiGHS
-    instance ``h``, warm-start it from ``basis`` (same pattern) and solve. Returns the new
-    basis, or None when the LP is not solved to optimality."""
+    instance ``h``, warm-start it from ``basis`` (same pattern) and solve, stopping at
+    ``deadline`` (:func:`time.time` stamp) or after
+    :data:`~hammerbound.solvers.highs.RUN_TIME_LIMIT` s. Returns the new basis, or None
+    when the LP is not solved to optimality (stopped ones included)."""
     import highspy as hs
 
     lp = hs.HighsLp()
@@ -72,6 +75,7 @@ def solve_colwise(h, st: dict, vals, cost, col_lo, col_hi, row_lo, row_hi, basis
     h.passModel(lp)
     if basis is not None:
         h.setBasis(basis)
+    limit_run(h, deadline=deadline)
     h.run()
     if h.getModelStatus() != hs.HighsModelStatus.kOptimal:
         return None
@@ -128,6 +132,8 @@ class LinearisedSet:
         self.h = new_highs({"primal_feasibility_tolerance": 1e-10} if self.elastic else None)
         self.basis = None
         self.solves = 0
+        #: :func:`time.time` stamp at which a solve stops (None: only the run limit)
+        self.deadline = None
 
     def solve(self, theta0, eta0, dx0, k: int, sense: float, lo, hi):
         """``argmin sense * theta_k`` over the set linearised at ``(theta0, eta0, dx0)``
@@ -160,7 +166,7 @@ class LinearisedSet:
         self.basis = solve_colwise(self.h, self.st, vals, cost,
                                    np.concatenate([lo, self.err_lo]),
                                    np.concatenate([hi, self.err_hi]), row_lo, row_hi,
-                                   self.basis)
+                                   self.basis, deadline=self.deadline)
         self.solves += 1
         if self.basis is None:
             return None
@@ -185,6 +191,7 @@ def improve(pool, start, k: int, sense: float, box, resolution: float, *,
     rho = rho0 * width
     floor = 1e-6 * width
     best = start
+    lin.deadline = None if stop_at is None else time.time() + (stop_at - time.perf_counter())
     for _ in range(max_lps):
         if stop_at is not None and time.perf_counter() > stop_at:
             break
@@ -239,9 +246,8 @@ def restore(pool, starts, box, *, max_lps: int = 12, stop_at: float | None = Non
                 left = stop_at - time.perf_counter()
                 if left <= 0:
                     return None
-                # HiGHS's time_limit counts the run time of all solves of the instance; a
-                # degenerate elastic LP can otherwise take minutes past stop_at
-                lin.h.setOptionValue("time_limit", lin.h.getRunTime() + max(left, 1e-3))
+                # a degenerate elastic LP can otherwise take minutes past stop_at
+                lin.deadline = time.time() + left
             out = lin.solve(th, eta, dxv, 0, 1.0, box[:, 0], box[:, 1])
             if out is None:
                 break

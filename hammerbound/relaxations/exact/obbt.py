@@ -20,25 +20,6 @@ from .points import _Screen
 from .working_set import WorkingSetRelaxation
 
 
-def _limit_lp(lp, seconds):
-    """Let the next solves of ``lp`` (a :class:`._highs.HighsLP`) stop after ``seconds``.
-
-    HiGHS compares its ``time_limit`` with the run clock accumulated over all solves of the
-    object, hence the offset. A solve stopped this way still yields a rigorous (maybe weak)
-    bound from its current duals (:meth:`._highs.HighsLP.solve`).
-    """
-    h = lp.h
-    limit = np.inf if seconds is None or not np.isfinite(seconds) else \
-        h.getRunTime() + max(float(seconds), 1e-3)
-    h.setOptionValue("time_limit", float(min(limit, _highs_inf())))
-
-
-def _highs_inf():
-    from ...solvers.highs import INF
-
-    return INF
-
-
 def warm_start(lp, basis) -> bool:
     """Warm start ``lp`` from ``basis``: a picklable :meth:`._highs.HighsLP.get_basis`
     (from a worker) or an in-process :meth:`._highs.HighsLP.snapshot` (cheaper: no
@@ -93,7 +74,7 @@ def _obbt_task(problem, box, tasks, bases, deadline=None, ws=None, picklable=Tru
             if left <= 0:
                 out.append((-np.inf, None, basis, 0))
                 continue
-            _limit_lp(relax.lp, left)
+            relax.lp.run_limit = left  # HighsLP: a stopped solve keeps its dual bound
         c = np.zeros(relax.ncol)
         c[k] = s
         relax.lp.set_cost(c)

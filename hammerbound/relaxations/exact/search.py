@@ -22,7 +22,7 @@ import numpy as np
 from .local import improve, restore_near
 from .mccormick import shared_groups
 from .node_box import _box_end, _cap, _reduced_cost_tightening
-from .obbt import _limit_lp, _relaxation, _solve, warm_start
+from .obbt import _relaxation, _solve, warm_start
 from .points import _Point, _Pool
 from .progress import _GapBar
 
@@ -309,7 +309,7 @@ class EndSearch:
         # HiGHS stops once its objective passes the cutoff; half the tolerance below the
         # incumbent leaves room for the certified bound to trail HiGHS's own value
         relax.lp.set_cutoff(ub - 0.5 * tol_eff if np.isfinite(ub) else None)
-        _limit_lp(relax.lp, self.stop_at - time.perf_counter())
+        relax.lp.run_limit = self.stop_at - time.perf_counter()
         res = _solve(relax, self.pool.screen)
         self.nodes += 1
         self.iters += res.iterations

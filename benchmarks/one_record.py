@@ -13,7 +13,8 @@ Every run is a fit of the identifier's one-record path (``na = nb = 2, nk = 1``,
 priori backlash box). ``method="lp"`` for every run except the *exact subset*: seed 0 of
 every N = 300 configuration (``--exact-N``, ``--exact-seeds``; ``--exact-end-limit`` S
 stops each end's search after S s with status "limit", a certified outer bound, and the
-witnesses found so far). Per run: is the truth inside
+witnesses found so far; ``--time-limit`` S stops every fit after S s, with the certified
+outer bounds it has then, maybe infinite ones, which are counted). Per run: is the truth inside
 every interval (infinite ends count as inside, and are counted), and for the exact runs is
 every witness verified by ``_record_sim.noise_excess`` (own backlash simulation + own LP:
 noise within the bound plus ``WITNESS_TOL = 1e-7``, unit gain within 1e-6, the witness's
@@ -107,18 +108,22 @@ def check_witnesses(u, y, deta, infos):
     return n, bad, worst
 
 
-def soundness_run(cfg, end_time_limit=None):
+def soundness_run(cfg, end_time_limit=None, time_limit=None):
+    """One run of the plan; ``time_limit`` (s) stops the whole fit (certified outer bounds,
+    maybe infinite: counted as ``infinite_ends``)."""
     signal, N, deta, noise, seed, method = cfg
     from hammerbound.exceptions import EmptyFeasibleSetError
 
     u, y = S.record(signal, N, deta, noise, seed)
     row = {"signal": signal, "N": N, "deta": deta, "noise": noise, "seed": seed,
            "method": method, "loadavg": C.loadavg(),
-           "end_time_limit": end_time_limit if method == "exact" else None}
+           "end_time_limit": end_time_limit if method == "exact" else None,
+           "time_limit": time_limit}
     t0 = time.perf_counter()
     try:
         bounds, statuses, infos, notid, sec = fit(
-            u, y, deta, method, end_time_limit=end_time_limit if method == "exact" else None)
+            u, y, deta, method, time_limit=time_limit,
+            end_time_limit=end_time_limit if method == "exact" else None)
     except EmptyFeasibleSetError as exc:
         row.update(error=f"EmptyFeasibleSetError: {exc}", inside=False,
                    seconds=time.perf_counter() - t0)
@@ -169,7 +174,7 @@ def run_soundness(args):
             if args.budget is not None and time.perf_counter() - t0 > args.budget:
                 C.log("budget used; re-run to resume")
                 return
-            yield delayed(soundness_run)(c, args.exact_end_limit)
+            yield delayed(soundness_run)(c, args.exact_end_limit, args.time_limit)
 
     # every finished run is saved at once (a killed run loses only the runs under way)
     for r in Parallel(n_jobs=args.n_jobs, return_as="generator_unordered")(jobs()):
@@ -187,11 +192,13 @@ def run_soundness(args):
 def summarise_soundness(rows):
     groups = {}
     for r in rows:
-        groups.setdefault((r["N"], r["method"]), []).append(r)
-    for (N, m), rs in sorted(groups.items()):
+        groups.setdefault((r["N"], r["method"], r["signal"]), []).append(r)
+    for (N, m, sig), rs in sorted(groups.items()):
         sec = [r["seconds"] for r in rs if "seconds" in r]
-        print(f"N={N} {m}: {len(rs)} runs, truth inside {sum(r.get('inside') is True for r in rs)}, "
-              f"errors {sum('error' in r for r in rs)}, witnesses {sum(r.get('witnesses', 0) for r in rs)} "
+        print(f"N={N} {m} {sig}: {len(rs)} runs, truth inside "
+              f"{sum(r.get('inside') is True for r in rs)}, errors {sum('error' in r for r in rs)}, "
+              f"infinite ends {sum(r.get('infinite_ends', 0) for r in rs)} of {16 * len(rs)}, "
+              f"witnesses {sum(r.get('witnesses', 0) for r in rs)} "
               f"(failed {sum(r.get('witnesses_failed', 0) for r in rs)}), time median "
               f"{np.median(sec):.1f} s max {np.max(sec):.1f} s")
 

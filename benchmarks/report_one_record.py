@@ -46,22 +46,29 @@ def section_soundness():
             body.append([N, m, sig, len(rs), sum(r.get("inside") is True for r in rs),
                          sum("error" in r for r in rs),
                          sum(r.get("infinite_ends", 0) > 0 for r in rs),
+                         f"{sum(r.get('infinite_ends', 0) for r in rs)}/{16 * len(rs)}",
+                         sum(r.get("time_limit") is not None and r.get("seconds", 0)
+                             >= r["time_limit"] - 0.5 for r in rs),
                          sum(r.get("witnesses", 0) for r in rs),
                          sum(r.get("witnesses_failed", 0) for r in rs),
                          f"{np.median(sec):.1f}" if sec else "–",
                          f"{np.max(sec):.1f}" if sec else "–"])
         levels = sorted({r["deta"] for r in rows})
         lim = sorted({r.get("end_time_limit") for r in rows if r["method"] == "exact"} - {None})
+        fit_lim = sorted({r.get("time_limit") for r in rows} - {None})
         parts.append(
             f"Plan `one_record_soundness{tag}`: {len(rows)} runs (output bounds {levels}, "
             "noise uniform and exactly at ±bound, seeds per configuration as run"
             + (f"; exact runs stopped at {lim} s per interval end, status \"limit\"" if lim
-               else "") + "). Truth inside = all 8 intervals hold the chapter's parameters "
+               else "") + (f"; every fit stopped at {fit_lim} s (its bounds then are the "
+                           "certified outer bounds it has, maybe infinite)" if fit_lim else "")
+            + "). Truth inside = all 8 intervals hold the chapter's parameters "
             "(infinite ends count as inside; runs with any are counted); witnesses are "
             "checked by `benchmarks/_record_sim.py` (own play operator and recursion, own LP: "
             "noise within the bound + 1e-7, unit gain within 1e-6).\n\n"
             + _table(["N", "method", "signal", "runs", "truth inside", "errors",
-                      "runs with infinite ends", "witnesses", "witnesses failed",
+                      "runs with infinite ends", "infinite ends", "stopped by the time limit",
+                      "witnesses", "witnesses failed",
                       "median s", "max s"], body) + "\n\n" + _env(j))
         bad = [r for r in rows if r.get("inside") is not True]
         if bad:

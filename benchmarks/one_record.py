@@ -32,9 +32,8 @@ samples, same output bound, same method (``--method``).
 method (``--n-jobs`` processes), with the statuses (``"limit"`` ends are certified outer bounds).
 
 The fits call :func:`hammerbound.hammerstein.one_record.fit_one_record`, which is what
-``HammersteinBacklashIdentifier(procedure="one-record").fit`` runs; the identifier itself
-raised an AttributeError after that step on identifying records at the time of writing
-(/work/notes/recbench_bugs.md); ``--identifier`` uses it instead.
+``HammersteinBacklashIdentifier(procedure="one-record").fit`` runs (``fit(...,
+identifier=True)`` goes through the identifier itself).
 """
 
 from __future__ import annotations

@@ -12,8 +12,9 @@ import warnings
 
 import numpy as np
 import pytest
-from oracles import play
+from oracles import A_TRUE, B_TRUE, GAMMA_TRUE, THETA_TRUE, play, random_steps
 from scipy.optimize import linprog
+from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound.exceptions import (
@@ -23,34 +24,20 @@ from hammerbound.exceptions import (
     ParameterValidationError,
 )
 
-GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
-A = np.array([1.0, -0.76, 0.82])
-B = np.array([0.0, 2.15, -1.09])
-THETA = np.array([-0.76, 0.82, 2.15, -1.09])
+GAMMA = np.array(GAMMA_TRUE)
+THETA = THETA_TRUE
 TRUTH = np.concatenate([GAMMA, THETA])
 
 
-def linear(x):
-    w = np.zeros(x.size)
-    for t in range(x.size):
-        w[t] = sum(B[j] * x[t - j] for j in (1, 2) if t >= j) \
-            - sum(A[i] * w[t - i] for i in (1, 2) if t >= i)
-    return w
-
-
 def steps(N, seed, hold=(3, 20)):
-    rng = np.random.default_rng(seed)
-    u = []
-    while len(u) < N:
-        u += [rng.uniform(-2, 2)] * int(rng.integers(hold[0], hold[1] + 1))
-    return np.array(u[:N])
+    return random_steps(N, np.random.default_rng(seed), hold)
 
 
 def record(u, deta, noise, seed):
     rng = np.random.default_rng(seed + 100)
     eta = (rng.uniform(-deta, deta, u.size) if noise == "uniform"
            else deta * rng.choice([-1.0, 1.0], u.size))
-    return linear(play(u, *GAMMA)) + eta
+    return lfilter(B_TRUE, A_TRUE, play(u, *GAMMA)) + eta
 
 
 def fit(u, y, deta, method="lp", **kw):

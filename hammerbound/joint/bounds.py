@@ -34,11 +34,13 @@ __all__ = ["RecordDetails", "record_bounds"]
 
 @dataclass(frozen=True)
 class RecordDetails:
-    """What the one-record search did: the number of leaf boxes after OBBT, and whether
-    the time limit stopped it (then ends may sit at the a priori box for that reason)."""
+    """What the one-record search did: the number of leaf boxes after OBBT, whether the
+    time limit stopped it, and how many relaxation LPs ended before optimality (their own
+    time limit); with either, ends may sit at the a priori box for that reason."""
 
     leaves: int
     stopped_by_time: bool
+    lps_stopped: int = 0
 
 
 def _pool(problem, points, limit=8, deadline=None):
@@ -111,7 +113,12 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     """
     t0 = time.perf_counter()
     points = []
-    leaves = outer_leaves(problem, deadline=deadline, on_point=points.append, n_jobs=n_jobs)
+    stops = []
+    leaves = outer_leaves(problem, deadline=deadline, on_point=points.append, n_jobs=n_jobs,
+                          on_stop=stops.append)
+    details = RecordDetails(0, False, sum(stops))
+    if details.lps_stopped:
+        skip = None  # an OBBT bound at a limit may be the stopped LPs', not the record's
     box = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
                            np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]
@@ -119,7 +126,8 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
                               infos=_lp_infos(names, box), method="lp",
                               time=time.perf_counter() - t0, root_box=box,
-                              details=RecordDetails(len(leaves), _stopped(deadline)))
+                              details=RecordDetails(len(leaves), _stopped(deadline),
+                                                    details.lps_stopped))
     pool = _pool(problem, points, deadline=deadline)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
@@ -147,7 +155,8 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         infos.append(_info(names[k], s, res, bounds[k, 0 if s > 0 else 1]))
     return IntervalResult(tuple(names), bounds, infos=tuple(infos), method="exact",
                           time=time.perf_counter() - t0, root_box=box, pool=tuple(pool),
-                          details=RecordDetails(len(leaves), _stopped(deadline)))
+                          details=RecordDetails(len(leaves), _stopped(deadline),
+                                                details.lps_stopped))
 
 
 def _stopped(deadline) -> bool:

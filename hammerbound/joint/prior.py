@@ -70,14 +70,15 @@ def reversal_summary(u) -> dict:
     return {"down": down, "up": up, "monotone": down == 0.0 or up == 0.0}
 
 
-def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False
+def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps_stopped=0
                  ) -> list[tuple[str, str]]:
     """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
 
     ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)
     array marking the prior limits that are assumptions (not the chapter's model);
-    ``stopped_by_time``: the time limit stopped the search (then that is the cause named,
-    not the input).
+    ``stopped_by_time``: the time limit stopped the search; ``lps_stopped``: that many
+    relaxation LPs ended before optimality (their own time limit); either is then the
+    cause named, not the input.
     """
     rev = reversal_summary(u)
     out = []
@@ -91,6 +92,11 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False
             if stopped_by_time:
                 cause = ("the time limit stopped the search before the record bounded it "
                          "(raise total_time_limit)")
+            elif lps_stopped:
+                cause = (f"{lps_stopped} LP(s) of the relaxation ended before optimality "
+                         "(each stops after at most hammerbound.joint.relaxation."
+                         "LP_TIME_LIMIT s), so the search may not have bounded it; "
+                         "rescaling the data or a narrower gamma_box may help")
             elif rev["monotone"]:
                 cause = ("the input never reverses, so only one line of the backlash is "
                          "ever active")

@@ -47,9 +47,10 @@ def _obbt_order(problem):
     return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
 
 
-def _tighten_one(problem, box, k, deadline=None):
+def _tighten_one(problem, box, k, deadline=None, on_stop=None):
     """Certified bounds of row ``k`` from one relaxation (None: certified empty) and the
-    LP points; the LPs stop at ``deadline`` (keeping the bounds they certify)."""
+    LP points; the LPs stop at ``deadline`` or their time limit (keeping the bounds they
+    certify; ``on_stop()`` is called for each LP that ended before optimality)."""
     rel = build_relaxation(problem, box, deadline=deadline)
     out = box[k].copy()
     points = []
@@ -60,6 +61,8 @@ def _tighten_one(problem, box, k, deadline=None):
         res = solve_lp(rel.lp, primal=sense < 0)  # the second solve: only the cost changed
         if res.status == "infeasible":
             return None, points
+        if res.status != "optimal" and on_stop is not None:
+            on_stop()
         if sense > 0:
             out[0] = max(out[0], res.bound)
         else:
@@ -74,11 +77,12 @@ def _past(deadline) -> bool:
 
 
 def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
-         on_point=None, rows=None):
+         on_point=None, rows=None, on_stop=None):
     """Shrink the box by OBBT rounds until a round shrinks no width by more than
     ``shrink`` (relative). Sequential: the relaxation is rebuilt after each row, so what one
     row's bounds decide (e.g. the branch of a sample) helps the next. Every bound is
-    certified; ``on_point(x)`` sees each LP point.
+    certified; ``on_point(x)`` sees each LP point, ``on_stop()`` each LP that ended before
+    optimality (its time limit).
 
     Raises
     ------
@@ -92,7 +96,7 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
         for k in order:
             if _past(deadline):  # every row so far is certified: stop here
                 return box
-            row, points = _tighten_one(problem, box, k, deadline)
+            row, points = _tighten_one(problem, box, k, deadline, on_stop)
             if row is None:
                 raise EmptyFeasibleSetError(
                     "no backlash and linear block explain the record within the bounds "
@@ -120,7 +124,7 @@ def _map(fn, items, n_jobs):
         delayed(fn)(*a) for a in items)
 
 
-def _window_obbt(problem, box, rows, deadline, max_rounds, shrink):
+def _window_obbt(problem, box, rows, deadline, max_rounds, shrink, on_stop=None):
     """``box`` tightened by OBBT over the record's windows (:mod:`.windows`), or None
     when a window certifies it empty."""
     p = problem.p
@@ -128,7 +132,7 @@ def _window_obbt(problem, box, rows, deadline, max_rounds, shrink):
         wp = window_problem(problem, box, s, e)
         try:
             wb = obbt(wp, wp.box, max_rounds=max_rounds, shrink=shrink, rows=rows,
-                      deadline=deadline)
+                      deadline=deadline, on_stop=on_stop)
         except EmptyFeasibleSetError:
             return None
         box = box.copy()
@@ -140,23 +144,25 @@ def _window_obbt(problem, box, rows, deadline, max_rounds, shrink):
 
 def _part_obbt(problem, box, rows, deadline, max_rounds=1, shrink=0.01, window_rounds=0,
                full=True):
-    """OBBT of one part in a worker: ``(box or None if certified empty, LP points)``;
-    first ``window_rounds`` rounds over the windows of a long record, then (``full``, and
-    always for a record too short for windows) over the whole record."""
-    points = []
+    """OBBT of one part in a worker: ``(box or None if certified empty, LP points, number
+    of LPs that ended before optimality)``; first ``window_rounds`` rounds over the windows
+    of a long record, then (``full``, and always for a record too short for windows) over
+    the whole record."""
+    points, stops = [], []
+    on_stop = partial(stops.append, 1)
     if window_rounds and windows(problem):
-        box = _window_obbt(problem, box, rows, deadline, window_rounds, shrink)
+        box = _window_obbt(problem, box, rows, deadline, window_rounds, shrink, on_stop)
         if box is None or not full:
-            return box, points
+            return box, points, len(stops)
     try:
         box = obbt(problem, box, max_rounds=max_rounds, shrink=shrink, rows=rows,
-                   deadline=deadline, on_point=points.append)
+                   deadline=deadline, on_point=points.append, on_stop=on_stop)
     except EmptyFeasibleSetError:
-        return None, points
-    return box, points
+        return None, points, len(stops)
+    return box, points, len(stops)
 
 
-def _partition(problem, prior, parts, deadline, n_jobs=1):
+def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None):
     """Boxes covering the set whose backlash widths are at most ``1/parts`` of the prior's
     (each tightened in ``a``, ``z0``, ``m`` and ``c`` by the relaxation; boxes certified
     empty are dropped; past ``MAX_PARTS`` boxes the rest are kept as they are). The boxes
@@ -173,7 +179,9 @@ def _partition(problem, prior, parts, deadline, n_jobs=1):
         part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False)
         done = _map(part, [(problem, b, rows, deadline) for b in queue], n_jobs)
         queue = []
-        for b, _points in done:
+        for b, _points, n_stopped in done:
+            if n_stopped and on_stop is not None:
+                on_stop(n_stopped)
             if b is None:
                 continue
             w = np.array([b[k, 1] - b[k, 0] for k in cols])
@@ -188,7 +196,7 @@ def _partition(problem, prior, parts, deadline, n_jobs=1):
 
 
 def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
-                 on_point=None, n_jobs=1):
+                 on_point=None, n_jobs=1, on_stop=None):
     """Certified boxes whose union holds the whole set.
 
     The dead band decides which samples are ambiguous, and a wide dead-band range leaves
@@ -202,6 +210,9 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     tightened over its windows only, and the leaves over its windows before the whole
     record (:mod:`.windows`: every window is a relaxation, at a fraction of the cost).
 
+    ``on_stop(n)`` is told of the ``n`` LPs of a part that ended before optimality (their
+    time limit, :data:`~.relaxation.LP_TIME_LIMIT`): their bounds are certified but weaker.
+
     Raises EmptyFeasibleSetError when every box is empty.
     """
     prior = problem.box if box is None else np.asarray(box, dtype=float)
@@ -211,9 +222,12 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     leaf = partial(_part_obbt, max_rounds=LEAF_ROUNDS, shrink=LEAF_SHRINK,
                    window_rounds=LEAF_ROUNDS)
     done = _map(leaf, [(problem, b, None, deadline)
-                       for b in _partition(problem, prior, parts, deadline, n_jobs)], n_jobs)
+                       for b in _partition(problem, prior, parts, deadline, n_jobs, on_stop)],
+                n_jobs)
     out = []
-    for b, points in done:
+    for b, points, n_stopped in done:
+        if n_stopped and on_stop is not None:
+            on_stop(n_stopped)
         if on_point is not None:
             for x in points:
                 on_point(x)

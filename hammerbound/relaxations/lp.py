@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import itertools
 import time
+import warnings
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
-from ..solvers.highs import HighsLP
-from ..status import BOX
+from ..solvers.highs import RUN_TIME_LIMIT, HighsLP
+from ..status import BOX, LIMIT, OPTIMAL
 from ..tolerances import feasibility_tol
 from .problem import EIVProblem
 from .result import BoundInfo, IntervalResult, LPDetails, Polytope
@@ -108,6 +109,7 @@ def _solve_orthant(problem, signs, box):
     lo, hi = box[:, 0].copy(), box[:, 1].copy()
     vlo = np.full(p, np.nan)
     vhi = np.full(p, np.nan)
+    stopped = np.zeros((p, 2), dtype=bool)  # an LP stopped by its time limit
     iters = 0
     for k in range(p):
         for sense in (1.0, -1.0):
@@ -124,6 +126,9 @@ def _solve_orthant(problem, signs, box):
                     f"the LP outer bound of {problem.param_names[k]} could not be computed: "
                     f"{r.note}. Rescaling the data (inputs and outputs of order one) "
                     f"usually helps.")
+            # ended before optimality (its time limit): its dual bound is certified, maybe
+            # weak, and the end's status says so
+            stopped[k, 0 if sense > 0 else 1] = r.status != "optimal"
             if sense > 0:
                 lo[k] = max(lo[k], r.bound)
                 vlo[k] = r.value
@@ -134,7 +139,7 @@ def _solve_orthant(problem, signs, box):
         mid = 0.5 * (lo + hi)
         lo, hi = np.minimum(lo, mid), np.maximum(hi, mid)
     return {"lo": lo, "hi": hi, "vlo": vlo, "vhi": vhi, "iterations": iters,
-            "time": time.perf_counter() - t0}
+            "stopped": stopped, "time": time.perf_counter() - t0}
 
 
 def _orthant_empty(problem, signs, box, n_eq) -> bool:
@@ -184,6 +189,15 @@ def end_statuses(names, infos, bounds, box) -> tuple:
     for k, e in zip(*np.nonzero(touches_box(bounds, box)), strict=True):
         st[k][e] = BOX
     return tuple(tuple(pair) for pair in st)
+
+
+def _statuses(names, infos, bounds, box, stopped) -> tuple:
+    """:func:`end_statuses`, with :data:`~hammerbound.status.LIMIT` kept for an end whose
+    LP ended before optimality even where it sits at the box (the box is then not the
+    data's answer)."""
+    st = end_statuses(names, infos, bounds, box)
+    return tuple(tuple(LIMIT if stopped[k, e] else st[k][e] for e in (0, 1))
+                 for k in range(len(names)))
 
 
 def raise_if_box_limited(bounds, box, names) -> None:
@@ -263,15 +277,20 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
     per = elapsed / (2 * p)
     iters = sum(r["iterations"] for _, r in feas)
     infos = []
+    stopped = np.any([r["stopped"] for _, r in feas], axis=0)
     for k in range(p):
-        vlo = np.nanmin([r["vlo"][k] for _, r in feas])
-        vhi = np.nanmax([r["vhi"][k] for _, r in feas])
-        for sense, b, v in (("min", lo[k], vlo), ("max", hi[k], vhi)):
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: every LP stopped
+            vlo = np.nanmin([r["vlo"][k] for _, r in feas])
+            vhi = np.nanmax([r["vhi"][k] for _, r in feas])
+        for e, (sense, b, v) in enumerate((("min", lo[k], vlo), ("max", hi[k], vhi))):
             infos.append(BoundInfo(
                 param=names[k], sense=sense, bound=float(b), solver_value=float(v),
-                status="optimal", certified=True, time=per,
+                status=LIMIT if stopped[k, e] else OPTIMAL, certified=True, time=per,
                 iterations=iters // (2 * p),
-                message=f"union of {len(feas)} feasible sign orthant(s)",
+                message=f"union of {len(feas)} feasible sign orthant(s)"
+                + ("; an LP ended before optimality (e.g. at its time limit of at most "
+                   f"{RUN_TIME_LIMIT:g} s): a certified outer bound" if stopped[k, e] else ""),
             ))
     polys = []
     for (s, box), _ in feas:
@@ -281,9 +300,16 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
         b = np.concatenate([b_ub, b_eq, -b_eq, box[:, 1], -box[:, 0]])
         polys.append(Polytope(s, A, b))
     if check_box:
+        if stopped.any() and box_limited_ends(bounds, problem.theta_box, names):
+            raise SolverError(
+                "an LP of the outer bounds ended before optimality (e.g. at its time limit of "
+                f"at most {RUN_TIME_LIMIT:g} s per LP) with an end still at theta_box, so it "
+                "is not known whether the data bound it. Rescale the data (order one) or "
+                "shorten the record.")
         raise_if_box_limited(bounds, problem.theta_box, names)
     return IntervalResult(
         param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="lp", time=elapsed,
-        status=end_statuses(names, infos, bounds, problem.theta_box), polytopes=tuple(polys),
+        status=_statuses(names, infos, bounds, problem.theta_box, stopped),
+        polytopes=tuple(polys),
         details=LPDetails(len(orthants), len(feas)),
     )

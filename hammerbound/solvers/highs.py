@@ -352,6 +352,7 @@ class HighsLP:
                              "(time.time() stamp) instead of the HiGHS option time_limit, "
                              "which counts the time of all solves of the instance")
         self.run_limit, self.deadline = run_limit, deadline
+        self._stop = None  # time.time() stamp at which the current solve() stops
         A = sp.csc_matrix(A, dtype=float)
         A.sort_indices()
         self.A = A
@@ -517,7 +518,11 @@ class HighsLP:
     def _certify_infeasible(self) -> bool:
         h = self.h
         zero = np.zeros_like(self.c)
+        # the ray may take a solve of its own (after presolve), and so may the fallback:
+        # what is left of the solve's time, at least 1 s (not certified: not infeasible)
+        left = max(1.0, (self._stop or np.inf) - time.time())
         try:
+            limit_run(h, seconds=left)
             out = h.getDualRay()
             has, ray = (out[1], out[2]) if len(out) == 3 else (out[0], out[1])
         except Exception:  # pragma: no cover - depends on highspy version
@@ -534,12 +539,13 @@ class HighsLP:
         lo = np.isfinite(self.rl) & ~eq
         A_ub = sp.vstack([A[up], -A[lo]]).tocsr()
         b_ub = np.concatenate([self.ru[up], -self.rl[lo]])
-        return certify_infeasible(A_ub, b_ub, A[eq], self.rl[eq], self.lb, self.ub)
+        return certify_infeasible(A_ub, b_ub, A[eq], self.rl[eq], self.lb, self.ub,
+                                  time_limit=min(left, RUN_TIME_LIMIT))
 
     def _run_highs(self):
         """One ``run()`` of HiGHS, stopped at :attr:`run_limit` or :attr:`deadline`
         (:func:`limit_run`): ``(run status, model status)`` (a seam for tests)."""
-        limit_run(self.h, self.run_limit, self.deadline)
+        limit_run(self.h, deadline=self._stop)
         run = self.h.run()
         return run, self.h.getModelStatus()
 
@@ -566,8 +572,10 @@ class HighsLP:
                 self._unscaled, self.rescaled = False, True  # scaling stays on for good
             tried.append(label)
             if not refused(run, st):
-                return st, (f"HiGHS stopped with an error before a result ({first}); "
-                            f"solved {label}")
+                how = (f"solved {label}" if st == highspy.HighsModelStatus.kOptimal else
+                       f"re-run {label}, which ended with model status "
+                       f"'{self.h.modelStatusToString(st)}'")
+                return st, f"HiGHS stopped with an error before a result ({first}); {how}"
         self.h.clearSolver()
         return None, refusal_message(first, tried, self.defects())
 
@@ -605,6 +613,11 @@ class HighsLP:
             return LPSolve(INFEASIBLE, np.inf, np.nan, None, 0)
         if primal:
             h.setOptionValue("simplex_strategy", 4)
+        # one stop for the whole solve, the recovery ladder's re-runs included
+        limit = RUN_TIME_LIMIT if self.run_limit is None else min(float(self.run_limit),
+                                                                  RUN_TIME_LIMIT)
+        self._stop = time.time() + limit if self.deadline is None else \
+            min(time.time() + limit, float(self.deadline))
         try:
             st, note = self._run()
         finally:

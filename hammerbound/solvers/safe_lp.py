@@ -122,8 +122,9 @@ def safe_minimize(c, A_ub=None, b_ub=None, A_eq=None, b_eq=None, bounds=None,
     return SafeLPResult(FAILED, -np.inf, np.nan, None, str(res.message))
 
 
-def certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub) -> bool:
-    """True only if the phase-1 LP has a *rigorous* positive minimum total violation."""
+def certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub, time_limit=None) -> bool:
+    """True only if the phase-1 LP has a *rigorous* positive minimum total violation
+    (``time_limit`` seconds for it, None: no limit; a stopped phase 1 certifies nothing)."""
     n = lb.size
     m_ub, m_eq = A_ub.shape[0], A_eq.shape[0]
     # worst violation of every row over the box (finite) bounds the slacks
@@ -138,5 +139,6 @@ def certify_infeasible(A_ub, b_ub, A_eq, b_eq, lb, ub) -> bool:
         [np.column_stack([lb, ub]), np.column_stack([np.zeros(m_ub), smax_ub]),
          np.column_stack([np.zeros(2 * m_eq), np.concatenate([smax_eq, smax_eq])])]
     )
-    res = safe_minimize(c, Aub, b_ub, Aeq, b_eq, bnds)
+    res = safe_minimize(c, Aub, b_ub, Aeq, b_eq, bnds,
+                        options=None if time_limit is None else {"time_limit": time_limit})
     return res.status == OPTIMAL and res.bound > 0.0

@@ -33,12 +33,12 @@ def _lp(n=1500, seed=0):
 def test_limit_is_per_run_not_the_sum_of_all_runs():
     """HiGHS's time_limit counts all runs of an instance: a plain limit would stop every
     run once the sum passed it. limit_run sets it per run."""
-    A, rl, ru, lb, ub, c = _lp(600)
-    lp = HighsLP(A, rl, ru, lb, ub, c, run_limit=0.5)
+    A, rl, ru, lb, ub, c = _lp(300)  # ~0.02 s a run; 10x that on a loaded machine
+    lp = HighsLP(A, rl, ru, lb, ub, c, run_limit=1.0)
     first = lp.solve()
     assert first.status == "optimal"
     runs = 0
-    while lp.h.getRunTime() < 2.0 or runs < 3:  # the sum well past one run's limit
+    while lp.h.getRunTime() < 2.5 or runs < 3:  # the sum well past one run's limit
         lp.h.clearSolver()  # from scratch: every run does the full work again
         res = lp.solve()
         assert res.status == "optimal", f"run {runs} stopped at {lp.h.getRunTime():.2f} s"
@@ -108,3 +108,50 @@ def test_seek_feasible_gives_its_deadline_to_the_screen_and_restores_it():
         WitnessLP.violation = real
     assert hit is not None and seen and all(d == stop for d in seen)
     assert lp.deadline is None
+
+
+def _stop_every_run(h, seconds=None, deadline=None):
+    """A limit_run that stops every HiGHS run at once (a stand-in for a slow LP)."""
+    h.setOptionValue("time_limit", h.getRunTime() + 1e-12)
+    return 0.0
+
+
+def test_lp_bounds_with_stopped_lps_say_limit_never_unbounded(monkeypatch):
+    from hammerbound.exceptions import SolverError, UnboundedSetError
+    from hammerbound.relaxations.lp import lp_bounds
+    from hammerbound.solvers import highs
+
+    data, theta = chapter_eiv_data(N=300, deta=0.05, seed=3)
+    pr = EIVProblem(**data)
+    full = lp_bounds(pr, check_box=False)
+    monkeypatch.setattr(highs, "limit_run", _stop_every_run)
+    cut = lp_bounds(pr, check_box=False)
+    assert np.all(cut.bounds[:, 0] <= full.bounds[:, 0] + 1e-12)  # outer, never tighter
+    assert np.all(cut.bounds[:, 1] >= full.bounds[:, 1] - 1e-12)
+    assert {s for pair in cut.status for s in pair} == {"limit"}
+    assert all(i.status == "limit" and "before optimality" in i.message for i in cut.infos)
+    with pytest.raises(SolverError, match="before optimality") as err:
+        lp_bounds(pr, check_box=True)  # the data are not blamed for the box
+    assert not isinstance(err.value, UnboundedSetError)
+
+
+def test_one_record_names_stopped_lps_not_the_record(monkeypatch):
+    """A record that bounds the backlash, with every relaxation LP stopped: the warning
+    names the stopped LPs, and the bounds stay outer."""
+    import warnings
+
+    from oracles import one_record
+
+    import hammerbound as hb
+    from hammerbound.exceptions import NotIdentifiedWarning
+    from hammerbound.solvers import highs
+
+    u, y, _ = one_record(60, 0.02, "uniform", 4)
+    lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, nk=1, method="lp")
+    monkeypatch.setattr(highs, "limit_run", _stop_every_run)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        idf = hb.HammersteinBacklashIdentifier(linear=lin, procedure="one-record").fit(u, y)
+    text = " ".join(str(w.message) for w in caught if w.category is NotIdentifiedWarning)
+    assert "ended before optimality" in text and "never move back" not in text
+    assert np.all(np.isinf(idf.gamma_bounds_[:, 1]))  # nothing certified: not identified

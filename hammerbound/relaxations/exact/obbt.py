@@ -74,7 +74,7 @@ def _obbt_task(problem, box, tasks, bases, deadline=None, ws=None, picklable=Tru
             if left <= 0:
                 out.append((-np.inf, None, basis, 0))
                 continue
-            relax.lp.run_limit = left  # HighsLP: a stopped solve keeps its dual bound
+            relax.lp.deadline = deadline  # HighsLP: a stopped solve keeps its dual bound
         c = np.zeros(relax.ncol)
         c[k] = s
         relax.lp.set_cost(c)

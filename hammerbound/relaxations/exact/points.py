@@ -57,8 +57,8 @@ class _Pool:
             # and its solution is the candidate witness that check_theta judges
             self._ensure_screen()
             v, hint = self.screen.full(theta)
-            if np.isfinite(v) and hint is None:
-                return None
+            if hint is None and (np.isfinite(v) or self._out_of_time()):
+                return None  # rejected, or its LP stopped at the pool's end: not accepted
         try:
             chk = check_theta(self.problem, theta, witness=hint)
         except SolverError:  # not verified: simply not accepted as a witness
@@ -72,6 +72,8 @@ class _Pool:
     def _ensure_screen(self):
         if self.screen is None:
             self.screen = _Screen(self.problem, working_set=self.working_set)
+        if self.stop_at is not None:  # the screening LPs stop with the pool too
+            self.screen.deadline = time.time() + (self.stop_at - time.perf_counter())
 
     def add(self, theta) -> _Point | None:
         """Screen, then verify (nothing once ``stop_at`` has passed)."""

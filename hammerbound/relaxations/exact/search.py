@@ -309,16 +309,21 @@ class EndSearch:
         # HiGHS stops once its objective passes the cutoff; half the tolerance below the
         # incumbent leaves room for the certified bound to trail HiGHS's own value
         relax.lp.set_cutoff(ub - 0.5 * tol_eff if np.isfinite(ub) else None)
-        relax.lp.run_limit = self.stop_at - time.perf_counter()
+        # every solve of the node (and its working-set re-solves) stops at the search's end
+        relax.lp.deadline = time.time() + (self.stop_at - time.perf_counter())
         res = _solve(relax, self.pool.screen)
         self.nodes += 1
         self.iters += res.iterations
         if res.status == "cutoff" and not res.bound >= ub - tol_eff:
             # cut off, but the certified bound does not close the node: solve it to the
-            # end (a point to branch at) instead of splitting it blindly
+            # end (a point to branch at) instead of splitting it blindly; a re-solve
+            # stopped early keeps the cut-off solve's certified bound
+            first = res.bound
             relax.lp.set_cutoff(None)
             res = _solve(relax, self.pool.screen)
             self.iters += res.iterations
+            if res.status not in ("optimal", "infeasible") and not res.bound >= first:
+                res.bound = first
         if res.refused:
             # HiGHS refused the node LP on every attempt: the node keeps its parent's
             # certified bound and is split without an LP point

@@ -3,6 +3,7 @@
     python -m benchmarks.one_record --part soundness [--quick] [--n-jobs 2] [--budget S]
     python -m benchmarks.one_record --part tightness [--quick]
     python -m benchmarks.one_record --part speed [--quick]
+    python -m benchmarks.one_record --part excitation
 
 **soundness** -- the chapter's system simulated by ``benchmarks/_record_sim.py`` (own play
 operator and recursion; the package's simulator is not used for truths): random-step
@@ -27,6 +28,9 @@ and a re-run resumes from it; ``--budget`` (s) stops starting new batches.
 chapter's experiment (``hb.chapter_example``: 2 M steady-state points, M = 50, and a PRBS
 of N_prbs = 100 samples) vs the one-record path on one random-step record of 2 M + N_prbs
 samples, same output bound, same method (``--method``).
+
+**excitation** -- the stage-2 theta set of every signal given its *true* inner signal:
+how much the record itself says about the linear block.
 
 **speed** -- wall time of one fit of a random-step record per N, output bound, seed and
 method (``--n-jobs`` processes), with the statuses (``"limit"`` ends are certified outer bounds).
@@ -268,6 +272,35 @@ def tightness_table(rows):
     return out
 
 
+# ------------------------------------------------------------------ excitation
+def run_excitation(args):
+    """How much each record's input excites the linear block: the stage-2 set of theta
+    with the *true* inner signal given (input error 1e-6), per signal and output bound,
+    ``method="lp"`` and ``"exact"`` (``--time-limit`` per fit). A record whose theta set is
+    wide even then cannot give narrow one-record bounds, whatever the backlash step does."""
+    import hammerbound as hb
+
+    path = C.RESULTS / f"one_record_excitation{args.tag}.json"
+    rows = []
+    for signal, deta, method in itertools.product(args.signals, args.levels, ("lp", "exact")):
+        u, y = S.record(signal, args.N[0], deta, "uniform", 1)
+        x = S.play(u, *S.GAMMA)
+        est = hb.LinearEIVSetEstimator(output_bound=deta, na=2, nb=2, nk=1, method=method,
+                                       total_time_limit=args.time_limit, on_failure="raise")
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            est.fit(x, y, input_bound=1e-6)
+        b = np.asarray(est.bounds_)
+        rows.append({"signal": signal, "N": args.N[0], "deta": deta, "method": method,
+                     "width": (b[:, 1] - b[:, 0]).tolist(),
+                     "inside": bool(np.all((S.THETA >= b[:, 0]) & (S.THETA <= b[:, 1]))),
+                     "seconds": time.perf_counter() - t0, "loadavg": C.loadavg()})
+        C.log(f"excitation {signal} deta={deta} {method}: widths "
+              f"{np.round(rows[-1]['width'], 4).tolist()}")
+    C.write_json({"environment": C.environment(), "rows": rows}, path)
+
+
 # ------------------------------------------------------------------ speed
 def run_speed(args):
     """Wall time per (N, output bound, seed, method) on random-step records, with the
@@ -300,7 +333,8 @@ def run_speed(args):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("soundness", "tightness", "speed"), required=True)
+    ap.add_argument("--part", choices=("soundness", "tightness", "speed", "excitation"),
+                    required=True)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--budget", type=float, default=None)
@@ -330,6 +364,11 @@ def main(argv=None):
         args.levels = args.levels or ([0.05] if args.quick else [0.005, 0.05, 0.3])
         args.tag = args.tag or ("_quick" if args.quick else "")
         run_tightness(args)
+    elif args.part == "excitation":
+        args.N = args.N or [300]
+        args.levels = args.levels or [0.005, 0.05, 0.3]
+        args.time_limit = args.time_limit or 120.0
+        run_excitation(args)
     else:
         args.N = args.N or ([300] if args.quick else [300, 1000])
         args.seeds = args.seeds or (1 if args.quick else 2)

@@ -100,3 +100,26 @@ def test_missing_output_bound_is_refused(capsys, record):
 def test_no_record_at_all_says_both_ways(capsys):
     rc, out, err = _run(capsys, "identify", "--output-bound", 0.05)
     assert rc == 2 and "--record DATA.csv" in err and "--steady STEADY.csv" in err
+
+
+def _strict(text):
+    """Parse as RFC 8259 JSON: Infinity and NaN are not JSON."""
+    def refuse(name):
+        raise ValueError(f"not JSON: {name}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_json_of_a_record_that_bounds_nothing_is_strict_json(capsys, tmp_path):
+    """A monotone ramp identifies no dead band: the infinite ends are null everywhere,
+    in the interval records too (they were printed as Infinity)."""
+    u = np.linspace(-2, 2, 60)
+    y = lfilter(B, A, own_play(u, *GAMMA)) + 0.02 * np.sin(np.arange(60))
+    path = tmp_path / "ramp.csv"
+    path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n"
+                                      for a, b in zip(u, y, strict=True)))
+    rc, out, err = _run(capsys, "identify", "--record", path, *ARGS, "--json")
+    assert rc == 0 and "never reverses" in err
+    res = _strict(out)
+    assert None in res["upper"]  # not identified: null, not a number
+    ends = [iv.get(k) for iv in res["intervals"] for k in ("upper", "centre", "half_width")]
+    assert None in ends and all(e is None or np.isfinite(e) for e in ends)

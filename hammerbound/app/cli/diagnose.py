@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import sys
 
 import numpy as np
@@ -13,6 +12,7 @@ from ...exceptions import HammerboundError, ParameterValidationError
 from ..paths import add_force_option, check_output_file
 from .console import cli_warnings, print_error
 from .options import CLI_NAMES, UsageError, add_csv_options, deprecated, require
+from .printing import json_text
 
 __all__ = ["add_arguments", "add_parser", "diagnose_cli_main", "run"]
 
@@ -140,7 +140,7 @@ def run(args) -> int:
                    progress=args.progress)
     if args.plot:
         _plot(rep, args.plot)
-    print(json.dumps(rep.to_dict(), indent=2) if args.json else rep.summary())
+    print(json_text(rep.to_dict()) if args.json else rep.summary())
     return 0 if rep.consistent_after else 1
 
 

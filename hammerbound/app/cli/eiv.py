@@ -3,8 +3,6 @@ errors are bounded (errors in variables)."""
 
 from __future__ import annotations
 
-import json
-
 from .options import (
     CLI_NAMES,
     add_bound_options,
@@ -15,7 +13,7 @@ from .options import (
     require,
     stage2_kwargs,
 )
-from .printing import assumption_lines, record_line, transfer_function
+from .printing import assumption_lines, json_text, record_line, transfer_function
 
 __all__ = ["add_parser", "input_bound_assumption", "run"]
 
@@ -79,7 +77,7 @@ def run(args) -> int:
             "assumed": assumed,
             "transfer_function": tf,
         }
-        print(json.dumps(out, indent=2))
+        print(json_text(out))
         return 0
     print(record_line(args.data, data))
     print("\n".join(assumption_lines(given, assumed)))

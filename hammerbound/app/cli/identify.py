@@ -3,7 +3,6 @@ or from the chapter's two experiments (``--steady`` and ``--prbs``)."""
 
 from __future__ import annotations
 
-import json
 import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir
@@ -17,7 +16,7 @@ from .options import (
     require,
     stage2_kwargs,
 )
-from .printing import assumption_lines, record_line, transfer_function
+from .printing import assumption_lines, json_text, record_line, transfer_function
 
 __all__ = ["add_parser", "run"]
 
@@ -116,8 +115,7 @@ def _two_records(args) -> int:
     ident.fit(data, steady_state=steady)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:
-        print(json.dumps(_record(args, ident, data, output_bound, steady_bound, assumed, tf),
-                         indent=2))
+        print(json_text(_record(args, ident, data, output_bound, steady_bound, assumed, tf)))
     else:
         print(f"steady-state record {args.steady}: {ss[args.u_col].size} points")
         print("PRBS record " + record_line(args.prbs, data))

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 
 from .options import CLI_NAMES, UsageError, require, stage2_kwargs
-from .printing import assumption_lines, record_line, transfer_function
+from .printing import assumption_lines, json_text, record_line, transfer_function
 
 __all__ = ["run_one_record"]
 
@@ -52,7 +50,7 @@ def run_one_record(args) -> int:
     tf_text, tf = (transfer_function(ident.linear_, ident.dt_) if ident.system_ is not None
                    else ("central model: not given (an interval is infinite)", None))
     if args.json:
-        print(json.dumps(_record(args, ident, data, output_bound, tf), indent=2))
+        print(json_text(_record(args, ident, data, output_bound, tf)))
         return 0
     print("record " + record_line(args.record, data))
     if steady is not None:

@@ -3,6 +3,8 @@ assumptions the bounds rest on, the central transfer function."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 __all__ = ["assumption_lines", "dt_text", "poly_z", "record_line", "transfer_function"]
@@ -51,3 +53,12 @@ def assumption_lines(given, assumed) -> list[str]:
     """``given: ...`` and ``assumed: ...`` lines (what the bounds rest on)."""
     out = ["given: " + "; ".join(given)] if given else []
     return out + [f"assumed: {a}" for a in assumed]
+
+
+def json_text(obj) -> str:
+    """``obj`` as strict JSON (RFC 8259): every non-finite number (an interval end the data
+    do not bound) is ``null``; anything else non-finite raises instead of printing
+    ``Infinity`` or ``NaN``, which JSON parsers reject."""
+    from ...results.base import jsonable
+
+    return json.dumps(jsonable(obj), indent=2, allow_nan=False)

@@ -142,7 +142,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
                         max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
                         deadline=deadline, n_jobs=lin.n_jobs,
-                        skip=_at_assumed_limit(problem, prior))
+                        skip=_at_assumed_limit(problem, prior), progress=bool(lin.progress))
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,

@@ -18,16 +18,17 @@ box of every variable and ``pool`` the verified points found on the way.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..relaxations.result import BoundInfo, IntervalResult
-from ..status import RELAXATION
+from ..status import BOX, LIMIT, RELAXATION
 from .local import restore
 from .problem import RecordProblem
+from .progress import RecordProgress
 from .search import search_end
-from .tighten import outer_leaves
+from .tighten import map_jobs, outer_leaves
 
 __all__ = ["RecordDetails", "record_bounds"]
 
@@ -50,7 +51,7 @@ def _pool(problem, points, limit=8, deadline=None):
     for x in points[-limit:]:
         if deadline is not None and time.time() > deadline:
             break
-        w = restore(problem, x, max_iter=12)
+        w = restore(problem, x, max_iter=12, deadline=deadline)
         if w is not None:
             out.append(w)
     return out
@@ -81,13 +82,28 @@ def _info(name, sense, res, bound):
                      witness=None if w is None else w.vector, nodes=res.nodes, point=w)
 
 
-def _lp_infos(names, box):
-    return tuple(BoundInfo(n, s, float(box[i, j]), status=RELAXATION, certified=True)
+def _lp_infos(names, box, stopped):
+    """The relaxation's ends: status LIMIT when a time limit stopped the tightening (the
+    fit's deadline, or relaxation LPs' own limit), RELAXATION otherwise."""
+    st = LIMIT if stopped else RELAXATION
+    return tuple(BoundInfo(n, s, float(box[i, j]), status=st, certified=True)
                  for i, n in enumerate(names) for j, s in ((0, "min"), (1, "max")))
 
 
+def _at_prior(infos, prior):
+    """Ends that sit at the a priori box get status BOX (guaranteed under that box, not by
+    the record), unless a time limit stopped them (LIMIT says more)."""
+    out = []
+    for i, info in enumerate(infos):
+        k, e = divmod(i, 2)
+        at = info.bound == prior[k, e]
+        out.append(replace(info, status=BOX) if at and info.status != LIMIT else info)
+    return tuple(out)
+
+
 def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes=2000,
-                  time_limit=None, deadline=None, n_jobs=1, skip=None) -> IntervalResult:
+                  time_limit=None, deadline=None, n_jobs=1, skip=None,
+                  progress=False) -> IntervalResult:
     """Certified intervals of ``[theta, m_l, c_l, m_r, c_r]`` over the one-record set.
 
     Parameters
@@ -105,6 +121,9 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         ``skip(k, sense, bound) -> bool``: an end whose OBBT bound makes the search
         pointless (e.g. it is at an assumed a priori limit, so it will be reported as not
         identified) keeps that certified bound, status "limit", without a search.
+    progress : bool
+        Lines (or bars on a terminal) on stderr: the partition, the leaves, the interval
+        ends (:mod:`.progress`).
 
     Raises
     ------
@@ -114,8 +133,9 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     t0 = time.perf_counter()
     points = []
     stops = []
+    bar = RecordProgress(progress)
     leaves = outer_leaves(problem, deadline=deadline, on_point=points.append, n_jobs=n_jobs,
-                          on_stop=stops.append)
+                          on_stop=stops.append, progress=bar)
     details = RecordDetails(0, False, sum(stops))
     if details.lps_stopped:
         skip = None  # an OBBT bound at a limit may be the stopped LPs', not the record's
@@ -123,8 +143,10 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
                            np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]
     if method == "lp":
+        stopped = _stopped(deadline) or details.lps_stopped > 0
         return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
-                              infos=_lp_infos(names, box), method="lp",
+                              infos=_at_prior(_lp_infos(names, box, stopped), problem.box),
+                              method="lp",
                               time=time.perf_counter() - t0, root_box=box,
                               details=RecordDetails(len(leaves), _stopped(deadline),
                                                     details.lps_stopped))
@@ -135,13 +157,11 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
                if skip is not None and skip(k, s, box[k, 0] if s > 0 else box[k, 1])}
     args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs
             if (k, s) not in skipped]
-    if n_jobs == 1:
-        found = [_end_job(*a) for a in args]
-    else:
-        from joblib import Parallel, delayed
-
-        found = Parallel(n_jobs=n_jobs)(delayed(_end_job)(*a) for a in args)
-    found = iter(found)
+    bar.start("interval end", len(args))
+    labels = iter(f"{names[a[2]]} {'min' if a[3] > 0 else 'max'}" for a in args)
+    found = iter(map_jobs(_end_job, args, n_jobs, each=lambda r: bar.done(
+        f"{next(labels)}, status {r.status}, {r.nodes} nodes")))
+    bar.close()
     results = [_not_searched(box, k, s) if (k, s) in skipped else next(found)
                for k, s in jobs]
     bounds = box[: problem.p + 4].copy()
@@ -153,7 +173,8 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         else:
             bounds[k, 1] = min(bounds[k, 1], b)
         infos.append(_info(names[k], s, res, bounds[k, 0 if s > 0 else 1]))
-    return IntervalResult(tuple(names), bounds, infos=tuple(infos), method="exact",
+    return IntervalResult(tuple(names), bounds, infos=_at_prior(infos, problem.box),
+                          method="exact",
                           time=time.perf_counter() - t0, root_box=box, pool=tuple(pool),
                           details=RecordDetails(len(leaves), _stopped(deadline),
                                                 details.lps_stopped))

@@ -19,6 +19,8 @@ accepted it (an independent simulation and the fixed-theta LP of stage 2).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
@@ -30,7 +32,18 @@ __all__ = ["restore", "walk"]
 
 # a step's LP that HiGHS has not solved by then counts as a failed step (the trust region
 # shrinks): seen at N = 300, one step's LP ran for minutes inside the starting pool
-_LP_OPTIONS = {"time_limit": 5.0}
+STEP_LP_LIMIT = 5.0
+
+
+def _lp_options(deadline):
+    """scipy/HiGHS options of a step's LP: at most STEP_LP_LIMIT s, and no later than
+    ``deadline`` (a :func:`time.time` stamp)."""
+    left = STEP_LP_LIMIT if deadline is None else min(STEP_LP_LIMIT, deadline - time.time())
+    return {"time_limit": max(left, 1e-3)}
+
+
+def _past(deadline) -> bool:
+    return deadline is not None and time.time() > deadline
 
 
 class _Linearised:
@@ -126,7 +139,7 @@ class _Linearised:
         return np.array(hs), np.array(Hs)
 
 
-def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None):
+def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None, deadline=None):
     """One SLP step. Without ``objective``: the smallest step (scaled L1 norm) among those
     that minimise the largest scaled linearised violation (two LPs: a minimum-norm
     Gauss-Newton step in the max norm, which converges fast where the first LP alone jumps
@@ -180,7 +193,7 @@ def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None):
     if objective is None:
         c[nv + N] = 1.0
         res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds,
-                      method="highs", options=_LP_OPTIONS)
+                      method="highs", options=_lp_options(deadline))
         if res.status != 0:
             return None
         tau = float(res.x[nv + N])
@@ -194,7 +207,7 @@ def _step(lin: _Linearised, box, rho, objective=None, rho_eta=None):
         c[k] = sense
         bounds[nv + N] = [0.0, 1.0]  # violations held at the current level
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=b_eq, bounds=bounds,
-                  method="highs", options=_LP_OPTIONS)
+                  method="highs", options=_lp_options(deadline))
     if res.status != 0:
         return None
     return lin.v + res.x[:nv], np.clip(res.x[nv: nv + N], -pr.deta, pr.deta)
@@ -230,7 +243,8 @@ def _violation(problem, v, eta):
     return float(np.max(np.abs(F) / scale)) if F.size else 0.0
 
 
-def restore(problem: RecordProblem, v, box=None, *, max_iter=20, rho=None) -> Witness | None:
+def restore(problem: RecordProblem, v, box=None, *, max_iter=20, rho=None,
+            deadline=None) -> Witness | None:
     """A verified point near ``v`` (Gauss-Newton steps in the max norm with an adaptive
     trust region), or None."""
     box = problem.box if box is None else np.asarray(box, dtype=float)
@@ -244,9 +258,12 @@ def restore(problem: RecordProblem, v, box=None, *, max_iter=20, rho=None) -> Wi
     eta = _initial_eta(problem, v)
     viol = _violation(problem, v, eta)
     for _ in range(max_iter):
+        if _past(deadline):
+            return None
         rho = f * ref
         try:
-            step = _step(_Linearised(problem, v, eta), box, rho, rho_eta=f * problem.deta)
+            step = _step(_Linearised(problem, v, eta), box, rho, rho_eta=f * problem.deta,
+                         deadline=deadline)
         except (ValueError, FloatingPointError):
             return None
         if step is None:
@@ -268,21 +285,25 @@ def restore(problem: RecordProblem, v, box=None, *, max_iter=20, rho=None) -> Wi
 
 
 def walk(problem: RecordProblem, witness: Witness, k: int, sense: float, box=None, *,
-         max_iter=4) -> Witness:
+         max_iter=4, deadline=None) -> Witness:
     """Move a verified point towards ``min sense * v_k``; returns the best verified point."""
     box = problem.box if box is None else np.asarray(box, dtype=float)
     best = witness
     rho = 0.1 * np.maximum(box[:, 1] - box[:, 0], 1e-12)
     for _ in range(max_iter):
+        if _past(deadline):
+            break
         v0 = best.vector
         try:
-            step = _step(_Linearised(problem, v0, best.eta), box, rho, objective=(k, sense))
+            step = _step(_Linearised(problem, v0, best.eta), box, rho, objective=(k, sense),
+                         deadline=deadline)
         except (ValueError, FloatingPointError):
             break
         if step is None:
             break
         v_new, _ = step
-        cand = restore(problem, np.clip(v_new, box[:, 0], box[:, 1]), box, max_iter=6)
+        cand = restore(problem, np.clip(v_new, box[:, 0], box[:, 1]), box, max_iter=6,
+                       deadline=deadline)
         if cand is not None and sense * cand.vector[k] < sense * v0[k] - 1e-15 * (1 + abs(v0[k])):
             best = cand
             rho = rho * 2.0

@@ -101,10 +101,12 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
                 cause = ("the input never reverses, so only one line of the backlash is "
                          "ever active")
             elif name.startswith("c") or name.startswith("m"):
-                cause = (f"the relaxation does not bound it below the assumed limit: the "
-                         f"input may never move back by more than the dead band (largest "
-                         f"reversals: {rev['down']:.4g} down, {rev['up']:.4g} up), or the "
-                         f"search needs more time")
+                cause = (f"the relaxation does not bound it below the assumed limit. "
+                         f"Either the input never moves back by more than the dead band "
+                         f"(largest reversals: {rev['down']:.4g} down, {rev['up']:.4g} up), "
+                         f"or the relaxation over the wide a priori box is too weak to tell: "
+                         f"a narrower gamma_box (--gamma-box) from what you know of the "
+                         f"actuator, or method='exact', usually bounds it")
             else:
                 cause = "the record does not excite this parameter"
             out.append((name, cause))

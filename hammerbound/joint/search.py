@@ -107,8 +107,9 @@ def _cap(box, k, sense, value):
 class _Incumbent:
     """The best verified point of one end."""
 
-    def __init__(self, problem, k, sense, witness):
+    def __init__(self, problem, k, sense, witness, deadline=None):
         self.problem, self.k, self.sense = problem, k, sense
+        self.deadline = deadline  # the walks stop there
         self.witness = None
         self.value = np.inf
         if witness is not None:
@@ -118,7 +119,8 @@ class _Incumbent:
         if w is None:
             return False
         if walk_it:
-            w = walk(self.problem, w, self.k, self.sense, max_iter=WALK_STEPS)
+            w = walk(self.problem, w, self.k, self.sense, max_iter=WALK_STEPS,
+                     deadline=self.deadline)
         val = self.sense * float(w.vector[self.k])
         if val < self.value:
             self.value, self.witness = val, w
@@ -176,7 +178,7 @@ class _EndSearch:
         self.pr, self.k, self.sense, self.tol = problem, k, sense, tol
         self.max_nodes, self.stop = max_nodes, stop
         self.deadline = stop if np.isfinite(stop) else None  # for the node LPs
-        self.inc = _Incumbent(problem, k, sense, start)
+        self.inc = _Incumbent(problem, k, sense, start, self.deadline)
         hull = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
                                 np.max([b[:, 1] for b in leaves], axis=0)])
         self.root_w = hull[:, 1] - hull[:, 0]
@@ -227,7 +229,8 @@ class _EndSearch:
         if self.nodes < self.next_search:
             return
         self.searches += 1
-        if self.inc.offer(restore(self.pr, x, self.pr.box, max_iter=8)):
+        if self.inc.offer(restore(self.pr, x, self.pr.box, max_iter=8,
+                                  deadline=self.deadline)):
             self.spacing = 1
         else:
             self.spacing = min(2 * self.spacing, MAX_SEARCH_SPACING)

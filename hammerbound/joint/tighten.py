@@ -34,6 +34,11 @@ LEAF_SHRINK = 0.05
 # (:mod:`.windows`; measured on the chapter's random-step record, N = 1000, Delta eta =
 # 0.05, method "lp", one core: 230 s without windows, 138 s with, the same widths to 1e-5)
 
+#: What an EmptyFeasibleSetError of the one-record search suggests.
+EMPTY_HINT = ("Check the output bound (every error within it?), the orders na, nb and the "
+              "delay nk, and any gamma_box you gave; an output bound too small for the "
+              "noise, or a model of the wrong order, leaves nothing to explain the record.")
+
 # the partition of the backlash box stops splitting at this many boxes (a record that
 # cannot tell the slopes or gaps apart would otherwise give parts**4 of them)
 MAX_PARTS = 48
@@ -100,7 +105,8 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
             if row is None:
                 raise EmptyFeasibleSetError(
                     "no backlash and linear block explain the record within the bounds "
-                    "(the relaxation of the one-record set is certified infeasible).")
+                    "(the relaxation of the one-record set is certified infeasible). "
+                    + EMPTY_HINT)
             box[k] = row
             if on_point is not None:
                 for x in points:
@@ -114,14 +120,22 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
     return box
 
 
-def _map(fn, items, n_jobs):
-    """``[fn(*a) for a in items]``, over ``n_jobs`` processes (joblib) when that pays."""
+def map_jobs(fn, items, n_jobs, each=None):
+    """``[fn(*a) for a in items]``, over ``n_jobs`` processes (joblib) when that pays;
+    ``each(result)`` is called in this process as each result arrives (in order)."""
     if n_jobs == 1 or len(items) < 2:
-        return [fn(*a) for a in items]
-    from joblib import Parallel, delayed
+        results = (fn(*a) for a in items)
+    else:
+        from joblib import Parallel, delayed
 
-    return Parallel(n_jobs=min(n_jobs, len(items)) if n_jobs > 0 else n_jobs)(
-        delayed(fn)(*a) for a in items)
+        results = Parallel(n_jobs=min(n_jobs, len(items)) if n_jobs > 0 else n_jobs,
+                           return_as="generator")(delayed(fn)(*a) for a in items)
+    out = []
+    for r in results:
+        out.append(r)
+        if each is not None:
+            each(r)
+    return out
 
 
 def _window_obbt(problem, box, rows, deadline, max_rounds, shrink, on_stop=None):
@@ -162,22 +176,29 @@ def _part_obbt(problem, box, rows, deadline, max_rounds=1, shrink=0.01, window_r
     return box, points, len(stops)
 
 
-def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None):
+def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress=None):
     """Boxes covering the set whose backlash widths are at most ``1/parts`` of the prior's
     (each tightened in ``a``, ``z0``, ``m`` and ``c`` by the relaxation; boxes certified
     empty are dropped; past ``MAX_PARTS`` boxes the rest are kept as they are). The boxes
-    of one generation are tightened in parallel (``n_jobs``)."""
+    of one generation are tightened in parallel (``n_jobs``); ``progress`` (a
+    :class:`.progress.RecordProgress`) gets a line per generation."""
     p = problem.p
     cols = (p, p + 1, p + 2, p + 3)
     rows = [*range(problem.na), p + 4, p, p + 2, *cols]
     res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
     queue, out = [prior.copy()], []
+    generation = 0
     while queue:
         if _past(deadline):
+            if progress is not None:
+                progress.line(f"partition stopped by the time limit, {len(out + queue)} "
+                              "part(s) kept as they are")
             return out + queue
         # one round per generation, over the windows only on a long record
         part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False)
-        done = _map(part, [(problem, b, rows, deadline) for b in queue], n_jobs)
+        done = map_jobs(part, [(problem, b, rows, deadline) for b in queue], n_jobs)
+        generation += 1
+        n_tightened, n_done = len(done), len(out)
         queue = []
         for b, _points, n_stopped in done:
             if n_stopped and on_stop is not None:
@@ -192,11 +213,16 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None):
                 queue.extend([lo, hi])
             else:
                 out.append(b)
+        if progress is not None:
+            empty = sum(b is None for b, _, _ in done)
+            progress.line(f"partition generation {generation}: {n_tightened} part(s) "
+                          f"tightened, {empty} certified empty, {len(out) - n_done} kept, "
+                          f"{len(queue)} to tighten next")
     return out
 
 
 def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
-                 on_point=None, n_jobs=1, on_stop=None):
+                 on_point=None, n_jobs=1, on_stop=None, progress=None):
     """Certified boxes whose union holds the whole set.
 
     The dead band decides which samples are ambiguous, and a wide dead-band range leaves
@@ -212,6 +238,7 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
 
     ``on_stop(n)`` is told of the ``n`` LPs of a part that ended before optimality (their
     time limit, :data:`~.relaxation.LP_TIME_LIMIT`): their bounds are certified but weaker.
+    ``progress`` (a :class:`.progress.RecordProgress`) shows the partition and the leaves.
 
     Raises EmptyFeasibleSetError when every box is empty.
     """
@@ -221,9 +248,14 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     # the search of each end does the rest: OBBT rounds stop once they pay little
     leaf = partial(_part_obbt, max_rounds=LEAF_ROUNDS, shrink=LEAF_SHRINK,
                    window_rounds=LEAF_ROUNDS)
-    done = _map(leaf, [(problem, b, None, deadline)
-                       for b in _partition(problem, prior, parts, deadline, n_jobs, on_stop)],
-                n_jobs)
+    todo = _partition(problem, prior, parts, deadline, n_jobs, on_stop, progress)
+    if progress is not None:
+        progress.start("leaf", len(todo))
+    done = map_jobs(leaf, [(problem, b, None, deadline) for b in todo], n_jobs,
+                each=None if progress is None else
+                lambda r: progress.done("certified empty" if r[0] is None else "tightened"))
+    if progress is not None:
+        progress.close()
     out = []
     for b, points, n_stopped in done:
         if n_stopped and on_stop is not None:
@@ -236,5 +268,6 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     if not out:
         raise EmptyFeasibleSetError(
             "no backlash and linear block explain the record within the bounds (the "
-            "relaxation is certified infeasible on every part of the a priori box).")
+            "relaxation is certified infeasible on every part of the a priori box). "
+            + EMPTY_HINT)
     return out

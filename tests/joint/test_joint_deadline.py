@@ -40,3 +40,64 @@ def test_an_lp_stopped_by_the_deadline_keeps_an_outer_bound():
         assert box[k, 0] <= cut[0] and cut[1] <= box[k, 1]
         stopped += bool(cut[1] - cut[0] > full[1] - full[0] + tol)
     assert stopped  # the deadline did stop LPs
+
+
+def _fit(u, y, **kw):
+    import warnings
+
+    import hammerbound as hb
+
+    lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, nk=1, method="lp", **kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return hb.HammersteinBacklashIdentifier(linear=lin, procedure="one-record").fit(u, y)
+
+
+def test_a_fit_stopped_by_its_time_limit_says_limit_not_relaxation():
+    u, y, _ = one_record(60, 0.02, "uniform", 4)
+    idf = _fit(u, y, total_time_limit=0.3)
+    statuses = {s for pair in idf.intervals_.status for s in pair}
+    assert statuses <= {"limit", "not identified"} and "limit" in statuses
+
+
+def test_ends_at_the_a_priori_box_say_box():
+    """An end the relaxation leaves at the a priori box is the box's, not the record's."""
+    from hammerbound.joint.bounds import record_bounds
+
+    u, y, _ = one_record(60, 0.02, "uniform", 4)
+    pr = RecordProblem(u, y, 0.02, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, 0.02)))
+    res = record_bounds(pr, method="lp")
+    prior = pr.box[: pr.p + 4]
+    at = res.bounds == prior
+    assert at.any()  # c_l, c_r >= 0 or an assumed upper limit: some end stays there
+    for i, info in enumerate(res.infos):
+        k, e = divmod(i, 2)
+        assert (info.status == "box") == bool(at[k, e]), (info.param, info.sense)
+
+
+def test_restore_and_walk_stop_at_the_deadline(monkeypatch):
+    """The starting pool's and the incumbents' local steps honour the deadline: past it
+    they solve no LP (they overran total_time_limit by minutes before)."""
+    from oracles import GAMMA_TRUE, THETA_TRUE
+
+    from hammerbound.joint import local
+    from hammerbound.joint.problem import verify_point
+
+    u, y, x = one_record(60, 0.05, "bound", 0)
+    pr = RecordProblem(u, y, 0.05, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, 0.05)))
+    truth = verify_point(pr, np.concatenate([THETA_TRUE, GAMMA_TRUE, [x[0]]]))
+    assert truth is not None  # the truth explains its own record
+    calls = []
+    real = local.linprog
+
+    def counting(*a, **kw):
+        calls.append(kw.get("options"))
+        return real(*a, **kw)
+
+    monkeypatch.setattr(local, "linprog", counting)
+    v = pr.box.mean(axis=1)
+    assert local.restore(pr, v, deadline=time.time() - 1.0) is None
+    assert local.walk(pr, truth, 0, 1.0, deadline=time.time() - 1.0) is truth
+    assert calls == []
+    local.walk(pr, truth, 0, 1.0, max_iter=2, deadline=time.time() + 1e3)
+    assert calls and all(0 < o["time_limit"] <= local.STEP_LP_LIMIT for o in calls)

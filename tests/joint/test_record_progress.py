@@ -1,0 +1,65 @@
+"""Progress of a one-record fit (``progress=True``, ``identify --record --progress``): what
+is shown is what happened (partition generations, leaves counted to their number, every
+interval end of the exact method), on stderr only."""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+from oracles import one_record
+
+import hammerbound as hb
+from hammerbound.app.cli import main
+
+
+def _fit(u, y, method, progress, **kw):
+    lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, nk=1, method=method,
+                                   progress=progress, **kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return hb.HammersteinBacklashIdentifier(linear=lin, procedure="one-record").fit(u, y)
+
+
+def test_lp_fit_shows_partition_and_leaves_on_stderr_only(capsys):
+    u, y, _ = one_record(40, 0.02, "uniform", 2)
+    idf = _fit(u, y, "lp", True)
+    out, err = capsys.readouterr()
+    assert out == ""
+    lines = err.splitlines()
+    assert lines and all(ln.startswith("one-record: ") for ln in lines)
+    gens = [ln for ln in lines if "partition generation" in ln]
+    assert gens and gens[0].startswith("one-record: partition generation 1: 1 part(s)")
+    leaves = [ln for ln in lines if re.match(r"one-record: leaf \d+/\d+", ln)]
+    n = int(re.match(r"one-record: leaf \d+/(\d+)", leaves[0]).group(1))
+    assert len(leaves) == n and leaves[-1].startswith(f"one-record: leaf {n}/{n}")
+    _fit(u, y, "lp", False)
+    assert capsys.readouterr() == ("", "")  # default: silent
+
+
+def test_exact_fit_counts_every_interval_end(capsys):
+    u, y, _ = one_record(40, 0.02, "uniform", 2)
+    idf = _fit(u, y, "exact", True, total_time_limit=30)
+    out, err = capsys.readouterr()
+    assert out == ""
+    ends = [ln for ln in err.splitlines() if ln.startswith("one-record: interval end ")]
+    searched = int(re.match(r"one-record: interval end \d+/(\d+)", ends[0]).group(1))
+    assert len(ends) == searched <= 16  # 8 parameters x 2 ends, minus those not searched
+    statuses = [re.search(r": (\w+) (min|max), status (\w+)", ln).group(3) for ln in ends]
+    assert set(statuses) <= {"optimal", "limit"}
+    assert np.all(np.isfinite(idf.theta_bounds_))
+
+
+def test_cli_progress_goes_to_stderr_and_json_stays_clean(capsys, tmp_path):
+    import json
+
+    u, y, _ = one_record(40, 0.02, "uniform", 2)
+    path = tmp_path / "r.csv"
+    path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n"
+                                      for a, b in zip(u, y, strict=True)))
+    rc = main(["identify", "--record", str(path), "--output-bound", "0.02", "--na", "2",
+               "--nb", "2", "--nk", "1", "--method", "lp", "--progress", "--json"])
+    out, err = capsys.readouterr()
+    assert rc == 0 and json.loads(out)["procedure"] == "one-record"
+    assert "one-record: partition generation 1" in err and "one-record: leaf 1/" in err

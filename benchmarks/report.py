@@ -835,7 +835,9 @@ def main(argv=None):
            "## 4. Monte Carlo coverage\n", notes_section("coverage-intro"), section_coverage(),
            notes_section("coverage-findings"),
            "## 4b. One ordinary record (issue 26)\n", notes_section("one-record-intro"),
-           "### Soundness\n", R1.section_soundness(), "### Tightness against the two-stage "
+           "### Soundness\n", R1.section_soundness(),
+           "### What each record says about the linear block\n", R1.section_excitation(),
+           "### Tightness against the two-stage "
            "method\n", R1.section_tightness(), "### Speed\n", R1.section_speed(),
            notes_section("one-record-findings"),
            "### Real plant data: 80 valve loops\n", notes_section("valve-intro"),

@@ -97,6 +97,14 @@ def section_tightness():
         r0 = rows[0]
         inside = (sum(r["two_stage_inside"] for r in rows), sum(r["one_record_inside"]
                                                                   for r in rows))
+        lim = [r for r in rows if r.get("time_limit") and r["one_record_s"]
+               >= r["time_limit"] - 0.5]
+        stopped = (f"One-record fits stopped by their time limit of "
+                   f"{rows[0]['time_limit']:g} s (widths then are certified outer ones): "
+                   + ", ".join(f"Δη = {d}: {sum(r['deta'] == d for r in lim)} of "
+                               f"{sum(r['deta'] == d for r in rows)}"
+                               for d in sorted({r['deta'] for r in rows}))
+                   + ".\n\n") if any(r.get("time_limit") for r in rows) else ""
         parts.append(
             f"Plan `one_record_tightness{tag}`: two-stage = `hb.chapter_example` with M = "
             f"{r0['M']} amplitudes (2M = {2 * r0['M']} steady-state points) and a PRBS of "
@@ -105,7 +113,8 @@ def section_tightness():
             f"record / two-stage (issue goal: θ ≤ 1, backlash ≤ 2). Truth inside: two-stage "
             f"{inside[0]}/{len(rows)}, one record {inside[1]}/{len(rows)}.\n\n"
             + _table(["Δη", "method", "parameter", "seeds", "two-stage width",
-                      "one-record width", "ratio"], body) + "\n\n" + _limits(rows) + _env(j))
+                      "one-record width", "ratio"], body) + "\n\n" + stopped + _limits(rows)
+            + _env(j))
     return "\n\n".join(parts) + "\n" if parts else ""
 
 
@@ -120,6 +129,21 @@ def _limits(rows):
     return (f"Exact one-record fits with all 16 ends optimal: {full} of {len(ex)}"
             + (f" (time limit {', '.join(f'{v:g}' for v in lims)} s per fit; the other "
                "fits' stopped ends are certified outer bounds)" if lims else "") + ".\n\n")
+
+
+def section_excitation():
+    j = _json("one_record_excitation.json")
+    if not j or not j["rows"]:
+        return ""
+    body = [[r["signal"], r["N"], r["deta"], r["method"],
+             " / ".join(f"{w:.4g}" for w in r["width"]), "yes" if r["inside"] else "**no**",
+             f"{r['seconds']:.1f}"] for r in j["rows"]]
+    return ("`python -m benchmarks.one_record --part excitation`: the stage-2 set of θ of "
+            "each signal's record (seed 1, noise uniform) when its *true* inner signal is "
+            "given (input error 1e-6): what the record says about the linear block, "
+            "whatever the backlash step does.\n\n"
+            + _table(["signal", "N", "Δη", "method", "widths a1 / a2 / b1 / b2",
+                      "truth inside", "s"], body) + "\n\n" + _env(j) + "\n")
 
 
 def section_speed():

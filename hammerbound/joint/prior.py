@@ -105,7 +105,7 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
                          f"Either the input never moves back by more than the dead band "
                          f"(largest reversals: {rev['down']:.4g} down, {rev['up']:.4g} up), "
                          f"or the relaxation over the wide a priori box is too weak to tell: "
-                         f"a narrower gamma_box (--gamma-box) from what you know of the "
+                         f"a narrower gamma_box from what you know of the "
                          f"actuator, or method='exact', usually bounds it")
             else:
                 cause = "the record does not excite this parameter"

@@ -123,3 +123,19 @@ def test_json_of_a_record_that_bounds_nothing_is_strict_json(capsys, tmp_path):
     assert None in res["upper"]  # not identified: null, not a number
     ends = [iv.get(k) for iv in res["intervals"] for k in ("upper", "centre", "half_width")]
     assert None in ends and all(e is None or np.isfinite(e) for e in ends)
+
+
+def test_text_speaks_command_line_and_gives_the_linear_model(capsys, tmp_path):
+    """The ramp bounds no dead band but the linear block: its central model is printed, and
+    the assumptions name the command-line option, not the Python parameter."""
+    u = np.linspace(-2, 2, 60)
+    y = lfilter(B, A, own_play(u, *GAMMA)) + 0.02 * np.sin(np.arange(60))
+    path = tmp_path / "ramp.csv"
+    path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n"
+                                      for a, b in zip(u, y, strict=True)))
+    rc, out, err = _run(capsys, "identify", "--record", path, *ARGS)
+    assert rc == 0
+    assert "pass --gamma-box to change" in out and "pass gamma_box" not in out
+    assert "central model: G(z) = " in out
+    rc, out, _ = _run(capsys, "identify", "--record", path, *ARGS, "--json")
+    assert _strict(out)["transfer_function"]["den"][0] == 1.0

@@ -22,6 +22,8 @@ _TERMS = [
     (r"\brelaxation_order=(\d+)", r"--order \1"),
     (r"\brelaxation_order\b", "--order"),
     (r"\btotal_time_limit\b", "--total-time-limit"),
+    (r"(?<![-\w])gamma_box\b", "--gamma-box"),
+    (r"pass theta_box to change", "theta_box of the Python API changes it"),
     (r"(?<![-\w])time_limit\b", "--time-limit"),
     (r"\bmax_nodes\b", "--max-nodes"),
     (r"\bn_jobs\b", "--n-jobs"),
@@ -42,7 +44,11 @@ _TERMS = [
 
 def to_cli(text: str) -> str:
     """A library message in command-line terms, on one line."""
-    text = one_line(text)
+    return cli_terms(one_line(text))
+
+
+def cli_terms(text: str) -> str:
+    """``text`` with the library's parameter names in command-line terms (layout kept)."""
     for pattern, repl in _TERMS:
         text = re.sub(pattern, repl, text)
     return text

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .console import cli_terms
 from .options import CLI_NAMES, UsageError, require, stage2_kwargs
 from .printing import assumption_lines, json_text, record_line, transfer_function
 
@@ -47,8 +48,12 @@ def run_one_record(args) -> int:
         procedure="one-record", gamma_box=_gamma_box(args))
     ident.fit(data, steady_state=steady)
     given = [f"output error bound {output_bound:g} (--output-bound)"]
-    tf_text, tf = (transfer_function(ident.linear_, ident.dt_) if ident.system_ is not None
-                   else ("central model: not given (an interval is infinite)", None))
+    # the linear block's central model needs only its own intervals finite (a backlash end
+    # the record does not bound leaves the linear block's model as it is)
+    tf_text, tf = (transfer_function(ident.linear_, ident.dt_)
+                   if np.all(np.isfinite(ident.theta_bounds_))
+                   else ("central model: not given (a linear-block interval is infinite)",
+                         None))
     if args.json:
         print(json_text(_record(args, ident, data, output_bound, tf)))
         return 0
@@ -56,7 +61,7 @@ def run_one_record(args) -> int:
     if steady is not None:
         print(f"steady-state points {args.steady}: {steady[0].size}, used jointly")
     print("\n".join(assumption_lines(given, [])))
-    print(ident.summary())
+    print(cli_terms(ident.summary()))
     print(tf_text)
     return 0
 

@@ -15,6 +15,8 @@ from __future__ import annotations
 import sys
 import time
 
+from ..terminal import is_terminal
+
 __all__ = ["SearchProgress"]
 
 #: Seconds between heartbeat lines during a long fit (line mode).
@@ -27,8 +29,7 @@ class SearchProgress:
     def __init__(self, enabled: bool, file=None):
         self.enabled = bool(enabled)
         self.file = sys.stderr if file is None else file
-        isatty = getattr(self.file, "isatty", None)
-        self.bars = self.enabled and callable(isatty) and bool(isatty())
+        self.bars = self.enabled and is_terminal(self.file)
         self.t0 = time.perf_counter()
         self.n_lps = 0
         self.bar = None

@@ -14,6 +14,8 @@ from __future__ import annotations
 import sys
 import time
 
+from ..terminal import is_terminal
+
 __all__ = ["RecordProgress"]
 
 
@@ -24,8 +26,7 @@ class RecordProgress:
     def __init__(self, enabled: bool, file=None):
         self.enabled = bool(enabled)
         self.file = sys.stderr if file is None else file
-        isatty = getattr(self.file, "isatty", None)
-        self.bars = self.enabled and callable(isatty) and bool(isatty())
+        self.bars = self.enabled and is_terminal(self.file)
         self.t0 = time.perf_counter()
         self.bar = None
         self.name, self.total, self.count = "", 0, 0

@@ -24,7 +24,7 @@ def _fit(u, y, method, progress, **kw):
 
 def test_lp_fit_shows_partition_and_leaves_on_stderr_only(capsys):
     u, y, _ = one_record(40, 0.02, "uniform", 2)
-    idf = _fit(u, y, "lp", True)
+    _fit(u, y, "lp", True)
     out, err = capsys.readouterr()
     assert out == ""
     lines = err.splitlines()

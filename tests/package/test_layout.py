@@ -16,7 +16,7 @@ PKG = Path(__file__).resolve().parents[2] / "hammerbound"
 
 # bottom to top; a module may import its own layer and the layers below it
 LAYERS = [
-    {"exceptions", "tolerances", "_compat", "data", "status"},
+    {"exceptions", "tolerances", "_compat", "data", "status", "terminal"},
     {"systems", "solvers", "tables", "plotting", "timeseries", "results"},
     {"relaxations"},
     {"modelset"},

@@ -7,6 +7,8 @@ import time
 
 import numpy as np
 
+from ...terminal import is_terminal
+
 
 class _GapBar:
     """Progress of one interval end: the fraction of its initial certified gap closed.
@@ -29,8 +31,7 @@ class _GapBar:
         self.t0 = self.last = time.perf_counter()
         self.state = (0.0, float(gap0), 0)
         self.bar = None
-        isatty = getattr(sys.stderr, "isatty", None)
-        if callable(isatty) and isatty():
+        if is_terminal(sys.stderr):
             from tqdm.auto import tqdm
 
             self.bar = tqdm(total=100.0, position=position, leave=False, desc=label,

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..relaxations.result import BoundInfo, IntervalResult
+from ..solvers.highs import past
 from ..status import BOX, LIMIT, RELAXATION
 from .local import restore
 from .problem import RecordProblem
@@ -49,7 +50,7 @@ def _pool(problem, points, limit=8, deadline=None):
     at N = 300 on the chapter's record 24 points cost 11 s; 8 gave the same nodes and widths)."""
     out = []
     for x in points[-limit:]:
-        if deadline is not None and time.time() > deadline:
+        if past(deadline):
             break
         w = restore(problem, x, max_iter=12, deadline=deadline)
         if w is not None:
@@ -136,20 +137,20 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     bar = RecordProgress(progress)
     leaves = outer_leaves(problem, deadline=deadline, on_point=points.append, n_jobs=n_jobs,
                           on_stop=stops.append, progress=bar)
-    details = RecordDetails(0, False, sum(stops))
-    if details.lps_stopped:
+    lps_stopped = sum(stops)
+    if lps_stopped:
         skip = None  # an OBBT bound at a limit may be the stopped LPs', not the record's
     box = np.column_stack([np.min([b[:, 0] for b in leaves], axis=0),
                            np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]
     if method == "lp":
-        stopped = _stopped(deadline) or details.lps_stopped > 0
+        stopped = past(deadline) or lps_stopped > 0
         return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
                               infos=_at_prior(_lp_infos(names, box, stopped), problem.box),
                               method="lp",
                               time=time.perf_counter() - t0, root_box=box,
-                              details=RecordDetails(len(leaves), _stopped(deadline),
-                                                    details.lps_stopped))
+                              details=RecordDetails(len(leaves), past(deadline),
+                                                    lps_stopped))
     pool = _pool(problem, points, deadline=deadline)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
@@ -176,9 +177,5 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     return IntervalResult(tuple(names), bounds, infos=_at_prior(infos, problem.box),
                           method="exact",
                           time=time.perf_counter() - t0, root_box=box, pool=tuple(pool),
-                          details=RecordDetails(len(leaves), _stopped(deadline),
-                                                details.lps_stopped))
+                          details=RecordDetails(len(leaves), past(deadline), lps_stopped))
 
-
-def _stopped(deadline) -> bool:
-    return deadline is not None and time.time() > deadline

@@ -19,12 +19,11 @@ accepted it (an independent simulation and the fixed-theta LP of stage 2).
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
+from ..solvers.highs import past, seconds_left
 from .modes import INIT, LEFT, RIGHT, branch_forms
 from .problem import RecordProblem, Witness, verify_point
 
@@ -38,12 +37,7 @@ STEP_LP_LIMIT = 5.0
 def _lp_options(deadline):
     """scipy/HiGHS options of a step's LP: at most STEP_LP_LIMIT s, and no later than
     ``deadline`` (a :func:`time.time` stamp)."""
-    left = STEP_LP_LIMIT if deadline is None else min(STEP_LP_LIMIT, deadline - time.time())
-    return {"time_limit": max(left, 1e-3)}
-
-
-def _past(deadline) -> bool:
-    return deadline is not None and time.time() > deadline
+    return {"time_limit": seconds_left(STEP_LP_LIMIT, deadline)}
 
 
 class _Linearised:
@@ -258,7 +252,7 @@ def restore(problem: RecordProblem, v, box=None, *, max_iter=20, rho=None,
     eta = _initial_eta(problem, v)
     viol = _violation(problem, v, eta)
     for _ in range(max_iter):
-        if _past(deadline):
+        if past(deadline):
             return None
         rho = f * ref
         try:
@@ -291,7 +285,7 @@ def walk(problem: RecordProblem, witness: Witness, k: int, sense: float, box=Non
     best = witness
     rho = 0.1 * np.maximum(box[:, 1] - box[:, 0], 1e-12)
     for _ in range(max_iter):
-        if _past(deadline):
+        if past(deadline):
             break
         v0 = best.vector
         try:

@@ -11,12 +11,12 @@ record is tightened over its windows first (:mod:`.windows`).
 
 from __future__ import annotations
 
-import time
 from functools import partial
 
 import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError
+from ..solvers.highs import past
 from .prior import reversal_summary
 from .problem import RecordProblem
 from .relaxation import build_relaxation, solve_lp
@@ -77,10 +77,6 @@ def _tighten_one(problem, box, k, deadline=None, on_stop=None):
     return (None if out[0] > out[1] else out), points
 
 
-def _past(deadline) -> bool:
-    return deadline is not None and time.time() > deadline
-
-
 def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
          on_point=None, rows=None, on_stop=None):
     """Shrink the box by OBBT rounds until a round shrinks no width by more than
@@ -99,7 +95,7 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
     for _ in range(max_rounds):
         old = box.copy()
         for k in order:
-            if _past(deadline):  # every row so far is certified: stop here
+            if past(deadline):  # every row so far is certified: stop here
                 return box
             row, points = _tighten_one(problem, box, k, deadline, on_stop)
             if row is None:
@@ -115,7 +111,7 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
         w_new = box[:, 1] - box[:, 0]
         if np.all(w_old - w_new <= shrink * np.maximum(w_old, 1e-300)):
             break
-        if _past(deadline):
+        if past(deadline):
             break
     return box
 
@@ -186,16 +182,16 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
     cols = (p, p + 1, p + 2, p + 3)
     rows = [*range(problem.na), p + 4, p, p + 2, *cols]
     res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
+    # one round per generation, over the windows only on a long record
+    part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False)
     queue, out = [prior.copy()], []
     generation = 0
     while queue:
-        if _past(deadline):
+        if past(deadline):
             if progress is not None:
                 progress.line(f"partition stopped by the time limit, {len(out + queue)} "
                               "part(s) kept as they are")
             return out + queue
-        # one round per generation, over the windows only on a long record
-        part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False)
         done = map_jobs(part, [(problem, b, rows, deadline) for b in queue], n_jobs)
         generation += 1
         n_tightened, n_done = len(done), len(out)

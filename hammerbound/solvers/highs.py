@@ -146,6 +146,23 @@ def new_highs(options=None):
 silence_highs_banner()
 
 
+def past(deadline) -> bool:
+    """Whether the :func:`time.time` stamp ``deadline`` (None: no deadline) has passed."""
+    return deadline is not None and time.time() > deadline
+
+
+def seconds_left(cap, deadline=None) -> float:
+    """Seconds a solve may take: ``cap``, or less when ``deadline`` (a :func:`time.time`
+    stamp) comes first; at least 1 ms (a limit of 0 would be read as none)."""
+    left = float(cap) if deadline is None else min(float(cap), float(deadline) - time.time())
+    return max(left, 1e-3)
+
+
+def wall_stamp(stop_at):
+    """The :func:`time.time` stamp of a :func:`time.perf_counter` instant (None: None)."""
+    return None if stop_at is None else time.time() + (stop_at - time.perf_counter())
+
+
 def limit_run(h, seconds=None, deadline=None) -> float:
     """Let the next ``run()`` of the HiGHS instance ``h`` stop after ``seconds`` (default
     and most :data:`RUN_TIME_LIMIT`) or at ``deadline`` (a :func:`time.time` stamp),
@@ -156,10 +173,8 @@ def limit_run(h, seconds=None, deadline=None) -> float:
     solves; the limit is set relative to :meth:`getRunTime` instead. The option is
     reserved for this function: :class:`HighsLP` refuses it among its options.
     """
-    left = RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
-    if deadline is not None:
-        left = min(left, float(deadline) - time.time())
-    left = max(left, 1e-3)
+    cap = RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
+    left = seconds_left(cap, deadline)
     h.setOptionValue("time_limit", float(h.getRunTime() + left))
     return left
 
@@ -614,10 +629,9 @@ class HighsLP:
         if primal:
             h.setOptionValue("simplex_strategy", 4)
         # one stop for the whole solve, the recovery ladder's re-runs included
-        limit = RUN_TIME_LIMIT if self.run_limit is None else min(float(self.run_limit),
-                                                                  RUN_TIME_LIMIT)
-        self._stop = time.time() + limit if self.deadline is None else \
-            min(time.time() + limit, float(self.deadline))
+        cap = RUN_TIME_LIMIT if self.run_limit is None else min(float(self.run_limit),
+                                                                RUN_TIME_LIMIT)
+        self._stop = time.time() + seconds_left(cap, self.deadline)
         try:
             st, note = self._run()
         finally:

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ...solvers.highs import limit_run, new_highs
+from ...solvers.highs import limit_run, new_highs, wall_stamp
 from ..problem import EIVProblem
 
 
@@ -191,7 +191,7 @@ def improve(pool, start, k: int, sense: float, box, resolution: float, *,
     rho = rho0 * width
     floor = 1e-6 * width
     best = start
-    lin.deadline = None if stop_at is None else time.time() + (stop_at - time.perf_counter())
+    lin.deadline = wall_stamp(stop_at)
     for _ in range(max_lps):
         if stop_at is not None and time.perf_counter() > stop_at:
             break
@@ -243,11 +243,10 @@ def restore(pool, starts, box, *, max_lps: int = 12, stop_at: float | None = Non
         dxv = np.clip(np.asarray(dx0, dtype=float), -pr.dx_group, pr.dx_group)
         for _ in range(max_lps):
             if stop_at is not None:
-                left = stop_at - time.perf_counter()
-                if left <= 0:
+                if time.perf_counter() >= stop_at:
                     return None
                 # a degenerate elastic LP can otherwise take minutes past stop_at
-                lin.deadline = time.time() + left
+                lin.deadline = wall_stamp(stop_at)
             out = lin.solve(th, eta, dxv, 0, 1.0, box[:, 0], box[:, 1])
             if out is None:
                 break

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...exceptions import SolverError
+from ...solvers.highs import wall_stamp
 from ..problem import EIVProblem, check_theta
 from ..witness import WitnessLP, seek_feasible
 from ..witness import on_gain_plane as _on_gain_plane  # noqa: F401 - used by bnb
@@ -73,7 +74,7 @@ class _Pool:
         if self.screen is None:
             self.screen = _Screen(self.problem, working_set=self.working_set)
         if self.stop_at is not None:  # the screening LPs stop with the pool too
-            self.screen.deadline = time.time() + (self.stop_at - time.perf_counter())
+            self.screen.deadline = wall_stamp(self.stop_at)
 
     def add(self, theta) -> _Point | None:
         """Screen, then verify (nothing once ``stop_at`` has passed)."""

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...solvers.highs import wall_stamp
 from .local import improve, restore_near
 from .mccormick import shared_groups
 from .node_box import _box_end, _cap, _reduced_cost_tightening
@@ -310,7 +311,7 @@ class EndSearch:
         # incumbent leaves room for the certified bound to trail HiGHS's own value
         relax.lp.set_cutoff(ub - 0.5 * tol_eff if np.isfinite(ub) else None)
         # every solve of the node (and its working-set re-solves) stops at the search's end
-        relax.lp.deadline = time.time() + (self.stop_at - time.perf_counter())
+        relax.lp.deadline = wall_stamp(self.stop_at)
         res = _solve(relax, self.pool.screen)
         self.nodes += 1
         self.iters += res.iterations

@@ -302,13 +302,36 @@ def run_excitation(args):
 
 
 # ------------------------------------------------------------------ speed
+def gaps_over_width(b, infos):
+    """Per end (PARAMS order, min then max): the gap between the certified bound and the
+    best verified value, over the interval's width (0 at an optimal end; ``None`` for an
+    end without a witness, e.g. the relaxation's)."""
+    by_end = {(i.param, i.sense): i for i in infos}
+    out = []
+    for k, name in enumerate(PARAMS):
+        w = b[k, 1] - b[k, 0]
+        for sense in ("min", "max"):
+            g = getattr(by_end.get((name, sense)), "gap", None)
+            out.append(None if g is None or not np.isfinite(g) or not np.isfinite(w)
+                       else float(g / max(w, 1e-300)))
+    return out
+
+
 def run_speed(args):
     """Wall time per (N, output bound, seed, method) on random-step records, with the
     statuses of the 16 ends, the nodes and the widths (``--time-limit`` bounds each fit:
     the ends it stops keep certified outer bounds, status "limit")."""
     path = C.RESULTS / f"one_record_speed{args.tag}.json"
     rows = C.read_json(path)["rows"] if path.exists() else []
-    have = {(r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"]) for r in rows}
+    have = {(r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"]) for r in rows
+            if r.get("pricing", "steepest edge") == args.pricing}
+    if args.pricing == "steepest edge":  # the ablation: HiGHS's default dual pricing
+        from hammerbound.joint import relaxation
+
+        if args.n_jobs != 1:  # worker processes would import the package's options
+            raise SystemExit("--pricing 'steepest edge' needs --n-jobs 1")
+
+        relaxation.LP_OPTIONS.pop("simplex_dual_edge_weight_strategy", None)
     env = C.environment()
     for N, deta, seed, method in itertools.product(args.N, args.levels, range(args.seeds),
                                                    args.methods):
@@ -323,9 +346,11 @@ def run_speed(args):
                      "optimal_ends": sum(s == "optimal" for s in statuses),
                      "nodes": int(sum(getattr(i, "nodes", 0) or 0 for i in infos)),
                      "width": (b[:, 1] - b[:, 0]).tolist(),
+                     "gap_over_width": gaps_over_width(b, infos),
                      "inside": bool(np.all((TRUTH >= b[:, 0]) & (TRUTH <= b[:, 1]))),
                      "not_identified": notid,
-                     "loadavg": C.loadavg(), "time_limit": args.time_limit})
+                     "loadavg": C.loadavg(), "time_limit": args.time_limit,
+                     "pricing": args.pricing})
         C.log(f"speed N={N} deta={deta} seed={seed} {method}: {sec:.1f} s "
               f"{sorted(set(statuses))}")
         C.write_json({"environment": env, "rows": rows}, path)
@@ -352,6 +377,9 @@ def main(argv=None):
     ap.add_argument("--N-prbs", type=int, default=100)
     ap.add_argument("--time-limit", type=float, default=None)
     ap.add_argument("--tag", default="")
+    ap.add_argument("--pricing", choices=("devex", "steepest edge"), default="devex",
+                    help="speed: dual pricing of the one-record LPs (the package uses devex; "
+                         "'steepest edge' is HiGHS's default, for the ablation)")
     args = ap.parse_args(argv)
     if args.part == "soundness":
         args.seeds = args.seeds or (2 if args.quick else 6)

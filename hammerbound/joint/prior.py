@@ -77,8 +77,8 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
     ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)
     array marking the prior limits that are assumptions (not the chapter's model);
     ``stopped_by_time``: the time limit stopped the search; ``lps_stopped``: that many
-    relaxation LPs ended before optimality (their own time limit); either is then the
-    cause named, not the input.
+    relaxation LPs ended before optimality (their own time limit, or a solver failure);
+    either is then the cause named, not the input.
     """
     rev = reversal_summary(u)
     out = []
@@ -94,8 +94,9 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
                          "(raise total_time_limit)")
             elif lps_stopped:
                 cause = (f"{lps_stopped} LP(s) of the relaxation ended before optimality "
-                         "(each stops after at most hammerbound.joint.relaxation."
-                         "LP_TIME_LIMIT s), so the search may not have bounded it; "
+                         "(at their time limit, at most hammerbound.joint.relaxation."
+                         "LP_TIME_LIMIT s, or HiGHS could not solve them), so the search "
+                         "may not have bounded it; "
                          "rescaling the data or a narrower gamma_box may help")
             elif rev["monotone"]:
                 cause = ("the input never reverses, so only one line of the backlash is "

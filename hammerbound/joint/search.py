@@ -55,8 +55,10 @@ class EndResult:
 
 
 def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, deadline=None):
-    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis;
-    the LP stops at ``deadline`` (keeping the bound it certifies).
+    """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis
+    (an in-process HiGHS snapshot with the LP's column and row counts: a child whose
+    decided samples changed the LP's shape starts cold); the LP stops at ``deadline``
+    (keeping the bound it certifies).
 
     ``cutoff``: the dual simplex may stop once its certified bound exceeds it (status
     "cutoff", no point): a node that cannot beat the incumbent, or is infeasible, is then
@@ -67,11 +69,12 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, de
     c[rel.box_cols[col]] = sense
     lp.set_cost(c)
     lp.set_cutoff(cutoff)  # None or not finite: no cutoff
-    if basis is not None and basis[0].size == lp.c.size and basis[1].size == lp.A.shape[0]:
-        lp.set_basis(basis)
+    if basis is not None and basis[1:] == lp.A.shape[::-1]:
+        lp.restore(basis[0])
     res = solve_lp(lp)
     x = None if res.x is None else res.x[rel.box_cols]
-    return res, x, (lp.get_basis() if res.status == "optimal" else None), rel
+    snap = lp.snapshot() if res.status == "optimal" else None
+    return res, x, (None if snap is None else (snap, *lp.A.shape[::-1])), rel
 
 
 def _children(box, j, x):

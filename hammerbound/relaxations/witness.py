@@ -11,12 +11,10 @@ A weaker screen only costs time, never a bound.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.sparse as sp
 
-from ..solvers.highs import new_highs
+from ..solvers.highs import new_highs, past
 from .exact.local import colwise_structure, solve_colwise
 from .problem import EIVProblem, equation_scale
 
@@ -275,7 +273,7 @@ def _nelder_mead_starts(pr, screen, accept, starts, box, basis, max_evals, deadl
         th0 = on_gain_plane(pr, start)
 
         def f(z, th0=th0):
-            if deadline is not None and time.time() > deadline:
+            if past(deadline):
                 raise _Stop
             th = th0 + basis @ z
             out = np.maximum(box[:, 0] - th, 0.0) + np.maximum(th - box[:, 1], 0.0)

@@ -641,6 +641,17 @@ class HighsLP:
         it = int(h.getInfo().simplex_iteration_count)
         if st is None:
             return LPSolve(FAILED, -np.inf, np.nan, None, it, note=note, refused=True)
+        if primal and st == highspy.HighsModelStatus.kUnknown \
+                and not (past(self.deadline) or past(self._stop)):
+            # the primal simplex sometimes ends with model status "Unknown" (seen on the
+            # one-record relaxation at N = 300, Delta eta = 0.3: 1 to 3 of about 1000
+            # re-solves, with either dual pricing; the dual simplex from that basis ends
+            # the same way at once); solved from scratch by the dual simplex
+            h.clearSolver()
+            res = self.solve()
+            res.note = ("the primal simplex ended with model status 'Unknown'; re-solved "
+                        "from scratch" + (f"; {res.note}" if res.note else ""))
+            return res
         res = self._result(st, it)
         res.note = note
         return res

@@ -142,6 +142,51 @@ def test_highs_lp_recovers_or_says_what_happened(monkeypatch):
     assert "1 row bound(s) crossed (first: row 0, 3 > 1)" in bad.defects()
 
 
+UNKNOWN = (highspy.HighsStatus.kWarning, highspy.HighsModelStatus.kUnknown)
+
+
+def _option(h, name):
+    out = h.getOptionValue(name)  # (status, value) in highspy >= 1.8
+    return out[1] if isinstance(out, tuple) else out
+
+
+def _unknown_on_primal(monkeypatch):
+    """Primal simplex runs end with model status "Unknown" (as HiGHS did on 1-3 of ~1000
+    re-solves of the one-record relaxation at N = 300, Delta eta = 0.3)."""
+    run = _highs.HighsLP._run_highs
+    calls = []
+
+    def run_or_unknown(self):
+        primal = _option(self.h, "simplex_strategy") == 4
+        calls.append("primal" if primal else "dual")
+        return UNKNOWN if primal else run(self)
+
+    monkeypatch.setattr(_highs.HighsLP, "_run_highs", run_or_unknown)
+    return calls
+
+
+def test_a_primal_resolve_ending_unknown_is_solved_again_by_the_dual(monkeypatch):
+    lp = _tiny_lp()
+    assert lp.solve().status == "optimal"
+    lp.set_cost(np.array([2.0, 1.0]))  # min 2x + y: optimum 1 at (0, 1)
+    calls = _unknown_on_primal(monkeypatch)
+    res = lp.solve(primal=True)
+    assert calls == ["primal", "dual"]
+    assert res.status == "optimal" and 1.0 - 1e-9 <= res.bound <= 1.0
+    assert "'Unknown'" in res.note and "from scratch" in res.note
+    assert _option(lp.h, "simplex_strategy") != 4  # the primal option was restored
+
+
+def test_no_second_solve_past_the_deadline(monkeypatch):
+    lp = _tiny_lp()
+    lp.solve()
+    calls = _unknown_on_primal(monkeypatch)
+    lp.deadline = 0.0  # long past
+    res = lp.solve(primal=True)
+    assert calls == ["primal"]
+    assert res.status == "failed" and res.bound <= 1.0
+
+
 def test_lp_method_raises_what_happened_when_every_attempt_is_refused(monkeypatch):
     data, _ = chapter_eiv_data(N=30, seed=1)
     pr = EIVProblem(**data)

@@ -71,6 +71,7 @@ import time
 import numpy as np
 
 from ...exceptions import EmptyFeasibleSetError
+from ...solvers.highs import past
 from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem, unit_scale
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
@@ -284,7 +285,7 @@ def _polished(problem, jobs, outs, tol, options, deadline):
     :func:`.local.polish`; each end's value may worsen only by what is left of its
     tolerance."""
     witnesses = [o.witness for o in outs]
-    if not options.polish or (deadline is not None and time.time() >= deadline):
+    if not options.polish or past(deadline):
         return witnesses
     keep = [(k, s, tol * max(1.0, abs(o.value)) - (o.value - o.bound)
              if o.status == "optimal" else np.inf) for (k, s), o in zip(jobs, outs, strict=True)]

@@ -15,6 +15,7 @@ import time
 import numpy as np
 
 from ...exceptions import EmptyFeasibleSetError
+from ...solvers.highs import past
 from .mccormick import McCormickRelaxation
 from .points import _Screen
 from .working_set import WorkingSetRelaxation
@@ -160,6 +161,6 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
         w_new = box[:, 1] - box[:, 0]
         if np.all(w_new >= (1 - rel_improve) * w_old):
             break
-        if deadline is not None and time.time() >= deadline:
+        if past(deadline):
             break
     return box, roots, thetas, ws

@@ -58,11 +58,38 @@ def _pool(problem, points, limit=8, deadline=None):
     return out
 
 
+def _workers(n_jobs, n):
+    """Processes that :func:`~.tighten.map_jobs` runs ``n`` jobs on."""
+    if n_jobs == 1 or n < 2:
+        return 1
+    from joblib import effective_n_jobs
+
+    return max(1, min(effective_n_jobs(n_jobs), n))
+
+
 def _best_start(pool, k, sense):
     return min(pool, key=lambda w: sense * w.vector[k]) if pool else None
 
 
-def _end_job(problem, box, k, sense, start, kw):
+def end_share(deadline, i, ends, workers, now=None):
+    """Seconds the ``i``-th of ``ends`` interval-end searches (0-based, started in order on
+    ``workers`` processes) may take before a fit's ``deadline``: what is left, shared by
+    the rounds of ends still to run (this one included), so that time an end does not use
+    goes to the ends after it. Without the share the first ends took the whole deadline
+    and the others stayed at their OBBT bounds (measured: N = 300, Delta eta = 0.3, 60 s:
+    median gap 48 % of the interval's width)."""
+    now = time.time() if now is None else now
+    rounds = -(-(ends - i) // max(1, workers))
+    return max(0.0, deadline - now) / max(1, rounds)
+
+
+def _end_job(problem, box, k, sense, start, kw, order=None):
+    """One end's search; ``order = (i, ends, workers)`` gives it its share of the time
+    left before ``kw["deadline"]`` (:func:`end_share`)."""
+    if order is not None and kw.get("deadline") is not None:
+        share = end_share(kw["deadline"], *order)
+        limit = kw.get("time_limit")
+        kw = {**kw, "time_limit": share if limit is None else min(limit, share)}
     return search_end(problem, box, k, sense, start, **kw)
 
 
@@ -156,8 +183,10 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
     skipped = {(k, s) for k, s in jobs
                if skip is not None and skip(k, s, box[k, 0] if s > 0 else box[k, 1])}
-    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw) for k, s in jobs
-            if (k, s) not in skipped]
+    todo = [(k, s) for k, s in jobs if (k, s) not in skipped]
+    workers = _workers(n_jobs, len(todo))
+    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw, (i, len(todo), workers))
+            for i, (k, s) in enumerate(todo)]
     bar.start("interval end", len(args))
     labels = iter(f"{names[a[2]]} {'min' if a[3] > 0 else 'max'}" for a in args)
     found = iter(map_jobs(_end_job, args, n_jobs, each=lambda r: bar.done(

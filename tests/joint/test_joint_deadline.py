@@ -101,3 +101,36 @@ def test_restore_and_walk_stop_at_the_deadline(monkeypatch):
     assert calls == []
     local.walk(pr, truth, 0, 1.0, max_iter=2, deadline=time.time() + 1e3)
     assert calls and all(0 < o["time_limit"] <= local.STEP_LP_LIMIT for o in calls)
+
+
+def test_end_share_gives_what_is_left_to_the_rounds_still_to_run():
+    from hammerbound.joint.bounds import end_share
+
+    assert end_share(100.0, 0, 16, 2, now=40.0) == 60.0 / 8  # 8 rounds of 2 ends
+    assert end_share(100.0, 15, 16, 2, now=40.0) == 60.0  # the last end: all that is left
+    assert end_share(100.0, 14, 16, 2, now=40.0) == 60.0  # the last round has two ends
+    assert end_share(100.0, 0, 16, 1, now=40.0) == 60.0 / 16
+    assert end_share(100.0, 3, 16, 2, now=120.0) == 0.0  # past the deadline
+
+
+def test_every_end_gets_a_share_of_the_deadline(monkeypatch):
+    """With a fit deadline, each interval end's search is limited to its share of the
+    time left (before, the first ends took it all and the rest were never searched)."""
+    from hammerbound.joint import bounds
+
+    u, y, _ = one_record(60, 0.05, "uniform", 1)
+    pr = RecordProblem(u, y, 0.05, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, 0.05)))
+    seen = []
+    real = bounds.search_end
+
+    def recording(problem, leaves, k, sense, start=None, **kw):
+        seen.append((time.time(), kw["time_limit"]))
+        return real(problem, leaves, k, sense, start, **{**kw, "max_nodes": 1})
+
+    monkeypatch.setattr(bounds, "search_end", recording)
+    deadline = time.time() + 600.0
+    bounds.record_bounds(pr, method="exact", deadline=deadline, n_jobs=1)
+    assert len(seen) == 2 * (pr.p + 4)  # no skip: every end is searched
+    for i, (t, limit) in enumerate(seen):
+        share = (deadline - t) / (len(seen) - i)
+        assert 0.0 < limit <= share + 1.0, (i, limit, share)

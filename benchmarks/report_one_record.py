@@ -154,22 +154,32 @@ def section_excitation():
                       "truth inside", "s"], body) + "\n\n" + _env(j) + "\n")
 
 
+def _gaps(r):
+    """Median and largest gap of an exact fit's ends (bound to best verified value) over
+    the interval's width; "–" when the run did not record it."""
+    g = [v for v in r.get("gap_over_width", []) if v is not None]
+    return f"{np.median(g):.3f} / {max(g):.3f}" if g else "–"
+
+
 def section_speed():
     parts = []
-    for tag in ("_n300", "_n1000", "", "_quick"):
+    for tag in ("_s35", "_s35_pricing", "_n300", "_n1000", "", "_quick"):
         j = _json(f"one_record_speed{tag}.json")
         if not j or not j["rows"]:
             continue
-        body = [[r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"], r["n_jobs"],
+        body = [[r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"],
+                 r.get("pricing", "steepest edge"), r["n_jobs"],
                  f"{r['seconds']:.1f}", ", ".join(r["statuses"]),
                  r.get("optimal_ends", "–") if r["method"] == "exact" else "–",
+                 _gaps(r) if r["method"] == "exact" else "–",
                  r.get("nodes", "–") if r["method"] == "exact" else "–",
                  "–" if r.get("time_limit") is None else f"{r['time_limit']:g}",
                  "yes" if r["inside"] else "**no**", r["loadavg"]]
                 for r in j["rows"]]
-        parts.append(_table(["N", "Δη", "seed", "method", "jobs", "wall s", "statuses",
-                             "optimal ends (of 16)", "nodes", "time limit s",
-                             "truth inside", "load"], body) + "\n\n" + _env(j))
+        parts.append(f"`one_record_speed{tag}`\n\n" + _table(
+            ["N", "Δη", "seed", "method", "LP pricing", "jobs", "wall s", "statuses",
+             "optimal ends (of 16)", "gap / width, median / max", "nodes", "time limit s",
+             "truth inside", "load"], body) + "\n\n" + _env(j))
     return "\n\n".join(parts) + "\n" if parts else "_No results (`--part speed` not run)._\n"
 
 

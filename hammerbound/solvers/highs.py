@@ -115,6 +115,11 @@ def silence_highs_banner() -> None:
         _BANNER_DONE = True
 
 
+def _joined(*notes) -> str:
+    """Non-empty notes joined by "; "."""
+    return "; ".join(n for n in notes if n)
+
+
 def new_highs(options=None):
     """A ``highspy.Highs`` instance that prints nothing (banner silenced, ``output_flag`` off).
 
@@ -623,15 +628,20 @@ class HighsLP:
         bound ``-inf`` and ``refused=True`` -- the caller keeps the bound it already has
         (a branch-and-bound node its parent's, OBBT its box) -- and ``note`` says why.
         """
+        # one stop for the whole solve: the recovery ladder's re-runs and the re-solves
+        # below (:meth:`_solve_once`) included
+        cap = RUN_TIME_LIMIT if self.run_limit is None else min(float(self.run_limit),
+                                                                RUN_TIME_LIMIT)
+        self._stop = time.time() + seconds_left(cap, self.deadline)
+        return self._solve_once(primal)
+
+    def _solve_once(self, primal) -> LPSolve:
+        """One solve before :attr:`_stop` (set by :meth:`solve`)."""
         h = self.h
         if np.any(self.lb > self.ub):
             return LPSolve(INFEASIBLE, np.inf, np.nan, None, 0)
         if primal:
             h.setOptionValue("simplex_strategy", 4)
-        # one stop for the whole solve, the recovery ladder's re-runs included
-        cap = RUN_TIME_LIMIT if self.run_limit is None else min(float(self.run_limit),
-                                                                RUN_TIME_LIMIT)
-        self._stop = time.time() + seconds_left(cap, self.deadline)
         try:
             st, note = self._run()
         finally:
@@ -641,19 +651,26 @@ class HighsLP:
         it = int(h.getInfo().simplex_iteration_count)
         if st is None:
             return LPSolve(FAILED, -np.inf, np.nan, None, it, note=note, refused=True)
-        if primal and st == highspy.HighsModelStatus.kUnknown \
-                and not (past(self.deadline) or past(self._stop)):
-            # the primal simplex sometimes ends with model status "Unknown" (seen on the
-            # one-record relaxation at N = 300, Delta eta = 0.3: 1 to 3 of about 1000
-            # re-solves, with either dual pricing; the dual simplex from that basis ends
-            # the same way at once); solved from scratch by the dual simplex
-            h.clearSolver()
-            res = self.solve()
-            res.note = ("the primal simplex ended with model status 'Unknown'; re-solved "
-                        "from scratch" + (f"; {res.note}" if res.note else ""))
-            return res
+        if primal and st == highspy.HighsModelStatus.kUnknown:
+            return self._after_unknown(it, note)
         res = self._result(st, it)
         res.note = note
+        return res
+
+    def _after_unknown(self, it, note) -> LPSolve:
+        """A primal re-solve that ended with model status "Unknown" (seen on the one-record
+        relaxation at N = 300, Delta eta = 0.3: 1 to 3 of about 1000 re-solves, with either
+        dual pricing; the dual simplex from that basis ends the same way at once): solved
+        again from scratch by the dual simplex while time is left, before the same stop."""
+        what = "the primal simplex ended with model status 'Unknown'"
+        if past(self.deadline) or past(self._stop):
+            res = self._result(highspy.HighsModelStatus.kUnknown, it)
+            res.note = _joined(note, f"{what}; no time left to solve it again")
+            return res
+        self.h.clearSolver()
+        res = self._solve_once(False)
+        res.iterations += it
+        res.note = _joined(note, f"{what}; re-solved from scratch", res.note)
         return res
 
     def _result(self, st, it) -> LPSolve:
@@ -670,7 +687,7 @@ class HighsLP:
             if self._unscaled and not val - bound <= 1e-5 * (1.0 + abs(val)):
                 self._unscaled, self.rescaled = False, True
                 h.setOptionValue("simplex_scale_strategy", 2)  # HiGHS's default
-                return self.solve()
+                return self._solve_once(False)
             return LPSolve(OPTIMAL, bound, val, x, it, r)
         if st == MS.kObjectiveBound:
             sol = h.getSolution()

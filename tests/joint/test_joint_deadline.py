@@ -113,6 +113,17 @@ def test_end_share_gives_what_is_left_to_the_rounds_still_to_run():
     assert end_share(100.0, 3, 16, 2, now=120.0) == 0.0  # past the deadline
 
 
+def test_workers_are_the_processes_map_jobs_runs_on():
+    from joblib import effective_n_jobs
+
+    from hammerbound.joint.bounds import _workers
+
+    assert _workers(1, 16) == 1 and _workers(4, 1) == 1
+    assert _workers(4, 3) == min(effective_n_jobs(4), 3)
+    assert _workers(-1, 16) == min(effective_n_jobs(-1), 16)
+    assert _workers(2, 16) == 2
+
+
 def test_every_end_gets_a_share_of_the_deadline(monkeypatch):
     """With a fit deadline, each interval end's search is limited to its share of the
     time left (before, the first ends took it all and the rest were never searched)."""

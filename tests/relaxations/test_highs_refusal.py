@@ -17,6 +17,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from fractions import Fraction
 from pathlib import Path
 
@@ -150,16 +151,20 @@ def _option(h, name):
     return out[1] if isinstance(out, tuple) else out
 
 
-def _unknown_on_primal(monkeypatch):
-    """Primal simplex runs end with model status "Unknown" (as HiGHS did on 1-3 of ~1000
-    re-solves of the one-record relaxation at N = 300, Delta eta = 0.3)."""
+def _unknown_on_primal(monkeypatch, seconds=0.0):
+    """Primal simplex runs end with model status "Unknown" after ``seconds`` (as HiGHS did
+    on 1-3 of ~1000 re-solves of the one-record relaxation at N = 300, Delta eta = 0.3).
+    Records each run: its kind, whether it started from a basis, and its stop time."""
     run = _highs.HighsLP._run_highs
     calls = []
 
     def run_or_unknown(self):
         primal = _option(self.h, "simplex_strategy") == 4
-        calls.append("primal" if primal else "dual")
-        return UNKNOWN if primal else run(self)
+        calls.append(("primal" if primal else "dual", self.h.getBasis().valid, self._stop))
+        if primal:
+            time.sleep(seconds)
+            return UNKNOWN
+        return run(self)
 
     monkeypatch.setattr(_highs.HighsLP, "_run_highs", run_or_unknown)
     return calls
@@ -171,20 +176,39 @@ def test_a_primal_resolve_ending_unknown_is_solved_again_by_the_dual(monkeypatch
     lp.set_cost(np.array([2.0, 1.0]))  # min 2x + y: optimum 1 at (0, 1)
     calls = _unknown_on_primal(monkeypatch)
     res = lp.solve(primal=True)
-    assert calls == ["primal", "dual"]
+    assert [c[:2] for c in calls] == [("primal", True), ("dual", False)]  # from scratch
     assert res.status == "optimal" and 1.0 - 1e-9 <= res.bound <= 1.0
     assert "'Unknown'" in res.note and "from scratch" in res.note
     assert _option(lp.h, "simplex_strategy") != 4  # the primal option was restored
 
 
-def test_no_second_solve_past_the_deadline(monkeypatch):
+def test_the_second_solve_keeps_the_first_ones_stop(monkeypatch):
+    """One time budget for the whole solve: the dual re-solve does not start a new one."""
+    lp = _highs.HighsLP(sp.csc_matrix(np.array([[1.0, 1.0]])), np.array([1.0]),
+                        np.array([3.0]), np.zeros(2), np.full(2, 2.0),
+                        c=np.array([1.0, 2.0]), run_limit=5.0)
+    lp.solve()
+    calls = _unknown_on_primal(monkeypatch, seconds=0.3)
+    res = lp.solve(primal=True)
+    assert [c[0] for c in calls] == ["primal", "dual"]
+    assert calls[1][2] == calls[0][2]  # the same stop time
+    assert res.status == "optimal"
+
+
+@pytest.mark.parametrize("how", ["deadline", "run limit"])
+def test_no_second_solve_when_no_time_is_left(monkeypatch, how):
     lp = _tiny_lp()
     lp.solve()
-    calls = _unknown_on_primal(monkeypatch)
-    lp.deadline = 0.0  # long past
+    if how == "deadline":
+        lp.deadline = 0.0  # long past
+        calls = _unknown_on_primal(monkeypatch)
+    else:
+        lp.run_limit = 0.2
+        calls = _unknown_on_primal(monkeypatch, seconds=0.3)  # the primal run uses it all
     res = lp.solve(primal=True)
-    assert calls == ["primal"]
+    assert [c[0] for c in calls] == ["primal"]
     assert res.status == "failed" and res.bound <= 1.0
+    assert "'Unknown'" in res.note and "no time left" in res.note
 
 
 def test_lp_method_raises_what_happened_when_every_attempt_is_refused(monkeypatch):

@@ -342,7 +342,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.backlash_ = BacklashBoxView(f.gamma_bounds, (data.u.min(), data.u.max()),
                                          sampler)
         self.gamma_bounds_, self.theta_bounds_ = f.gamma_bounds, f.theta_bounds
-        self.bound_info_ = tuple(f.result.infos)
+        # the search's ends are theta's then the backlash's: here in the order of bounds_
+        two_p = 2 * f.problem.p
+        self.bound_info_ = tuple(f.result.infos[two_p:]) + tuple(f.result.infos[:two_p])
         self.intervals_ = IntervalSet(GAMMA_NAMES + self.linear_.param_names_,
                                       np.vstack([f.gamma_bounds, f.theta_bounds]),
                                       infos=self.bound_info_, method="one-record")

@@ -635,8 +635,9 @@ class HighsLP:
         self._stop = time.time() + seconds_left(cap, self.deadline)
         return self._solve_once(primal)
 
-    def _solve_once(self, primal) -> LPSolve:
-        """One solve before :attr:`_stop` (set by :meth:`solve`)."""
+    def _solve_once(self, primal, retry=True) -> LPSolve:
+        """One solve before :attr:`_stop` (set by :meth:`solve`); ``retry``: a run that
+        ends with model status "Unknown" is solved again (:meth:`_after_unknown`)."""
         h = self.h
         if np.any(self.lb > self.ub):
             return LPSolve(INFEASIBLE, np.inf, np.nan, None, 0)
@@ -651,26 +652,30 @@ class HighsLP:
         it = int(h.getInfo().simplex_iteration_count)
         if st is None:
             return LPSolve(FAILED, -np.inf, np.nan, None, it, note=note, refused=True)
-        if primal and st == highspy.HighsModelStatus.kUnknown:
-            return self._after_unknown(it, note)
+        if retry and st == highspy.HighsModelStatus.kUnknown:
+            return self._after_unknown(primal, it, note)
         res = self._result(st, it)
         res.note = note
         return res
 
-    def _after_unknown(self, it, note) -> LPSolve:
-        """A primal re-solve that ended with model status "Unknown" (seen on the one-record
-        relaxation at N = 300, Delta eta = 0.3: 1 to 3 of about 1000 re-solves, with either
-        dual pricing; the dual simplex from that basis ends the same way at once): solved
-        again from scratch by the dual simplex while time is left, before the same stop."""
-        what = "the primal simplex ended with model status 'Unknown'"
+    def _after_unknown(self, primal, it, note) -> LPSolve:
+        """A run that ended with model status "Unknown", solved once more from scratch by
+        the other simplex while time is left, before the same stop. Seen on the
+        one-record relaxation: primal re-solves at N = 300, Delta eta = 0.3 (1 to 3 of about
+        1000, with either dual pricing; the dual simplex from that basis ends the same way
+        at once), and a cold dual solve in 1 of 10465 LPs of an N = 300 fit whose every
+        end then said "limit"."""
+        kind, other = ("primal", "dual") if primal else ("dual", "primal")
+        what = f"the {kind} simplex ended with model status 'Unknown'"
         if past(self.deadline) or past(self._stop):
             res = self._result(highspy.HighsModelStatus.kUnknown, it)
             res.note = _joined(note, f"{what}; no time left to solve it again")
             return res
         self.h.clearSolver()
-        res = self._solve_once(False)
+        res = self._solve_once(not primal, retry=False)
         res.iterations += it
-        res.note = _joined(note, f"{what}; re-solved from scratch", res.note)
+        res.note = _joined(note, f"{what}; re-solved from scratch with the {other} simplex",
+                           res.note)
         return res
 
     def _result(self, st, it) -> LPSolve:

@@ -95,6 +95,12 @@ def test_truth_inside_lp_short_record(noise):
     assert np.all(np.isfinite(f.theta_bounds_))
     assert f.theta_bounds_[0, 1] - f.theta_bounds_[0, 0] < 2.0
     assert f.contains(GAMMA, THETA)
+    # one order from bounds_ down: bound_info_ and intervals_.infos follow param_names_
+    names = [i.param for i in f.bound_info_]
+    assert names[::2] == names[1::2] == list(f.param_names_)
+    assert [i.param for i in f.intervals_.infos] == names
+    for k, info in enumerate(f.bound_info_):  # each end's bound is the reported one
+        assert info.bound == b[k // 2, k % 2] or not np.isfinite(b[k // 2, k % 2])
 
 
 @pytest.mark.deep

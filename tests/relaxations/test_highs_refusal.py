@@ -195,6 +195,28 @@ def test_the_second_solve_keeps_the_first_ones_stop(monkeypatch):
     assert res.status == "optimal"
 
 
+def test_a_dual_solve_ending_unknown_is_solved_again_by_the_primal_once(monkeypatch):
+    run = _highs.HighsLP._run_highs
+    calls = []
+
+    def dual_unknown(self):
+        primal = _option(self.h, "simplex_strategy") == 4
+        calls.append("primal" if primal else "dual")
+        return run(self) if primal else UNKNOWN
+
+    monkeypatch.setattr(_highs.HighsLP, "_run_highs", dual_unknown)
+    res = _tiny_lp().solve()
+    assert calls == ["dual", "primal"]
+    assert res.status == "optimal" and 1.0 - 1e-9 <= res.bound <= 1.0
+    assert "dual simplex ended with model status 'Unknown'" in res.note
+    assert "with the primal simplex" in res.note
+    # both simplex codes ending "Unknown": one retry, then "failed" (a dual bound if any)
+    calls.clear()
+    monkeypatch.setattr(_highs.HighsLP, "_run_highs", lambda self: calls.append(1) or UNKNOWN)
+    res = _tiny_lp().solve()
+    assert len(calls) == 2 and res.status == "failed" and res.bound <= 1.0
+
+
 @pytest.mark.parametrize("how", ["deadline", "run limit"])
 def test_no_second_solve_when_no_time_is_left(monkeypatch, how):
     lp = _tiny_lp()

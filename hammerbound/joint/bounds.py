@@ -29,7 +29,7 @@ from .local import restore
 from .problem import RecordProblem
 from .progress import RecordProgress
 from .search import search_end
-from .tighten import map_jobs, outer_leaves
+from .tighten import map_jobs, outer_leaves, workers
 
 __all__ = ["RecordDetails", "record_bounds"]
 
@@ -56,15 +56,6 @@ def _pool(problem, points, limit=8, deadline=None):
         if w is not None:
             out.append(w)
     return out
-
-
-def _workers(n_jobs, n):
-    """Processes that :func:`~.tighten.map_jobs` runs ``n`` jobs on."""
-    if n_jobs == 1 or n < 2:
-        return 1
-    from joblib import effective_n_jobs
-
-    return max(1, min(effective_n_jobs(n_jobs), n))
 
 
 def _best_start(pool, k, sense):
@@ -184,11 +175,11 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     skipped = {(k, s) for k, s in jobs
                if skip is not None and skip(k, s, box[k, 0] if s > 0 else box[k, 1])}
     todo = [(k, s) for k, s in jobs if (k, s) not in skipped]
-    workers = _workers(n_jobs, len(todo))
-    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw, (i, len(todo), workers))
+    procs = workers(n_jobs, len(todo))
+    args = [(problem, leaves, k, s, _best_start(pool, k, s), kw, (i, len(todo), procs))
             for i, (k, s) in enumerate(todo)]
     bar.start("interval end", len(args))
-    labels = iter(f"{names[a[2]]} {'min' if a[3] > 0 else 'max'}" for a in args)
+    labels = iter(f"{names[k]} {'min' if s > 0 else 'max'}" for k, s in todo)
     found = iter(map_jobs(_end_job, args, n_jobs, each=lambda r: bar.done(
         f"{next(labels)}, status {r.status}, {r.nodes} nodes")))
     bar.close()

@@ -116,16 +116,27 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
     return box
 
 
+def workers(n_jobs, n) -> int:
+    """Processes that :func:`map_jobs` runs ``n`` jobs on with ``n_jobs`` (1: in this
+    process)."""
+    if n_jobs == 1 or n < 2:
+        return 1
+    from joblib import effective_n_jobs
+
+    return max(1, min(effective_n_jobs(n_jobs), n))
+
+
 def map_jobs(fn, items, n_jobs, each=None):
-    """``[fn(*a) for a in items]``, over ``n_jobs`` processes (joblib) when that pays;
-    ``each(result)`` is called in this process as each result arrives (in order)."""
-    if n_jobs == 1 or len(items) < 2:
+    """``[fn(*a) for a in items]``, over :func:`workers` processes (joblib) when that
+    pays; ``each(result)`` is called in this process as each result arrives (in order)."""
+    procs = workers(n_jobs, len(items))
+    if procs == 1:
         results = (fn(*a) for a in items)
     else:
         from joblib import Parallel, delayed
 
-        results = Parallel(n_jobs=min(n_jobs, len(items)) if n_jobs > 0 else n_jobs,
-                           return_as="generator")(delayed(fn)(*a) for a in items)
+        results = Parallel(n_jobs=procs, return_as="generator")(
+            delayed(fn)(*a) for a in items)
     out = []
     for r in results:
         out.append(r)

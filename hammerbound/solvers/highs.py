@@ -168,6 +168,11 @@ def wall_stamp(stop_at):
     return None if stop_at is None else time.time() + (stop_at - time.perf_counter())
 
 
+def _run_cap(seconds=None) -> float:
+    """A run's own limit: ``seconds``, at most :data:`RUN_TIME_LIMIT` (None: that)."""
+    return RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
+
+
 def limit_run(h, seconds=None, deadline=None) -> float:
     """Let the next ``run()`` of the HiGHS instance ``h`` stop after ``seconds`` (default
     and most :data:`RUN_TIME_LIMIT`) or at ``deadline`` (a :func:`time.time` stamp),
@@ -178,8 +183,7 @@ def limit_run(h, seconds=None, deadline=None) -> float:
     solves; the limit is set relative to :meth:`getRunTime` instead. The option is
     reserved for this function: :class:`HighsLP` refuses it among its options.
     """
-    cap = RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
-    left = seconds_left(cap, deadline)
+    left = seconds_left(_run_cap(seconds), deadline)
     h.setOptionValue("time_limit", float(h.getRunTime() + left))
     return left
 
@@ -630,9 +634,7 @@ class HighsLP:
         """
         # one stop for the whole solve: the recovery ladder's re-runs and the re-solves
         # below (:meth:`_solve_once`) included
-        cap = RUN_TIME_LIMIT if self.run_limit is None else min(float(self.run_limit),
-                                                                RUN_TIME_LIMIT)
-        self._stop = time.time() + seconds_left(cap, self.deadline)
+        self._stop = time.time() + seconds_left(_run_cap(self.run_limit), self.deadline)
         return self._solve_once(primal)
 
     def _solve_once(self, primal, retry=True) -> LPSolve:

@@ -116,12 +116,12 @@ def test_end_share_gives_what_is_left_to_the_rounds_still_to_run():
 def test_workers_are_the_processes_map_jobs_runs_on():
     from joblib import effective_n_jobs
 
-    from hammerbound.joint.bounds import _workers
+    from hammerbound.joint.tighten import workers
 
-    assert _workers(1, 16) == 1 and _workers(4, 1) == 1
-    assert _workers(4, 3) == min(effective_n_jobs(4), 3)
-    assert _workers(-1, 16) == min(effective_n_jobs(-1), 16)
-    assert _workers(2, 16) == 2
+    assert workers(1, 16) == 1 and workers(4, 1) == 1
+    assert workers(4, 3) == min(effective_n_jobs(4), 3)
+    assert workers(-1, 16) == min(effective_n_jobs(-1), 16)
+    assert workers(2, 16) == 2
 
 
 def test_every_end_gets_a_share_of_the_deadline(monkeypatch):

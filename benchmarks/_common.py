@@ -7,6 +7,7 @@ import json
 import os
 import platform
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -33,6 +34,40 @@ METHODS = {
     "moment1-2level": dict(method="moment", relaxation_order=1, inner_signal="two-level"),
     "exact-2level": dict(method="exact", inner_signal="two-level"),
 }
+
+
+class PeakRSS:
+    """Peak resident memory (MB) of this process and its children, sampled in a thread."""
+
+    def __init__(self, period=0.05):
+        import psutil
+
+        self.proc, self.period, self.peak = psutil.Process(), period, 0.0
+        self._stop = threading.Event()
+        self._t = threading.Thread(target=self._run, daemon=True)
+
+    def _rss(self):
+        total = 0
+        for p in [self.proc, *self.proc.children(recursive=True)]:
+            try:
+                total += p.memory_info().rss
+            except Exception:  # noqa: BLE001 - a worker that just exited
+                pass
+        return total / 2**20
+
+    def _run(self):
+        while not self._stop.is_set():
+            self.peak = max(self.peak, self._rss())
+            time.sleep(self.period)
+
+    def __enter__(self):
+        self.base = self._rss()
+        self._t.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._t.join()
 
 
 def environment() -> dict:

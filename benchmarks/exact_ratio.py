@@ -31,7 +31,6 @@ import time
 import numpy as np
 
 from benchmarks import _common as C
-from benchmarks.exact_scaling import _PeakRSS
 from hammerbound.relaxations import exact_bounds, lp_bounds
 
 TOL = 1e-4
@@ -51,7 +50,7 @@ def _row(problem, n_jobs, repeat):
         # the LP takes 0.01-0.4 s: its median over 5 runs is the denominator
         lp = [_timed(lambda: lp_bounds(problem, check_box=False))[1:] for _ in range(5)]
         lp_cpu, lp_wall = (float(np.median(v)) for v in zip(*lp, strict=True))
-        with _PeakRSS() as m:
+        with C.PeakRSS() as m:
             res, ex_cpu, ex_wall = _timed(
                 lambda: exact_bounds(problem, tol=TOL, n_jobs=n_jobs, check_box=False))
         peaks.append((m.peak, m.base))

@@ -18,7 +18,6 @@ and the old/new ratio is measured in the same run.
 from __future__ import annotations
 
 import argparse
-import threading
 import time
 
 import numpy as np
@@ -26,40 +25,6 @@ import numpy as np
 import hammerbound as hb
 from benchmarks import _common as C
 from hammerbound.relaxations.exact.bnb import exact_bounds
-
-
-class _PeakRSS:
-    """Peak resident memory (MB) of this process and its children, sampled in a thread."""
-
-    def __init__(self, period=0.05):
-        import psutil
-
-        self.proc, self.period, self.peak = psutil.Process(), period, 0.0
-        self._stop = threading.Event()
-        self._t = threading.Thread(target=self._run, daemon=True)
-
-    def _rss(self):
-        total = 0
-        for p in [self.proc, *self.proc.children(recursive=True)]:
-            try:
-                total += p.memory_info().rss
-            except Exception:  # noqa: BLE001 - a worker that just exited
-                pass
-        return total / 2**20
-
-    def _run(self):
-        while not self._stop.is_set():
-            self.peak = max(self.peak, self._rss())
-            time.sleep(self.period)
-
-    def __enter__(self):
-        self.base = self._rss()
-        self._t.start()
-        return self
-
-    def __exit__(self, *exc):
-        self._stop.set()
-        self._t.join()
 
 
 def _problem(N, deta):
@@ -73,7 +38,7 @@ def _problem(N, deta):
 
 
 def _run(pr, working_set, n_jobs, tol):
-    with _PeakRSS() as mem:
+    with C.PeakRSS() as mem:
         t = time.perf_counter()
         res = exact_bounds(pr, tol=tol, n_jobs=n_jobs, working_set=working_set)
         wall = time.perf_counter() - t

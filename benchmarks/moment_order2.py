@@ -10,12 +10,14 @@ box and fallback):
 * ``exact_bounds(tol=1e-6)`` as reference.
 
 Reported per run: conic size (moment variables, rows, PSD blocks by side, nonzeros of A),
-build time, wall time, solver time per bound and iterations, certification, and the signed
+build time, wall time, solver time per bound and iterations, peak resident memory of the
+process and its workers (sampled every 50 ms), certification, and the signed
 difference per interval end relative to the exact width (positive = the moment bound lies
 inside the exact outer bound, which is possible up to the exact method's tolerance).
 The machine is shared: timings are under load (load average stored per row).
 
     python -m benchmarks moment2 [--N 10 20 50 100] [--full-N 10] [--n-jobs 2]
+    python -m benchmarks moment2 --N 300 --full-N --append   # the chapter's size, added
 """
 
 from __future__ import annotations
@@ -50,10 +52,11 @@ def stage2_problem(N: int, noise: float, seed: int):
 
 
 def run_moment(pr, lp, basis, n_jobs):
-    t0 = time.perf_counter()
-    res = moment_bounds(pr, order=2, theta_box=lp.bounds, fallback=lp.bounds, n_jobs=n_jobs,
-                        max_work=float("inf"), basis=basis)
-    wall = time.perf_counter() - t0
+    with C.PeakRSS() as mem:
+        t0 = time.perf_counter()
+        res = moment_bounds(pr, order=2, theta_box=lp.bounds, fallback=lp.bounds,
+                            n_jobs=n_jobs, max_work=float("inf"), basis=basis)
+        wall = time.perf_counter() - t0
     e = res.details
     return {
         "basis": basis, "wall_s": wall, "build_s": e.build_time,
@@ -66,6 +69,7 @@ def run_moment(pr, lp, basis, n_jobs):
         "n_psd_blocks": e.n_psd_blocks,
         "psd_sides": {str(k): v for k, v in e.psd_sides.items()},
         "bounds": res.bounds.tolist(), "loadavg": C.loadavg(),
+        "peak_rss_mb": round(mem.peak, 1), "rss_before_mb": round(mem.base, 1),
     }
 
 
@@ -83,8 +87,11 @@ def main(argv=None):
     ap.add_argument("--noise", type=float, default=0.05)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-jobs", type=int, default=2)
+    ap.add_argument("--append", action="store_true",
+                    help="keep the stored rows of other N (and bases) and add these")
     args = ap.parse_args(argv)
-    rows = []
+    old = C.read_json(OUT) if args.append and OUT.exists() else None
+    rows = [r for r in (old or {}).get("rows", []) if r["N"] not in args.N]
     for N in args.N:
         pr, theta = stage2_problem(N, args.noise, args.seed)
         lp = lp_bounds(pr, check_box=False)
@@ -96,6 +103,7 @@ def main(argv=None):
             est = estimate_moment_relaxation(pr, 2, lp.bounds, basis=basis)
             r = run_moment(pr, lp, basis, args.n_jobs)
             r.update(N=N, noise=args.noise, seed=args.seed, exact_s=t_ex,
+                     run_at=time.strftime("%Y-%m-%d %H:%M:%S"),
                      exact_bounds=ex.bounds.tolist(),
                      exact_status=[i.status for i in ex.infos],
                      rel_diff=rel_diff(r["bounds"], ex.bounds),

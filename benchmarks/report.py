@@ -749,7 +749,8 @@ def section_moment2():
     out = [env_line(j)]
     hdr = ["N", "basis", "moments", "conic rows", "nnz(A)", "PSD blocks (side: count)",
            "build s", "wall s (8 bounds)", "solver s (sum)", "iterations (median)",
-           "all certified", "max rel. diff. vs exact", "truth inside", "load"]
+           "peak memory (process + workers)", "all certified", "max rel. diff. vs exact",
+           "truth inside", "load"]
     body = []
     for r in rows:
         blocks = ", ".join(f"{k}: {v}" for k, v in sorted(r["psd_sides"].items(),
@@ -757,7 +758,9 @@ def section_moment2():
         d = float(np.max(np.abs(np.asarray(r["rel_diff"]))))
         body.append([r["N"], r["basis"], r["n_moments"], r["n_rows"], r["nnz"], blocks,
                      fs(r["build_s"]), fs(r["wall_s"]), fs(r["solve_sum_s"]),
-                     int(np.median(r["iterations"])), "yes" if all(r["certified"]) else "**no**",
+                     int(np.median(r["iterations"])),
+                     f"{r['peak_rss_mb']:.0f} MB" if r.get("peak_rss_mb") else "not measured",
+                     "yes" if all(r["certified"]) else "**no**",
                      f"{d:.1e}", "yes" if r["truth_inside"] else "**no**", r["loadavg"]])
     out.append(table(hdr, body))
     ratios = []

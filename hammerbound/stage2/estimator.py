@@ -89,17 +89,21 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
         cost. Order 2 (term-sparse basis, ``relaxation_basis="sparse"``) equals the exact
-        intervals within 1e-3 of their width on the chapter example and takes minutes at
-        N = 100 (see ``docs/benchmarks.md``). The relaxation's size is estimated before it
-        is built: above ``relaxation_max_work`` the fit raises
+        intervals within 1e-3 of their width on the chapter example and takes minutes (357 s
+        on 2 cores at N = 300, see ``docs/benchmarks.md``). The relaxation's time and
+        memory are estimated before it is built: above ``relaxation_max_work`` (or the
+        machine's memory) the fit raises
         :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or
-        ``"exact"``), above ``rows x moments = 2e7`` it warns (module
+        ``"exact"``), above an estimated minute it warns (module
         :mod:`hammerbound.relaxations.moment.size`).
-    relaxation_max_work : float, default 8e8
-        Size budget ``rows x moments`` of the moment relaxation, checked before it is built
-        (default :data:`~hammerbound.relaxations.moment.size.MOMENT_MAX_WORK`: order 1 at
-        N ~ 1500, order 2 at N ~ 150); ``float("inf")`` lifts the refusal. Raise it only
-        when the estimated time and memory in the refusal are acceptable.
+    relaxation_max_work : float, default 3600
+        Budget on the estimated seconds (one core) of building and solving the moment
+        relaxation, checked before it is built (default
+        :data:`~hammerbound.relaxations.moment.size.MOMENT_MAX_WORK`: sparse order 2 at
+        N ~ 1700, full order 2 at N ~ 50, order 3 at N ~ 12; the memory check refuses
+        sparse order 2 above N ~ 500 on 24 GB with 2 workers); ``float("inf")`` lifts the
+        refusals. Raise it only when the estimated time and memory in the refusal are
+        acceptable.
     relaxation_basis : {"sparse", "full"}, default "sparse"
         Monomial basis of the moment matrices (order >= 2; both coincide at order 1):
         ``"sparse"`` uses ``1, theta, e, theta e`` (the equations are bilinear in
@@ -465,7 +469,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 # memory/time guard before any work (refuses with the estimate, or warns)
                 check_moment_budget(estimate_moment_relaxation(
                     problem, self.relaxation_order, basis=self.relaxation_basis),
-                    max_work=float(self.relaxation_max_work), option="relaxation_max_work")
+                    max_work=float(self.relaxation_max_work), option="relaxation_max_work",
+                    processes=min(max(1, int(self.n_jobs)), 2 * problem.p))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 # the LP bounds are the a priori box and the fallback; kept as res.lp

@@ -237,13 +237,17 @@ def test_reader_messages_name_the_interface_in_use(capsys, rec):
 def test_library_messages_in_cli_terms():
     from hammerbound.app.cli.console import to_cli
 
-    msg = ("the moment relaxation is too large: ..., above the budget rows x moments <= 8e+08 "
+    msg = ("the moment relaxation is too large: ..., above the budget of 3600 s "
            "(relaxation_max_work; raise it to build anyway). Use method='lp' (polytopic "
            "outer bounds, seconds) or\n"
            "method='exact' (tight bounds; bound its time with total_time_limit), a shorter "
            "record, or a lower relaxation_order.")
     out = to_cli(msg)
-    assert "\n" not in out and "max_work" not in out and "8e+08. Use" in out
+    assert "\n" not in out and "max_work" not in out and "3600 s. Use" in out
+    mem = ("the moment relaxation is too large: ..., more than this machine's 100 MB of "
+           "memory (relaxation_max_work=inf builds it anyway). Use method='lp' ...")
+    assert to_cli(mem).startswith("the moment relaxation is too large: ..., more than this "
+                                  "machine's 100 MB of memory. Use --method lp")
     assert "--method lp" in out and "--method exact" in out
     assert "--total-time-limit" in out and "--order" in out and "method='" not in out
     assert to_cli("LinearEIVSetEstimator(na=40, nb=40, nk=1) has p = 80") == \

@@ -416,3 +416,19 @@ def test_bad_arguments_raise_typed_errors(kwargs, exc):
     kw.update(kwargs)
     with pytest.raises(exc):
         moment_bounds(pr, **kw)
+
+
+def test_equality_rows_in_blocks_give_the_same_relaxation(monkeypatch):
+    """PICOS indexes a constant's entries with 32 bits, so the equality rows go to it in
+    blocks (a SystemError at N = 2000, order 2, before). Blocks of a few rows build the
+    same conic rows and the same certified bounds as one block."""
+    from hammerbound.relaxations.moment import relaxation as moment_module
+
+    pr, _ = first_order_problem(N=10, dx=0.0)
+    one = MomentRelaxation(pr, 1)
+    b_one = moment_bounds(pr, order=1).bounds
+    monkeypatch.setattr(moment_module, "EQ_BLOCK_ENTRIES", 3 * one.n_moments)
+    blocks = MomentRelaxation(pr, 1)
+    assert blocks.data.m == one.data.m and blocks.n_moments == one.n_moments
+    assert len(blocks.picos_problem.constraints) > len(one.picos_problem.constraints) + 1
+    np.testing.assert_allclose(moment_bounds(pr, order=1).bounds, b_one, atol=1e-9)

@@ -67,8 +67,7 @@ def test_estimator_moment_ends_are_labelled_by_their_source(at_bound):
     x, y, theta = second_order_eiv(1, at_bound=at_bound)
     est = hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=DELTA, method="moment",
                                    on_failure="box")
-    with pytest.warns(RuntimeWarning, match="large moment relaxation"):
-        est.fit(x, y, input_bound=DELTA)
+    est.fit(x, y, input_bound=DELTA)  # (estimated ~12 s: below the minute that warns)
     res = est.intervals_
     assert res.lp is not None
     assert est.contains(theta)

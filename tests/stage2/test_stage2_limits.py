@@ -100,7 +100,7 @@ def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
     pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, steady_state_gain=1.0)
     lp = lp_bounds(pr, check_box=False).bounds
     # no certificate for any bound (as after a solver failure)
-    monkeypatch.setattr(moment_module, "verified_lower_bound", lambda *a, **k: None)
+    monkeypatch.setattr(moment_module, "best_certificate", lambda *a, **k: None)
     res = moment_bounds(pr, order=1, on_failure="box")
     assert not any(i.certified for i in res.infos)
     assert np.all(lp[:, 1] - lp[:, 0] < 0.5 * np.diff(pr.theta_box, axis=1)[:, 0])
@@ -133,12 +133,34 @@ def test_size_estimate_matches_the_built_relaxation(n, order, dx, na, groups, ga
 
 
 def test_moment_guard_refuses_with_the_estimate_and_alternatives():
+    """Order 3 at N = 2000 is estimated at over an hour of one core (the budget): refused
+    before anything is built, with the estimate and what to use instead. Order 1 on the
+    same record (about a minute) is only warned about."""
     x, y = chapter_record(2000)
-    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="moment")
+    est = LinearEIVSetEstimator(output_bound=0.05, steady_state_gain=1.0, method="moment",
+                                relaxation_order=3)
     with pytest.raises(RelaxationTooLargeError, match="method='lp'") as ei:
         est.fit(x, y)
     msg = str(ei.value)
     assert "method='exact'" in msg and "1998 cliques" in msg and "MB" in msg
+    assert "above the budget of 3600 s (relaxation_max_work" in msg
+    pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, steady_state_gain=1.0)
+    size = moment_size.estimate_moment_relaxation(pr, 1)
+    assert moment_size.MOMENT_WARN_WORK < size.work < moment_size.MOMENT_MAX_WORK
+    with pytest.warns(RuntimeWarning, match="large moment relaxation"):
+        moment_size.check_moment_budget(size)
+
+
+def test_moment_guard_refuses_what_memory_cannot_hold(monkeypatch):
+    """A relaxation within the time budget whose estimated memory, one copy per worker,
+    exceeds the machine's is refused naming the memory; max_work=inf builds it anyway."""
+    pr = _problem(12)
+    size = moment_size.estimate_moment_relaxation(pr, 1)
+    monkeypatch.setattr(moment_size, "physical_memory", lambda: 1.5 * size.est_bytes)
+    moment_size.check_moment_budget(size, processes=1, warn_work=np.inf)
+    with pytest.raises(RelaxationTooLargeError, match="in each of 2 processes, more than"):
+        moment_size.check_moment_budget(size, processes=2)
+    moment_size.check_moment_budget(size, max_work=np.inf, processes=2)
 
 
 def test_high_order_refuses_before_forming_any_monomial(monkeypatch):

@@ -37,6 +37,7 @@ _TERMS = [
     (r"\binput_bound\b", "--input-bound"),
     # (the command line has no flag for the moment size budget)
     (r" \(\w*max_work; raise it to build anyway\)", ""),
+    (r" \(\w*max_work=inf builds it anyway\)", ""),
     (r"\(bound_info_ gives each end's status and certified gap\)",
      "(the status column gives each end's status; --json its details)"),
 ]

@@ -18,7 +18,9 @@ variables ``dx[g(t-j)]``, see :meth:`EIVProblem.dx_index`). At relaxation order 
 Monomials shared by several cliques are one moment variable. All variables are scaled to
 ``[-1, 1]``, so every moment of a feasible point satisfies ``|y_alpha| <= 1``; these a priori
 bounds turn each (possibly inaccurate) dual solution into a *guaranteed* bound through
-:func:`hammerbound.solvers.conic.verified_lower_bound`. A bound that cannot be certified
+:func:`hammerbound.solvers.conic.verified_lower_bound` (the best over the solver's dual, its
+least-squares repair and alternating cone projections:
+:func:`~hammerbound.solvers.conic.best_certificate`). A bound that cannot be certified
 falls back to the a priori box end; the solver's objective value is never reported.
 """
 
@@ -35,9 +37,8 @@ from ...solvers import get_solver
 from ...solvers.conic import (
     EPS,
     ConicData,
+    best_certificate,
     extract_conic_data,
-    repair_dual,
-    verified_lower_bound,
 )
 from ...status import BOX, FAILED, INACCURATE, INFEASIBLE, LIMIT, OPTIMAL, RELAXATION
 from ..problem import EIVProblem
@@ -51,6 +52,10 @@ from .basis import (  # noqa: F401 - re-exported for compatibility
     _ScaledPOP,
     _sparse_basis,
 )
+
+#: Largest number of entries (rows x moment variables) of one block of equality rows
+#: handed to PICOS (whose constants index their entries with 32 bits).
+EQ_BLOCK_ENTRIES = 2**30
 
 
 class MomentRelaxation:
@@ -173,8 +178,14 @@ class MomentRelaxation:
             else:
                 P.add_constraint(expr >> 0)
         if eqs:
-            Aeq = sp.csc_matrix((evals, (erows, ecols)), shape=(len(eqs), m))
-            P.add_constraint(picos.Constant(Aeq) * y == picos.Constant(-ecst))
+            Aeq = sp.csr_matrix((evals, (erows, ecols)), shape=(len(eqs), m))
+            # PICOS holds a constant matrix as a vector of rows x columns entries with 32-bit
+            # indices (cvxopt): above 2^31 the build crashed (a SystemError at N = 2000,
+            # order 2), so the equalities go in blocks of rows below that
+            step = max(1, EQ_BLOCK_ENTRIES // max(1, m))
+            for r0 in range(0, Aeq.shape[0], step):
+                P.add_constraint(picos.Constant(Aeq[r0:r0 + step].tocsc()) * y
+                                 == picos.Constant(-ecst[r0:r0 + step]))
         obj = self._objective(0)
         P.set_objective("min", picos.Constant(obj[0].reshape(1, -1)) * y)
         self.picos_problem = P
@@ -236,18 +247,9 @@ def _solve_group(data: ConicData, xub, jobs, backend, solver_options: dict | Non
         except Exception as exc:  # noqa: BLE001
             out.append((jid, None, None, f"{type(exc).__name__}: {exc}"))
             continue
-        vb = None
-        if sol.z is not None:
-            vb = verified_lower_bound(data, q, sol.z, xub, q0)
-            if np.all(np.isfinite(sol.z)):
-                # a least-squares repair of the dual residual is another dual vector:
-                # certify it too and keep the better (both bounds are rigorous)
-                try:
-                    vb2 = verified_lower_bound(data, q, repair_dual(data, q, sol.z), xub, q0)
-                except (ValueError, ArithmeticError):  # pragma: no cover - keep the first
-                    vb2 = None
-                if vb2 is not None and vb2.bound > vb.bound:
-                    vb = vb2
+        # the dual, its least-squares repair and alternating cone projections are all dual
+        # vectors: the best of their rigorous bounds is kept
+        vb = None if sol.z is None else best_certificate(data, q, sol.z, xub, q0)
         out.append((jid, sol, vb, ""))
     return out
 
@@ -301,13 +303,15 @@ def moment_bounds(
         is given, so no end is ever wider than the LP bound, nor from the a priori box
         where the LP bound is tighter.
     max_work : float, optional
-        Size budget ``rows x moments`` of the relaxation, checked *before* it is built
-        (:mod:`hammerbound.relaxations.moment.size`); default ``MOMENT_MAX_WORK = 8e8``
-        (order 1 with ``na = nb = 2`` reaches it at N ~ 1500, sparse order 2 at N ~ 150);
-        ``inf`` skips the check (and the warning).
+        Budget on the relaxation's estimated seconds (one core: building it and the
+        ``2 p`` solves), checked *before* it is built, with its estimated memory
+        (:mod:`hammerbound.relaxations.moment.size`); default ``MOMENT_MAX_WORK = 3600``
+        (with ``na = nb = 2`` sparse order 2 reaches it at N ~ 1700, the full order-2
+        basis at N ~ 50, order 3 at N ~ 12; the memory check refuses sparse order 2 above
+        N ~ 500 on 24 GB with 2 workers); ``inf`` skips the checks (and the warning).
     warn_work : float, optional
-        Above this ``rows x moments`` a :class:`RuntimeWarning` says the relaxation will
-        take minutes; default ``MOMENT_WARN_WORK = 2e7``.
+        Above this estimate (seconds, one core) a :class:`RuntimeWarning` says the
+        relaxation will take minutes; default ``MOMENT_WARN_WORK = 60``.
     basis : {"sparse", "full"}, default "sparse"
         Monomial basis of the moment matrices (see :class:`MomentRelaxation`). Order 1:
         both are the same. Order 2: ``"sparse"`` (``1, theta, e, theta e`` per clique) is
@@ -376,7 +380,8 @@ def moment_bounds(
     if int(order) == order and order >= 1 and not max_work == np.inf:
         # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
         size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
-        check_moment_budget(size, max_work=max_work, warn_work=warn_work)
+        check_moment_budget(size, max_work=max_work, warn_work=warn_work,
+                            processes=min(max(1, int(n_jobs)), 2 * problem.p))
     if fallback is None:
         # the polytopic LP bound is cheap and certified: a moment end is never reported
         # wider than it (nor from the a priori box where the LP bound is tighter)

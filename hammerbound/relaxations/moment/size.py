@@ -2,34 +2,41 @@
 
 The relaxation is built in PICOS (coefficients passed directly as sparse matrices, so the
 build is about linear in the record length N) and solved by an interior-point method whose
-cost per iteration is dominated by the dense Hessian blocks of the PSD cones: a block of
-side ``s`` has ``t = s (s + 1) / 2`` rows and costs about ``t^3`` per factorisation. The
-full order-2 basis on ``na = nb = 2`` has 45 x 45 moment matrices (``t = 1035``): 404 s for
-the 8 bounds at N = 10; the term-sparse basis (24 x 24, ``t = 300``) runs N = 100 in
-minutes (``docs/benchmarks.md``). :func:`estimate_moment_relaxation` counts the cliques,
-conic rows, moment variables and PSD blocks from the problem's structure (cheap: no
-polynomial is formed) and :func:`check_moment_budget` refuses
-(:class:`~hammerbound.exceptions.RelaxationTooLargeError`) or warns against the module
-budgets below.
+cost per iteration is the sparse factorisation of its rows plus the dense Hessian blocks of
+the PSD cones: a block of side ``s`` has ``t = s (s + 1) / 2`` rows and costs about ``t^3``
+per factorisation. :func:`estimate_moment_relaxation` counts the cliques, conic rows,
+moment variables and PSD blocks from the problem's structure (cheap: no polynomial is
+formed) and turns them into an estimate of the time (one core: the build and the ``2 p``
+solves) and memory (one process); :func:`check_moment_budget` refuses
+(:class:`~hammerbound.exceptions.RelaxationTooLargeError`) or warns against the budgets
+below. The cost model is calibrated on the chapter example (``na = nb = 2``, idle machine,
+``docs/benchmarks.md``): order 1 at N = 300 took 14 s, the term-sparse order 2 at N = 300
+(24 x 24 moment matrices, ``t = 300``) 663 s of one core (357 s on 2) and about 1.8 GB per
+process, the full order-2 basis (45 x 45, ``t = 1035``) at N = 10 about 400 s.
 
 Default budgets (constants; a call changes them through its options, never by patching
 the module: ``LinearEIVSetEstimator(relaxation_max_work=...)``,
 ``moment_bounds(..., max_work=..., warn_work=...)``; ``float("inf")`` lifts the refusal):
 
-``MOMENT_WARN_WORK = 2e7``
-    ``rows x moments`` above which a :class:`RuntimeWarning` says the relaxation will take
-    minutes (order 1 at N ~ 300, sparse order 2 at N ~ 25, full order 2 at N ~ 10 with
-    ``na = nb = 2``).
-``MOMENT_MAX_WORK = 8e8``
-    ``rows x moments`` above which the moment method refuses (order 1 at N ~ 1500, sparse
-    order 2 at N ~ 150, full order 2 at N ~ 25). Use ``method="lp"`` (seconds) or
-    ``method="exact"`` (tight, with ``total_time_limit``) instead.
+``MOMENT_WARN_WORK = 60``
+    estimated seconds (one core) above which a :class:`RuntimeWarning` says the relaxation
+    will take minutes (with ``na = nb = 2``: order 1 at N ~ 1000, sparse order 2 at
+    N ~ 30, the full order-2 basis at any N).
+``MOMENT_MAX_WORK = 3600``
+    estimated seconds (one core) above which the moment method refuses (sparse order 2 at
+    N ~ 1700, the full order-2 basis at N ~ 50, order 3 at N ~ 12). A relaxation whose
+    estimated memory (counted once per worker process) exceeds the machine's is refused
+    as well: on 24 GB with 2 workers that is sparse order 2 above N ~ 500 and order 1
+    above N ~ 3500. Use
+    ``method="lp"`` (seconds) or ``method="exact"`` (tight, with ``total_time_limit``)
+    instead.
 """
 
 from __future__ import annotations
 
 import itertools
 import numbers
+import os
 import warnings
 from dataclasses import dataclass
 from math import comb
@@ -42,16 +49,25 @@ from ..problem import EIVProblem
 __all__ = ["MOMENT_MAX_WORK", "MOMENT_WARN_WORK", "MomentSize", "check_moment_budget",
            "check_work", "estimate_moment_relaxation"]
 
-#: ``rows x moments`` above which building the relaxation is refused.
-MOMENT_MAX_WORK = 8.0e8
-#: ``rows x moments`` above which a warning says the build will take minutes.
-MOMENT_WARN_WORK = 2.0e7
-# rough cost model (2-core machine under load, measured for issue 15): build ~ per conic
-# row; solve ~ 2 p objectives x ~25 iterations x sum over PSD blocks of t^3 (t = svec rows)
+#: Estimated seconds (one core) above which building the relaxation is refused.
+MOMENT_MAX_WORK = 3600.0
+#: Estimated seconds (one core) above which a warning says it will take minutes.
+MOMENT_WARN_WORK = 60.0
+# cost model, calibrated on the chapter example on an idle machine (issue 28): build ~ per
+# conic row; solve ~ 2 p objectives x ~30 iterations x (a sparse factorisation ~ per conic
+# row + the dense PSD blocks ~ sum of t^3, t = svec rows). Order 1, N = 300: 14,311 rows,
+# 1.6 s build, 0.067 s per iteration; sparse order 2, N = 300: 102,546 rows, sum t^3 =
+# 8.05e9, 22 s build, 2.5 s per iteration.
 _SEC_PER_ROW = 2.0e-4
-_SEC_PER_PSD_FLOP = 1.0e-9
-_ITERATIONS = 25
-_BYTES_PER_ROW = 2.0e3  # build (PICOS expressions, conic data)
+_SEC_PER_ROW_ITER = 4.0e-6
+_SEC_PER_PSD_FLOP = 2.6e-10
+_ITERATIONS = 30
+# memory of one process: the PICOS build grows with rows x moments (order 1 at N = 1000,
+# 8.1e8: 880 MB over the process's base; sparse order 2 at N = 300, 3.4e9: 4.1 GB for the
+# process and 2 workers; order 2 at N = 2000 without input errors, 2.6e10: past 13 GB and
+# still building when stopped), the solver with the rows and the PSD blocks
+_BYTES_PER_ENTRY = 1.2  # x rows x moments: the PICOS build
+_BYTES_PER_ROW = 1.8e4  # conic data and the sparse KKT factors
 _BYTES_PER_PSD = 32.0  # x sum t^2: the dense KKT blocks and their factors
 # enumerate monomials to count the moments exactly up to this many tuples
 _MAX_ENUMERATE = 2_000_000
@@ -75,10 +91,8 @@ class MomentSize:
     n_moments : int
         Moment variables (exact when ``moments_exact``, else an upper bound).
     moments_exact : bool
-    work : float
-        ``n_rows * n_moments``, the measure the budgets apply to.
     est_seconds, est_bytes : float
-        Rough time (build and the ``2 p`` conic solves, one core) and memory.
+        Rough time (build and the ``2 p`` conic solves, one core) and memory (one process).
     psd_work : float
         ``sum t^3`` over the PSD blocks (``t = s (s + 1) / 2`` for side ``s``): the cost
         of one interior-point factorisation.
@@ -92,21 +106,25 @@ class MomentSize:
     n_rows: int
     n_moments: int
     moments_exact: bool
-    work: float
     est_seconds: float
     est_bytes: float
     psd_work: float = 0.0
     basis: str = "sparse"
+
+    @property
+    def work(self) -> float:
+        """The measure the budgets apply to: :attr:`est_seconds`."""
+        return self.est_seconds
 
     def describe(self) -> str:
         """One sentence with the sizes and the rough build cost (used in messages)."""
         b = f" ({self.basis} basis)" if self.order >= 2 else ""
         return (f"order {self.order}{b}: {self.n_cliques} cliques of up to {self.clique_vars} "
                 f"variables (moment matrices {self.psd_side} x {self.psd_side}), "
-                f"{self.n_rows} conic rows x {'' if self.moments_exact else '<= '}"
-                f"{self.n_moments} moments = {self.work:.3g}; building and solving it would take "
+                f"{self.n_rows} conic rows, {'' if self.moments_exact else '<= '}"
+                f"{self.n_moments} moments; building and solving it would take "
                 f"about {self.est_seconds:.0f} s (one core) and "
-                f"{self.est_bytes / 2**20:.0f} MB")
+                f"{self.est_bytes / 2**20:.0f} MB (one process)")
 
 
 def _clique_sets(problem: EIVProblem, theta_box) -> tuple[int, int, list]:
@@ -141,13 +159,15 @@ def _t3(side: int) -> float:
 
 
 def _seconds(rows: int, psd: float, p: int) -> float:
-    return _SEC_PER_ROW * rows + 2 * p * _ITERATIONS * _SEC_PER_PSD_FLOP * psd
+    return _SEC_PER_ROW * rows + 2 * p * _ITERATIONS * (_SEC_PER_ROW_ITER * rows
+                                                         + _SEC_PER_PSD_FLOP * psd)
 
 
-def _bytes(rows: int, psd: float) -> float:
+def _bytes(rows: int, moments: int, psd: float) -> float:
     # sum t^2 >= (sum t^3)^(2/3) / n_blocks^(1/3); blocks of one size dominate: use the sum
     # of t^2 of the same blocks, recovered as psd^(2/3) times a safety factor of 4
-    return _BYTES_PER_ROW * rows + 4.0 * _BYTES_PER_PSD * psd ** (2.0 / 3.0)
+    solve = _BYTES_PER_ROW * rows + 4.0 * _BYTES_PER_PSD * psd ** (2.0 / 3.0)
+    return max(_BYTES_PER_ENTRY * float(rows) * float(moments), solve)
 
 
 def _sparse_counts(q: int, n_extra: int, cliques, d: int):
@@ -205,12 +225,11 @@ def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None,
     if basis == "sparse" and d >= 2 and any(nh for _, nh in cliques):
         rows, moments, side, psd = _sparse_counts(q, n_extra, cliques, d)
         nv_max = max(len(cv) for cv, _ in cliques)
-        work = float(rows) * float(moments)
         return MomentSize(order=d, n_cliques=len(cliques), clique_vars=nv_max,
                           psd_side=side, n_rows=int(rows), n_moments=int(moments),
-                          moments_exact=True, work=work,
+                          moments_exact=True,
                           est_seconds=_seconds(rows, psd, problem.p),
-                          est_bytes=_bytes(rows, psd), psd_work=psd, basis="sparse")
+                          est_bytes=_bytes(rows, moments, psd), psd_work=psd, basis="sparse")
     rows = 0
     nv_max = 0
     psd = 0.0
@@ -238,48 +257,67 @@ def estimate_moment_relaxation(problem: EIVProblem, order: int, theta_box=None,
     else:
         theta_only = comb(q + 2 * d, 2 * d)
         moments = len(cliques) * (per - theta_only) + theta_only - 1
-    work = float(rows) * float(moments)
     return MomentSize(order=d, n_cliques=len(cliques), clique_vars=nv_max,
                       psd_side=comb(nv_max + d, d), n_rows=int(rows), n_moments=int(moments),
-                      moments_exact=exact, work=work,
+                      moments_exact=exact,
                       est_seconds=_seconds(rows, psd, problem.p),
-                      est_bytes=_bytes(rows, psd), psd_work=psd,
+                      est_bytes=_bytes(rows, moments, psd), psd_work=psd,
                       basis="full" if d >= 2 else "sparse")
 
 
 def check_work(name: str, value, default: float = MOMENT_MAX_WORK) -> float:
-    """A size budget ``rows x moments``: a number > 0 (``inf`` allowed), else
+    """A size budget (estimated seconds of one core): a number > 0 (``inf`` allowed), else
     :class:`~hammerbound.exceptions.ParameterValidationError` naming the option."""
     if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) \
             and value > 0:  # (NaN fails "> 0")
         return float(value)
     raise ParameterValidationError(
-        f"{name} must be a number > 0 (a budget on rows x moments of the moment relaxation, "
-        f"default {default:.3g}; float('inf') lifts it); got {value!r}.")
+        f"{name} must be a number > 0 (a budget on the estimated seconds, one core, of "
+        f"building and solving the moment relaxation, default {default:g}; float('inf') "
+        f"lifts it); got {value!r}.")
 
 
 def check_moment_budget(size: MomentSize, max_work: float | None = None,
-                        warn_work: float | None = None, *, option: str = "max_work") -> None:
+                        warn_work: float | None = None, *, option: str = "max_work",
+                        processes: int = 1) -> None:
     """Refuse or warn when a relaxation of ``size`` exceeds the budgets.
 
     ``option`` is the name of the caller's option that sets ``max_work`` (the refusal names
-    it, so a user knows what to raise).
+    it, so a user knows what to raise); ``processes`` hold a copy each (the memory check).
+    ``max_work=inf`` skips both refusals.
 
     Raises
     ------
     RelaxationTooLargeError
-        ``size.work > max_work`` (default :data:`MOMENT_MAX_WORK`).
+        ``size.work > max_work`` (default :data:`MOMENT_MAX_WORK`), or an estimated
+        memory above the machine's (:func:`physical_memory`).
     """
     max_work = MOMENT_MAX_WORK if max_work is None else max_work
     warn_work = MOMENT_WARN_WORK if warn_work is None else warn_work
+    alternatives = ("Use method='lp' (polytopic outer bounds, seconds) or method='exact' "
+                    "(tight bounds; bound its time with total_time_limit), a shorter record, "
+                    "or a lower relaxation_order.")
     if size.work > max_work:
         raise RelaxationTooLargeError(
-            f"the moment relaxation is too large: {size.describe()}, above the budget "
-            f"rows x moments <= {max_work:.3g} ({option}; raise it to build anyway). Use "
-            "method='lp' (polytopic outer bounds, seconds) or method='exact' (tight bounds; "
-            "bound its time with total_time_limit), a shorter record, or a lower "
-            "relaxation_order.")
+            f"the moment relaxation is too large: {size.describe()}, above the budget of "
+            f"{max_work:g} s ({option}; raise it to build anyway). " + alternatives)
+    ram = physical_memory()
+    need = size.est_bytes * max(1, int(processes))
+    if ram is not None and need > ram and max_work != float("inf"):
+        on = f" in each of {int(processes)} processes" if processes > 1 else ""
+        raise RelaxationTooLargeError(
+            f"the moment relaxation is too large: {size.describe()}{on}, more than this "
+            f"machine's {ram / 2**20:.0f} MB of memory ({option}=inf builds it anyway). "
+            + alternatives)
     if size.work > warn_work:
         warnings.warn(
             f"large moment relaxation: {size.describe()}. method='lp' or method='exact' "
             "(with total_time_limit) may be faster.", RuntimeWarning, stacklevel=3)
+
+
+def physical_memory() -> float | None:
+    """Bytes of physical memory of this machine (None where the OS does not tell)."""
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE")) * float(os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):
+        return None

@@ -745,7 +745,7 @@ def section_moment2():
     j = _json("moment_order2.json")
     if not j or not j.get("rows"):
         return ""
-    rows = j["rows"]
+    rows = sorted(j["rows"], key=lambda r: (r["N"], r["basis"] != "sparse"))
     out = [env_line(j)]
     hdr = ["N", "basis", "moments", "conic rows", "nnz(A)", "PSD blocks (side: count)",
            "build s", "wall s (8 bounds)", "solver s (sum)", "iterations (median)",

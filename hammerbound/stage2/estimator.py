@@ -100,7 +100,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         Budget on the estimated seconds (one core) of building and solving the moment
         relaxation, checked before it is built (default
         :data:`~hammerbound.relaxations.moment.size.MOMENT_MAX_WORK`: sparse order 2 at
-        N ~ 1700, full order 2 at N ~ 50, order 3 at N ~ 12; the memory check refuses
+        N ~ 1800, full order 2 at N ~ 60, order 3 at N ~ 13; the memory check refuses
         sparse order 2 above N ~ 500 on 24 GB with 2 workers); ``float("inf")`` lifts the
         refusals. Raise it only when the estimated time and memory in the refusal are
         acceptable.

@@ -306,8 +306,8 @@ def moment_bounds(
         Budget on the relaxation's estimated seconds (one core: building it and the
         ``2 p`` solves), checked *before* it is built, with its estimated memory
         (:mod:`hammerbound.relaxations.moment.size`); default ``MOMENT_MAX_WORK = 3600``
-        (with ``na = nb = 2`` sparse order 2 reaches it at N ~ 1700, the full order-2
-        basis at N ~ 50, order 3 at N ~ 12; the memory check refuses sparse order 2 above
+        (with ``na = nb = 2`` sparse order 2 reaches it at N ~ 1800, the full order-2
+        basis at N ~ 60, order 3 at N ~ 13; the memory check refuses sparse order 2 above
         N ~ 500 on 24 GB with 2 workers); ``inf`` skips the checks (and the warning).
     warn_work : float, optional
         Above this estimate (seconds, one core) a :class:`RuntimeWarning` says the

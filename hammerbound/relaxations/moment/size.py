@@ -11,8 +11,9 @@ solves) and memory (one process); :func:`check_moment_budget` refuses
 (:class:`~hammerbound.exceptions.RelaxationTooLargeError`) or warns against the budgets
 below. The cost model is calibrated on the chapter example (``na = nb = 2``, idle machine,
 ``docs/benchmarks.md``): order 1 at N = 300 took 14 s, the term-sparse order 2 at N = 300
-(24 x 24 moment matrices, ``t = 300``) 663 s of one core (357 s on 2) and about 1.8 GB per
-process, the full order-2 basis (45 x 45, ``t = 1035``) at N = 10 about 400 s.
+(24 x 24 moment matrices, ``t = 300``) 632 s of one core (357 s on 2) and 4.1 GB with 2
+workers; it overestimates the full order-2 basis (45 x 45, ``t = 1035``; N = 10: 110 s of
+one core, estimated 507 s). The memory of the PICOS build grows with ``rows x moments``.
 
 Default budgets (constants; a call changes them through its options, never by patching
 the module: ``LinearEIVSetEstimator(relaxation_max_work=...)``,
@@ -20,11 +21,11 @@ the module: ``LinearEIVSetEstimator(relaxation_max_work=...)``,
 
 ``MOMENT_WARN_WORK = 60``
     estimated seconds (one core) above which a :class:`RuntimeWarning` says the relaxation
-    will take minutes (with ``na = nb = 2``: order 1 at N ~ 1000, sparse order 2 at
+    will take minutes (with ``na = nb = 2``: order 1 at N ~ 830, sparse order 2 at
     N ~ 30, the full order-2 basis at any N).
 ``MOMENT_MAX_WORK = 3600``
     estimated seconds (one core) above which the moment method refuses (sparse order 2 at
-    N ~ 1700, the full order-2 basis at N ~ 50, order 3 at N ~ 12). A relaxation whose
+    N ~ 1800, the full order-2 basis at N ~ 60, order 3 at N ~ 13). A relaxation whose
     estimated memory (counted once per worker process) exceeds the machine's is refused
     as well: on 24 GB with 2 workers that is sparse order 2 above N ~ 500 and order 1
     above N ~ 3500. Use
@@ -55,12 +56,14 @@ MOMENT_MAX_WORK = 3600.0
 MOMENT_WARN_WORK = 60.0
 # cost model, calibrated on the chapter example on an idle machine (issue 28): build ~ per
 # conic row; solve ~ 2 p objectives x ~30 iterations x (a sparse factorisation ~ per conic
-# row + the dense PSD blocks ~ sum of t^3, t = svec rows). Order 1, N = 300: 14,311 rows,
-# 1.6 s build, 0.067 s per iteration; sparse order 2, N = 300: 102,546 rows, sum t^3 =
-# 8.05e9, 22 s build, 2.5 s per iteration.
+# row + the dense PSD blocks ~ sum of t^3, t = svec rows). Seconds per iteration measured:
+# order 1 at N = 300 / 1000 (14,311 / 47,911 rows) 0.067 / 0.24; sparse order 2 at N = 100
+# / 300 (sum t^3 = 2.65e9 / 8.05e9) 0.66 / 2.38; the full order-2 basis at N = 10 (8.88e9)
+# 0.86 in 16 iterations per solve: the model overestimates it 4.6x in all (its few large
+# blocks cost less per t^3).
 _SEC_PER_ROW = 2.0e-4
-_SEC_PER_ROW_ITER = 4.0e-6
-_SEC_PER_PSD_FLOP = 2.6e-10
+_SEC_PER_ROW_ITER = 5.0e-6
+_SEC_PER_PSD_FLOP = 2.3e-10
 _ITERATIONS = 30
 # memory of one process: the PICOS build grows with rows x moments (order 1 at N = 1000,
 # 8.1e8: 880 MB over the process's base; sparse order 2 at N = 300, 3.4e9: 4.1 GB for the

@@ -94,7 +94,7 @@ def test_identifier_passes_the_budget_to_stage_2():
 
 def test_moment_fallback_is_the_lp_bound_not_the_a_priori_box(monkeypatch):
     """on_failure="box" with an uncertifiable solve reports the LP bound."""
-    import hammerbound.relaxations.moment.relaxation as moment_module
+    import hammerbound.relaxations.moment.certify as moment_module
 
     x, y = chapter_record(15)
     pr = EIVProblem(y, x, 0.0, 0.05, 2, 2, steady_state_gain=1.0)

@@ -35,14 +35,11 @@ import scipy.sparse as sp
 from ...exceptions import ParameterValidationError, SolverError
 from ...solvers import get_solver
 from ...solvers.conic import (
-    EPS,
-    ConicData,
-    best_certificate,
     extract_conic_data,
 )
-from ...status import BOX, FAILED, INACCURATE, INFEASIBLE, LIMIT, OPTIMAL, RELAXATION
+from ...status import FAILED
 from ..problem import EIVProblem
-from ..result import BoundInfo, DualCertificate, IntervalResult, MomentDetails
+from ..result import IntervalResult, MomentDetails
 from .basis import (  # noqa: F401 - re-exported for compatibility
     BASES,
     _affine,
@@ -52,6 +49,7 @@ from .basis import (  # noqa: F401 - re-exported for compatibility
     _ScaledPOP,
     _sparse_basis,
 )
+from .certify import end_info, solve_group
 
 #: Largest number of entries (rows x moment variables) of one block of equality rows
 #: handed to PICOS (whose constants index their entries with 32 bits).
@@ -228,32 +226,6 @@ class MomentRelaxation:
         return out
 
 
-# ---------------------------------------------------------------------------------------
-# solving
-# ---------------------------------------------------------------------------------------
-
-
-def _solve_group(data: ConicData, xub, jobs, backend, solver_options: dict | None):
-    """Worker: solve several objectives on one conic data set and certify each (``backend``
-    is the registry's object, passed as it is: no lookup or licence check in a worker)."""
-    out = []
-    try:
-        inst = backend.conic(data, solver_options)
-    except Exception as exc:  # noqa: BLE001 - reported per bound below
-        return [(j, None, None, f"{type(exc).__name__}: {exc}") for j in jobs]
-    for jid, q, q0 in jobs:
-        try:
-            sol = inst.solve(q, q0)
-        except Exception as exc:  # noqa: BLE001
-            out.append((jid, None, None, f"{type(exc).__name__}: {exc}"))
-            continue
-        # the dual, its least-squares repair and alternating cone projections are all dual
-        # vectors: the best of their rigorous bounds is kept
-        vb = None if sol.z is None else best_certificate(data, q, sol.z, xub, q0)
-        out.append((jid, sol, vb, ""))
-    return out
-
-
 def moment_bounds(
     problem: EIVProblem,
     order: int = 2,
@@ -415,13 +387,13 @@ def moment_bounds(
         # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
         opts = {**opts, "max_threads": 1}
     if n_jobs == 1:
-        results = _solve_group(data, relax.xub, jobs, backend, opts)
+        results = solve_group(data, relax.xub, jobs, backend, opts)
     else:
         from joblib import Parallel, delayed
 
         groups = [jobs[i::n_jobs] for i in range(n_jobs)]
         parts = Parallel(n_jobs=n_jobs)(
-            delayed(_solve_group)(data, relax.xub, g, backend, opts) for g in groups
+            delayed(solve_group)(data, relax.xub, g, backend, opts) for g in groups
         )
         results = [r for part in parts for r in part]
     results.sort(key=lambda r: r[0])
@@ -437,7 +409,7 @@ def moment_bounds(
                 f"(status {status}{': ' + err if err else ''}); try another solver, "
                 "tighter tolerances or on_failure='box'."
             )
-        info = _end_info(names[k], sense, sol, vb, err, backend.name,
+        info = end_info(names[k], sense, sol, vb, err, backend.name,
                          (max(box[k, 0], fallback[k, 0]), min(box[k, 1], fallback[k, 1])),
                          problem.theta_box[k])
         infos.append(info)
@@ -455,52 +427,6 @@ def moment_bounds(
             eliminated=None if relax.pop.elim is None else names[relax.pop.elim],
             n_rows=relax.data.m),
     )
-
-
-def _end_info(name, sense, sol, vb, err, solver, known, a_priori) -> BoundInfo:
-    """One end of a moment interval, labelled by where its value comes from.
-
-    ``known`` = (lower, upper) certified outer bounds already known for the parameter (the
-    polytopic LP bound, within the a priori box); ``a_priori`` its a priori box
-    (``problem.theta_box``). The end is the moment certificate when it is tighter than
-    ``known`` (status of the solve: ``OPTIMAL``, else ``INACCURATE`` / ``LIMIT``: the bound
-    comes from the dual), else the known end: ``BOX`` when that end is the a priori box
-    itself, ``RELAXATION`` (the LP bound) otherwise. Never wider than ``known``.
-    """
-    lo, hi = known
-    certified = vb is not None and bool(np.isfinite(vb.bound))
-    val = np.nan
-    if certified:
-        # vb.bound <= min of (+-theta_k); add a rounding margin for the sign flip
-        lb = vb.bound - 2 * EPS * abs(vb.bound)
-        val = lb if sense == "min" else -lb
-    tighter = certified and (val > lo if sense == "min" else val < hi)
-    if tighter:
-        bnd = float(val)
-        status = sol.status if sol.status in (OPTIMAL, LIMIT, INFEASIBLE) else INACCURATE
-    else:
-        bnd = float(lo if sense == "min" else hi)
-        w = max(1.0, a_priori[1] - a_priori[0])
-        at_box = (bnd <= a_priori[0] + 1e-9 * w) if sense == "min" else (
-            bnd >= a_priori[1] - 1e-9 * w)
-        status = BOX if at_box else RELAXATION
-    sv = np.nan
-    if sol is not None and np.isfinite(sol.primal_value):
-        sv = sol.primal_value if sense == "min" else -sol.primal_value
-    cert = None
-    if vb is not None:
-        cert = DualCertificate(vb.dual_value if sense == "min" else -vb.dual_value,
-                               vb.psd_correction, vb.residual_correction, vb.cone_correction)
-    msg = err if sol is None else f"{solver}: {sol.native_status}" + (f"; {err}" if err else "")
-    if not tighter:
-        why = ("its certificate" + (f" ({val:.6g})" if certified else "") + " is not tighter"
-               if certified else "no certificate")
-        msg += (f"; {why}: the {'a priori box' if status == BOX else 'LP bound'} end "
-                "is reported")
-    return BoundInfo(
-        param=name, sense=sense, bound=bnd, solver_value=float(sv), status=status,
-        certified=certified, time=float(sol.time) if sol is not None else 0.0,
-        iterations=None if sol is None else sol.iterations, message=msg, certificate=cert)
 
 
 def relaxation_size(n_vars_clique: int, order: int) -> int:

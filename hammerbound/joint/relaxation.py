@@ -80,17 +80,38 @@ LP_OPTIONS = {"presolve": "off", "simplex_dual_edge_weight_strategy": 1}
 # positions of the inner variables in beta
 B_ML, B_DL, B_MR, B_DR, B_Z0 = range(5)
 
+# Keys of the LP's rows and columns: what each one *is* (the noise of sample t, the
+# product of b_j with the value of ambiguous sample t, the band row of sample t, ...), so
+# that a node's basis can be carried to a child whose LP has other columns and rows (a
+# child split on a sample's branch loses that sample's value variable): see
+# :func:`carry_basis`. A key is ``kind * 2**40 + a * 2**20 + b`` (a, b < 2**20; the
+# McCormick rows of a product add 0..3 times _SUB to its column key).
+_SUB = 2**38
+
+
+def key(kind, a=0, b=0):
+    """The key code of a row or column (arrays broadcast)."""
+    return (np.int64(kind) << 40) + (np.asarray(a, dtype=np.int64) << 20) \
+        + np.asarray(b, dtype=np.int64)
+
+
+# kinds of columns and rows
+(K_BOX, K_V, K_PROD, K_ETA, K_Q, K_EQ, K_GAIN, K_RLT, K_MC_D, K_BAND, K_BAND0, K_ONE,
+ K_DEC, K_WELL, K_STEADY) = range(1, 16)
+
 
 class _Rows:
     """COO triplets and row bounds of an LP under construction."""
 
     def __init__(self):
-        self.r, self.c, self.v, self.lo, self.hi = [], [], [], [], []
+        self.r, self.c, self.v, self.lo, self.hi, self.keys = [], [], [], [], [], []
         self.m = 0
 
-    def add(self, rows, cols, vals, lo, hi):
-        """Add rows given as (k,) arrays of bounds and flat triplets (row offsets 0..k-1)."""
+    def add(self, rows, cols, vals, lo, hi, key=-1):
+        """Add rows given as (k,) arrays of bounds and flat triplets (row offsets 0..k-1);
+        ``key``: their :func:`key` codes (one, or one per row; -1: none)."""
         lo = np.atleast_1d(np.asarray(lo, dtype=float))
+        self.keys.append(np.broadcast_to(np.asarray(key, dtype=np.int64), lo.shape))
         self.r.append(np.asarray(rows, dtype=np.int64) + self.m)
         self.c.append(np.asarray(cols, dtype=np.int64))
         self.v.append(np.asarray(vals, dtype=float))
@@ -100,8 +121,9 @@ class _Rows:
         self.m += lo.size
         return np.arange(start, self.m)
 
-    def mccormick(self, w, x, e, xl, xu, el, eu):
-        """Envelope rows of the products ``w = x e`` (arrays of columns and bounds)."""
+    def mccormick(self, w, x, e, xl, xu, el, eu, key):
+        """Envelope rows of the products ``w = x e`` (arrays of columns and bounds);
+        ``key``: the products' column keys (the rows get ``key`` and 1..3 in :data:`_SUB`)."""
         w, x, e = (np.atleast_1d(np.asarray(a, dtype=np.int64)) for a in (w, x, e))
         xl, xu, el, eu = (np.broadcast_to(np.asarray(a, dtype=float), w.shape) for a in
                           (xl, xu, el, eu))
@@ -114,7 +136,8 @@ class _Rows:
                               -np.inf * one, -np.inf * one]).ravel()
         hi = np.column_stack([np.inf * one, np.inf * one,
                               round_up(-xu * el), round_up(-xl * eu)]).ravel()
-        return self.add(rows, cols, vals.ravel(), lo, hi)
+        k4 = np.asarray(key, dtype=np.int64)[:, None] + _SUB * np.arange(4)
+        return self.add(rows, cols, vals.ravel(), lo, hi, key=k4.ravel())
 
     def matrix(self, n):
         r = np.concatenate(self.r) if self.r else np.zeros(0, dtype=np.int64)
@@ -123,6 +146,9 @@ class _Rows:
         A = sp.csc_matrix((v, (r, c)), shape=(self.m, n))
         A.sum_duplicates()
         return A, np.concatenate(self.lo), np.concatenate(self.hi)
+
+    def row_keys(self):
+        return np.concatenate(self.keys) if self.keys else np.zeros(0, dtype=np.int64)
 
 
 def _prod_range(xl, xu, el, eu):
@@ -136,7 +162,8 @@ class JointRelaxation:
     variables, and the structure it was built on.
 
     ``box_cols`` are the LP columns of ``[theta, m_l, c_l, m_r, c_r, z0]`` (the rows of
-    the box); ``beta_cols`` those of ``(m_l, d_l, m_r, d_r, z0, v_1..v_K)``.
+    the box); ``beta_cols`` those of ``(m_l, d_l, m_r, d_r, z0, v_1..v_K)``;
+    ``col_keys``, ``row_keys`` what each column and row is (:func:`key`).
     """
 
     lp: HighsLP
@@ -144,6 +171,8 @@ class JointRelaxation:
     beta_cols: np.ndarray
     structure: InnerStructure
     products: dict
+    col_keys: np.ndarray | None = None
+    row_keys: np.ndarray | None = None
 
 
 def _inner_ranges(problem, box, st):
@@ -236,6 +265,11 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
     hi.append(bhi[5:])
     ncol += K
     beta_cols = np.concatenate([[p, col_dl, p + 2, col_dr, p + 4], col_v]).astype(np.int64)
+    # the key of each inner variable: its position for the first five, 5 + t for the value
+    # of ambiguous sample t
+    bkey = np.concatenate([np.arange(5), 5 + np.array([a.t for a in st.ambiguous],
+                                                      dtype=np.int64)]).astype(np.int64)
+    col_keys = [key(K_BOX, np.arange(p + 7)), key(K_V, bkey[5:])]
     # products b_j beta_k and a_i beta_k (RLT)
     th_lo, th_hi = box[:p, 0], box[:p, 1]
     jj, kk = np.meshgrid(np.arange(p), np.arange(nbeta), indexing="ij")
@@ -245,11 +279,14 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
     lo.append(pl)
     hi.append(ph)
     ncol += jj.size
+    prod_keys = key(K_PROD, jj, bkey[kk])
+    col_keys.append(prod_keys)
     # noise and the products a_i eta_t
     col_eta = np.arange(ncol, ncol + N)
     lo.append(-problem.deta)
     hi.append(problem.deta)
     ncol += N
+    col_keys.append(key(K_ETA, np.arange(N)))
     n0 = problem.n0
     t_eq = np.arange(n0, N)
     qi, qt = [], []
@@ -263,6 +300,8 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
     lo.append(ql)
     hi.append(qh)
     ncol += qi.size
+    q_keys = key(K_Q, qi, qt)
+    col_keys.append(q_keys)
     rows = _Rows()
     # ---- equations -----------------------------------------------------------------------
     m = t_eq.size
@@ -279,27 +318,29 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
             ev.append(-val[:, c])
     tau = FEASIBILITY_RTOL * _scale(problem, box)
     rows.add(np.concatenate(er), np.concatenate(ec), np.concatenate(ev),
-             round_down(-y[t_eq] - tau), round_up(-y[t_eq] + tau))
+             round_down(-y[t_eq] - tau), round_up(-y[t_eq] + tau), key=key(K_EQ, t_eq))
     # ---- gain (22.8) and its RLT rows ------------------------------------------------------
     g = float(problem.gain)
     gcols = np.arange(p)
     gvals = np.concatenate([-g * np.ones(na), np.ones(nbc)])
     gtol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box[:p]), axis=1))) * max(1, abs(g)))
-    rows.add(np.zeros(p, dtype=np.int64), gcols, gvals, g - gtol, g + gtol)
+    rows.add(np.zeros(p, dtype=np.int64), gcols, gvals, g - gtol, g + gtol, key=key(K_GAIN))
     for k in range(nbeta):
         cols = np.concatenate([col_prod[na:, k], col_prod[:na, k], [beta_cols[k]]])
         vals = np.concatenate([np.ones(nbc), -g * np.ones(na), [-g]])
         mag = float(np.sum(np.maximum(np.abs(pl), np.abs(ph)).reshape(p, nbeta)[:, k])
                     + abs(g) * max(abs(blo[k]), abs(bhi[k])))
         t = FEASIBILITY_RTOL * mag + gtol * max(abs(blo[k]), abs(bhi[k]))
-        rows.add(np.zeros(cols.size, dtype=np.int64), cols, vals, -t, t)
+        rows.add(np.zeros(cols.size, dtype=np.int64), cols, vals, -t, t,
+                 key=key(K_RLT, bkey[k]))
     # ---- McCormick envelopes -----------------------------------------------------------------
-    rows.mccormick(col_prod.ravel(), jj, beta_cols[kk], th_lo[jj], th_hi[jj], blo[kk], bhi[kk])
+    rows.mccormick(col_prod.ravel(), jj, beta_cols[kk], th_lo[jj], th_hi[jj], blo[kk], bhi[kk],
+                   prod_keys)
     rows.mccormick(col_q, qi, col_eta[qt], th_lo[qi], th_hi[qi], -problem.deta[qt],
-                   problem.deta[qt])
+                   problem.deta[qt], q_keys)
     ml, cl, mr, cr = (box[p + i] for i in range(4))
     rows.mccormick([col_dl, col_dr], [p, p + 2], [p + 1, p + 3], [ml[0], mr[0]],
-                   [ml[1], mr[1]], [cl[0], cr[0]], [cl[1], cr[1]])
+                   [ml[1], mr[1]], [cl[0], cr[0]], [cl[1], cr[1]], key(K_MC_D, [0, 1]))
     _branch_rows(rows, problem, st, beta_cols)
     _steady_rows(rows, problem, beta_cols)
     A, rl, ru = rows.matrix(ncol)
@@ -307,43 +348,48 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
     lp = HighsLP(A, rl, ru, lb, ub, options={**LP_OPTIONS, **(options or {})},
                  run_limit=LP_TIME_LIMIT, deadline=deadline)
     return JointRelaxation(lp, box_cols, beta_cols, st,
-                           {"prod": col_prod, "eta": col_eta, "q": col_q})
+                           {"prod": col_prod, "eta": col_eta, "q": col_q},
+                           np.concatenate(col_keys), rows.row_keys())
 
 
-def _band(rows, u_t, coef_x, bc, x_terms):
-    """``R_t <= x <= L_t`` for a linear form ``x`` (list of (column, coefficient))."""
+def _band(rows, u_t, coef_x, bc, x_terms, k):
+    """``R_t <= x <= L_t`` for a linear form ``x`` (list of (column, coefficient)); row keys
+    ``k`` and ``k + 1``."""
     cols = [c for c, _ in x_terms]
     vals = [v for _, v in x_terms]
     # x - m_r u + d_r >= 0
     rows.add(np.zeros(len(cols) + 2, dtype=np.int64), [*cols, bc[B_MR], bc[B_DR]],
-             [*vals, -u_t, 1.0], 0.0, np.inf)
+             [*vals, -u_t, 1.0], 0.0, np.inf, key=k)
     # x - m_l u - d_l <= 0
     rows.add(np.zeros(len(cols) + 2, dtype=np.int64), [*cols, bc[B_ML], bc[B_DL]],
-             [*vals, -u_t, -1.0], -np.inf, 0.0)
+             [*vals, -u_t, -1.0], -np.inf, 0.0, key=k + 1)
 
 
 def _branch_rows(rows, problem, st, bc):
     """Bands, the one-sided rows of ambiguous samples, and well-posedness."""
     u = problem.u
-    _band(rows, u[0], 1.0, bc, [(bc[B_Z0], 1.0)])
+    _band(rows, u[0], 1.0, bc, [(bc[B_Z0], 1.0)], key(K_BAND0))
     for k, a in enumerate(st.ambiguous):
         v = bc[5 + k]
-        _band(rows, u[a.t], 1.0, bc, [(v, 1.0)])
+        _band(rows, u[a.t], 1.0, bc, [(v, 1.0)], key(K_BAND, a.t))
         s_terms = [(bc[i], c) for i, c in _state_form(st, u, a.src_kind, a.src)]
         cols = [v] + [c for c, _ in s_terms]
         vals = [1.0] + [-c for _, c in s_terms]
         if not a.up:  # x_t = min(L_t, S) <= S
-            rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, -np.inf, 0.0)
+            rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, -np.inf, 0.0,
+                     key=key(K_ONE, a.t, 0))
         if not a.down:  # x_t = max(R_t, S) >= S
-            rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, 0.0, np.inf)
+            rows.add(np.zeros(len(cols), dtype=np.int64), cols, vals, 0.0, np.inf,
+                     key=key(K_ONE, a.t, 1))
     for d in st.decided:
-        _decision_rows(rows, u[d.t], bc, _state_form(st, u, d.src_kind, d.src), d.branch)
-    for uu in (float(u.min()), float(u.max())):  # (m_l - m_r) u + d_l + d_r >= 0
+        _decision_rows(rows, u[d.t], bc, _state_form(st, u, d.src_kind, d.src), d.branch,
+                       key(K_DEC, d.t))
+    for i, uu in enumerate((float(u.min()), float(u.max()))):  # (m_l - m_r) u + d_l + d_r >= 0
         rows.add(np.zeros(4, dtype=np.int64), [bc[B_ML], bc[B_MR], bc[B_DL], bc[B_DR]],
-                 [uu, -uu, 1.0, 1.0], 0.0, np.inf)
+                 [uu, -uu, 1.0, 1.0], 0.0, np.inf, key=key(K_WELL, i))
 
 
-def _decision_rows(rows, u_t, bc, s_form, branch):
+def _decision_rows(rows, u_t, bc, s_form, branch, k):
     """The inequalities of a decided sample (:class:`~.modes.Decided`) with the state ``S``
     before it (a linear form): ``UP``: ``R_t >= S``; ``DOWN``: ``L_t <= S``; ``HOLD``: both
     ``R_t <= S`` and ``L_t >= S``."""
@@ -353,12 +399,12 @@ def _decision_rows(rows, u_t, bc, s_form, branch):
     l_cols, l_vals = [bc[B_ML], bc[B_DL], *s_cols], [u_t, 1.0, *s_vals]  # L_t - S
     zr, zl = np.zeros(len(r_cols), dtype=np.int64), np.zeros(len(l_cols), dtype=np.int64)
     if branch == UP:
-        rows.add(zr, r_cols, r_vals, 0.0, np.inf)
+        rows.add(zr, r_cols, r_vals, 0.0, np.inf, key=k)
     elif branch == DOWN:
-        rows.add(zl, l_cols, l_vals, -np.inf, 0.0)
+        rows.add(zl, l_cols, l_vals, -np.inf, 0.0, key=k + 1)
     else:
-        rows.add(zr, r_cols, r_vals, -np.inf, 0.0)
-        rows.add(zl, l_cols, l_vals, 0.0, np.inf)
+        rows.add(zr, r_cols, r_vals, -np.inf, 0.0, key=k + 2)
+        rows.add(zl, l_cols, l_vals, 0.0, np.inf, key=k + 3)
 
 
 def _steady_rows(rows, problem, bc):
@@ -366,11 +412,11 @@ def _steady_rows(rows, problem, bc):
     if problem.steady is None:
         return
     us, ys, ds = problem.steady
-    for ui, yi, di in zip(us, ys, ds, strict=True):
+    for i, (ui, yi, di) in enumerate(zip(us, ys, ds, strict=True)):
         tol = FEASIBILITY_RTOL * (abs(yi) + di) + di * FEASIBILITY_RTOL
         if ui > 0:
             cols, vals = [bc[B_MR], bc[B_DR]], [ui, -1.0]
         else:
             cols, vals = [bc[B_ML], bc[B_DL]], [ui, 1.0]
         rows.add(np.zeros(2, dtype=np.int64), cols, vals, round_down(yi - di - tol),
-                 round_up(yi + di + tol))
+                 round_up(yi + di + tol), key=key(K_STEADY, i))

@@ -27,6 +27,7 @@ from .local import restore, walk
 from .modes import DOWN, HOLD, UP
 from .problem import RecordProblem, Witness
 from .relaxation import build_relaxation, solve_lp
+from .warm import carry_basis
 
 __all__ = ["EndResult", "search_end"]
 
@@ -39,6 +40,9 @@ SAMPLE = "sample"  # origin of a child split on a sample (no pseudocost)
 WALK_STEPS = 2
 # the local search of an end backs off to at most one search per this many nodes
 MAX_SEARCH_SPACING = 64
+# a child whose LP differs from its parent's (split on a sample's branch) starts from the
+# parent's basis carried over by keys (:mod:`.warm`); False: it starts cold
+CARRY_BASIS = True
 
 
 @dataclass
@@ -56,9 +60,9 @@ class EndResult:
 
 def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, deadline=None):
     """Certified bound of ``min sense * v_col`` over ``box``, LP point (or None), basis
-    (an in-process HiGHS snapshot with the LP's column and row counts: a child whose
-    decided samples changed the LP's shape starts cold); the LP stops at ``deadline``
-    (keeping the bound it certifies).
+    (an in-process HiGHS snapshot with the LP's column and row keys: a child whose decided
+    samples changed the LP starts from it carried over by :func:`.warm.carry_basis`); the
+    LP stops at ``deadline`` (keeping the bound it certifies).
 
     ``cutoff``: the dual simplex may stop once its certified bound exceeds it (status
     "cutoff", no point): a node that cannot beat the incumbent, or is infeasible, is then
@@ -69,12 +73,16 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, de
     c[rel.box_cols[col]] = sense
     lp.set_cost(c)
     lp.set_cutoff(cutoff)  # None or not finite: no cutoff
-    if basis is not None and basis[1:] == lp.A.shape[::-1]:
-        lp.restore(basis[0])
+    if basis is not None:
+        snap, ck, rk = basis
+        if np.array_equal(ck, rel.col_keys) and np.array_equal(rk, rel.row_keys):
+            lp.restore(snap)
+        elif CARRY_BASIS:
+            lp.restore(carry_basis(snap, ck, rk, rel.col_keys, rel.row_keys, lp.rl, lp.ru))
     res = solve_lp(lp)
     x = None if res.x is None else res.x[rel.box_cols]
     snap = lp.snapshot() if res.status == "optimal" else None
-    return res, x, (None if snap is None else (snap, *lp.A.shape[::-1])), rel
+    return res, x, (None if snap is None else (snap, rel.col_keys, rel.row_keys)), rel
 
 
 def _children(box, j, x):

@@ -163,7 +163,7 @@ def _gaps(r):
 
 def section_speed():
     parts = []
-    for tag in ("_s35", "_s35_pricing", "_n300", "_n1000", "", "_quick"):
+    for tag in ("_s36", "_s35", "_s35_pricing", "_n300", "_n1000", "", "_quick"):
         j = _json(f"one_record_speed{tag}.json")
         if not j or not j["rows"]:
             continue

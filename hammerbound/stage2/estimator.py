@@ -89,8 +89,10 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         Order ``delta`` of the moment relaxation. The chapter uses 2; with the LP box as a
         priori box, order 1 is already close to the exact intervals at a fraction of the
         cost. Order 2 (term-sparse basis, ``relaxation_basis="sparse"``) equals the exact
-        intervals within 1e-3 of their width on the chapter example and takes minutes (357 s
-        on 2 cores at N = 300, see ``docs/benchmarks.md``). The relaxation's time and
+        intervals within 1e-3 of their width on the chapter example (on other records up to
+        5e-3 measured: Clarabel stops the order-2 solves "AlmostSolved" and the certificate
+        pays for that) and takes minutes (357 s on 2 cores at N = 300, see
+        ``docs/benchmarks.md``). The relaxation's time and
         memory are estimated before it is built: above ``relaxation_max_work`` (or the
         machine's memory) the fit raises
         :class:`~hammerbound.exceptions.RelaxationTooLargeError` (use ``"lp"`` or

@@ -59,7 +59,7 @@ class LinearModelMixin:
         dt = getattr(self, "dt_", None)
         dt = "not given" if dt is None else f"{dt:g}" + (
             f" {self.time_unit_}" if getattr(self, "time_unit_", "") else "")
-        head = (f"LinearEIVSetEstimator: method {self.method}, na={pr.na} nb={pr.nb} "
+        head = (f"LinearEIVSetEstimator: method {self.method_label()}, na={pr.na} nb={pr.nb} "
                 f"nk={pr.nk}, N = {pr.N}, dt = {dt}, "
                 + ("no gain constraint" if g is None else f"gain B(1)/A(1) = {g:g}"))
         sig = signal_label(getattr(self, "signal_names_", ("u", "y")),
@@ -68,6 +68,16 @@ class LinearModelMixin:
             head += f"\nsignals: {sig}"
         head += "\nassumptions: " + "; ".join(self._assumption_list(pr))
         return self.intervals_.summary(title=head)
+
+    def method_label(self) -> str:
+        """The method as the summary names it: the moment method with its relaxation
+        order, basis (order >= 2) and solver, e.g. ``moment (order 2, sparse basis,
+        clarabel)``."""
+        order = getattr(self, "relaxation_order", None)
+        if self.method != "moment" or order is None:
+            return self.method
+        basis = f", {self.relaxation_basis} basis" if order >= 2 else ""
+        return f"moment (order {order}{basis}, {self.solver})"
 
     # ------------------------------------------------------------------ model
     def _polys(self, theta=None):

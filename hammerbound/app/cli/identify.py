@@ -137,6 +137,7 @@ def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
             "intervals": ident.intervals_.records(),
             "u_star": ident.u_star_,
             "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method,
+                      "method_label": ident.linear_.method_label(),
                       "inner_signal": args.inner_signal},
             "data": {"steady": str(args.steady), "prbs": str(args.prbs), "N": data.N,
                      "dt": data.dt, "input": data.input_name, "output": data.output_name,

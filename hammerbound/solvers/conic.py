@@ -432,18 +432,20 @@ def best_certificate(data: ConicData, q: np.ndarray, z: np.ndarray, xub: np.ndar
     best = verified_lower_bound(data, q, z, xub, q0)
     if not np.all(np.isfinite(np.asarray(z, dtype=float))):
         return best
-    try:
-        zr = repair_dual(data, q, z)
-        cands = [zr]
-        for margin in PROJECTION_MARGINS:
-            zz = zr
-            for _ in range(PROJECTION_ROUNDS):
-                zz = repair_dual(data, q, project_dual(data, zz, margin))
-                cands.append(zz)
-    except (ValueError, ArithmeticError, np.linalg.LinAlgError):  # keep what we have
-        return best
-    for zz in cands:
+
+    def keep(zz):
+        nonlocal best
         vb = verified_lower_bound(data, q, zz, xub, q0)
         if vb.bound > best.bound:
             best = vb
+        return zz
+
+    try:  # each candidate is certified as soon as it is made: a later failure keeps it
+        zr = keep(repair_dual(data, q, z))
+        for margin in PROJECTION_MARGINS:
+            zz = zr
+            for _ in range(PROJECTION_ROUNDS):
+                zz = keep(repair_dual(data, q, project_dual(data, zz, margin)))
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+        pass
     return best

@@ -242,6 +242,25 @@ def test_best_certificate_is_sound_and_beats_the_repair_alone():
     assert gains >= 1
 
 
+def test_best_certificate_keeps_the_repair_when_a_projection_fails(monkeypatch):
+    """A projection that raises (e.g. eigenvalues that do not converge on a NaN block)
+    must not throw away the candidates already certified."""
+    from hammerbound.solvers import conic
+
+    data = extract_conic_data(sdp_problem()[0])
+    lam = np.linalg.eigvalsh(C3)[0]
+    z = np.random.default_rng(1).standard_normal(data.m) * 1e-4
+    z[0] = -lam
+    xub = np.full(data.n, 2.0)
+    rep = verified_lower_bound(data, data.q, repair_dual(data, data.q, z), xub, data.q0)
+
+    def failing(*args, **kwargs):
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
+
+    monkeypatch.setattr(conic, "project_dual", failing)
+    assert best_certificate(data, data.q, z, xub, data.q0).bound >= rep.bound
+
+
 # ---------------------------------------------------------------------------------------
 # the moment relaxation on two backends
 # ---------------------------------------------------------------------------------------

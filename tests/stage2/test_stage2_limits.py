@@ -194,6 +194,18 @@ def test_moment_guard_warns_between_the_budgets():
         moment_bounds(pr, order=1, max_work=size.work / 2)
 
 
+def test_physical_memory_sees_a_container_limit(tmp_path, monkeypatch):
+    """A container's memory limit (cgroup) below the machine's memory is what counts;
+    "max" (no limit) leaves the machine's."""
+    machine = moment_size.physical_memory()
+    limit = tmp_path / "memory.max"
+    limit.write_text("1048576\n")
+    monkeypatch.setattr(moment_size, "CGROUP_LIMITS", (str(tmp_path / "none"), str(limit)))
+    assert moment_size.physical_memory() == 1048576.0
+    limit.write_text("max\n")
+    assert moment_size.physical_memory() == machine
+
+
 def test_moment_budget_is_an_estimator_option():
     """The budget is a constructor parameter (get_params/clone/set_params), not a module
     global: below the estimate the fit refuses naming the option, inf lifts the refusal."""

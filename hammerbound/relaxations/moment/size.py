@@ -322,9 +322,23 @@ def check_moment_budget(size: MomentSize, max_work: float | None = None,
             "(with total_time_limit) may be faster.", RuntimeWarning, stacklevel=3)
 
 
+#: Memory limits of a container (cgroup v2, then v1), read by :func:`physical_memory`.
+CGROUP_LIMITS = ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes")
+
+
 def physical_memory() -> float | None:
-    """Bytes of physical memory of this machine (None where the OS does not tell)."""
+    """Bytes of memory this process may use: the machine's physical memory, or a smaller
+    memory limit of its container (:data:`CGROUP_LIMITS`); None where neither is known."""
     try:
-        return float(os.sysconf("SC_PAGE_SIZE")) * float(os.sysconf("SC_PHYS_PAGES"))
+        ram = float(os.sysconf("SC_PAGE_SIZE")) * float(os.sysconf("SC_PHYS_PAGES"))
     except (AttributeError, ValueError, OSError):
-        return None
+        ram = None
+    for path in CGROUP_LIMITS:
+        try:
+            with open(path) as fh:
+                text = fh.read().strip()
+        except OSError:
+            continue
+        if text.isdigit() and 0 < int(text) < (ram if ram is not None else float("inf")):
+            ram = float(text)
+    return ram

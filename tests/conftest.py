@@ -176,3 +176,16 @@ def lric_record(shared_data):
     d = np.genfromtxt(shared_data("lric", "eiv_first_order_2017.csv"), delimiter=",",
                       names=True)
     return d["u"], d["y"]
+
+
+@pytest.fixture(autouse=True)
+def _fixed_machine_memory(monkeypatch):
+    """Every test sees the same machine memory (``moment.size.physical_memory``,
+    ``error_cases.MACHINE_MEMORY``): the moment method's size guard also refuses what the
+    machine cannot hold, so its messages would otherwise depend on the machine. Tests of
+    the memory refusal set their own value; the real function is tested on its own."""
+    from error_cases import MACHINE_MEMORY
+
+    from hammerbound.relaxations.moment import size
+
+    monkeypatch.setattr(size, "physical_memory", lambda: MACHINE_MEMORY)

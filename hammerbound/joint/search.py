@@ -78,7 +78,7 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, de
         if np.array_equal(ck, rel.col_keys) and np.array_equal(rk, rel.row_keys):
             lp.restore(snap)
         elif CARRY_BASIS:
-            lp.restore(carry_basis(snap, ck, rk, rel.col_keys, rel.row_keys, lp.rl, lp.ru))
+            lp.set_basis(carry_basis(snap, ck, rk, rel.col_keys, rel.row_keys, lp.rl, lp.ru))
     res = solve_lp(lp)
     x = None if res.x is None else res.x[rel.box_cols]
     snap = lp.snapshot() if res.status == "optimal" else None

@@ -8,8 +8,9 @@ against 17 ms warm on an end of a random-step record (N = 300, Delta eta = 0.3),
 of an end's first LPs are such children. :func:`carry_basis` maps the parent's basis onto
 the child's LP by the keys of their columns and rows (:func:`.relaxation.key`): a column or
 row in both keeps its status, a new column starts at its lower bound, a new row basic,
-and the number of basic variables is then made equal to the number of rows. The result is
-only a starting point for the dual simplex: every bound is still certified from the duals
+and the number of basic variables is then made equal to the number of rows (the result is
+a basis for :meth:`~hammerbound.solvers.highs.HighsLP.set_basis`). It is only a starting
+point for the dual simplex: every bound is still certified from the duals
 of the child's own solve (:class:`~hammerbound.solvers.highs.HighsLP`).
 """
 
@@ -18,15 +19,13 @@ from __future__ import annotations
 import highspy
 import numpy as np
 
+from ..solvers.highs import basis_arrays
+
 __all__ = ["carry_basis"]
 
 _ST = highspy.HighsBasisStatus
 LOWER, BASIC, UPPER, ZERO = (int(_ST.kLower), int(_ST.kBasic), int(_ST.kUpper),
                              int(_ST.kZero))
-
-
-def _statuses(values) -> np.ndarray:
-    return np.fromiter((int(v) for v in values), dtype=np.int64)
 
 
 def _carry(old_keys, old_status, new_keys, default):
@@ -47,11 +46,13 @@ def _nonbasic_row(lo, hi):
 
 
 def carry_basis(snap, old_cols, old_rows, new_cols, new_rows, row_lo, row_hi):
-    """A HiGHS basis for the LP with column and row keys ``new_cols``, ``new_rows`` (row
-    bounds ``row_lo``, ``row_hi``) from ``snap``, a basis of the LP keyed ``old_cols``,
-    ``old_rows``; None if nothing fits."""
-    cs, cfound = _carry(old_cols, _statuses(snap.col_status), new_cols, LOWER)
-    rs, rfound = _carry(old_rows, _statuses(snap.row_status), new_rows, BASIC)
+    """``(col_status, row_status)`` for the LP with column and row keys ``new_cols``,
+    ``new_rows`` (row bounds ``row_lo``, ``row_hi``; :meth:`HighsLP.set_basis` takes them)
+    from ``snap``, a basis of the LP keyed ``old_cols``, ``old_rows``; None if nothing
+    fits."""
+    old_cs, old_rs = basis_arrays(snap)
+    cs, cfound = _carry(old_cols, old_cs, new_cols, LOWER)
+    rs, rfound = _carry(old_rows, old_rs, new_rows, BASIC)
     if not cfound.any():
         return None
     excess = int(np.sum(cs == BASIC) + np.sum(rs == BASIC)) - new_rows.size
@@ -66,8 +67,4 @@ def carry_basis(snap, old_cols, old_rows, new_cols, new_rows, row_lo, row_hi):
     elif excess < 0:  # too few: the slacks of nonbasic rows enter (the last rows first)
         cand = np.flatnonzero(rs != BASIC)[::-1][: -excess]
         rs[cand] = BASIC
-    b = highspy.HighsBasis()
-    b.col_status = [_ST(int(v)) for v in cs]
-    b.row_status = [_ST(int(v)) for v in rs]
-    b.valid = True
-    return b
+    return cs, rs

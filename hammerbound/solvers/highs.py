@@ -168,6 +168,13 @@ def wall_stamp(stop_at):
     return None if stop_at is None else time.time() + (stop_at - time.perf_counter())
 
 
+def basis_arrays(basis):
+    """A HiGHS basis (:meth:`HighsLP.snapshot`) as the ``(col_status, row_status)`` int8
+    arrays of :meth:`HighsLP.get_basis` and :meth:`HighsLP.set_basis`."""
+    return (np.fromiter((int(v) for v in basis.col_status), np.int8),
+            np.fromiter((int(v) for v in basis.row_status), np.int8))
+
+
 def _run_cap(seconds=None) -> float:
     """A run's own limit: ``seconds``, at most :data:`RUN_TIME_LIMIT` (None: that)."""
     return RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
@@ -509,10 +516,7 @@ class HighsLP:
     def get_basis(self):
         """Current simplex basis as ``(col_status (n,), row_status (m,))`` int8 arrays, or None."""
         b = self.h.getBasis()
-        if not b.valid:
-            return None
-        return (np.fromiter((int(v) for v in b.col_status), np.int8),
-                np.fromiter((int(v) for v in b.row_status), np.int8))
+        return basis_arrays(b) if b.valid else None
 
     def snapshot(self):
         """The current simplex basis as a HiGHS object (a cheap copy, for warm starts in

@@ -466,13 +466,14 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                 from ..relaxations.moment.size import (
                     check_moment_budget,
                     estimate_moment_relaxation,
+                    solve_processes,
                 )
                 # (solver and options were checked by _check_params, before any work)
                 # memory/time guard before any work (refuses with the estimate, or warns)
                 check_moment_budget(estimate_moment_relaxation(
                     problem, self.relaxation_order, basis=self.relaxation_basis),
                     max_work=float(self.relaxation_max_work), option="relaxation_max_work",
-                    processes=min(max(1, int(self.n_jobs)), 2 * problem.p))
+                    processes=solve_processes(self.n_jobs, problem.p))
                 lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
                 self._check_box(problem, lp)
                 # the LP bounds are the a priori box and the fallback; kept as res.lp

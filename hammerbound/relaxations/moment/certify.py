@@ -17,8 +17,6 @@ from ..result import BoundInfo, DualCertificate
 __all__ = ["end_info", "solve_group"]
 
 
-
-
 def solve_group(data: ConicData, xub, jobs, backend, solver_options: dict | None):
     """Worker: solve several objectives on one conic data set and certify each (``backend``
     is the registry's object, passed as it is: no lookup or licence check in a worker)."""

@@ -323,6 +323,7 @@ def moment_bounds(
         check_moment_budget,
         check_work,
         estimate_moment_relaxation,
+        solve_processes,
     )
 
     if max_work is not None:
@@ -353,7 +354,7 @@ def moment_bounds(
         # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
         size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
         check_moment_budget(size, max_work=max_work, warn_work=warn_work,
-                            processes=min(max(1, int(n_jobs)), 2 * problem.p))
+                            processes=solve_processes(n_jobs, problem.p))
     if fallback is None:
         # the polytopic LP bound is cheap and certified: a moment end is never reported
         # wider than it (nor from the a priori box where the LP bound is tighter)
@@ -382,7 +383,7 @@ def moment_bounds(
     objs = relax.objectives()
     jobs = [(i, q, q0) for i, (_, _, q, q0) in enumerate(objs)]
     data = relax.data.strip_picos()
-    n_jobs = max(1, min(int(n_jobs), len(jobs)))
+    n_jobs = solve_processes(n_jobs, problem.p)
     if n_jobs > 1 and backend.name == "clarabel" and "max_threads" not in opts:
         # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
         opts = {**opts, "max_threads": 1}

@@ -48,7 +48,7 @@ from ...exceptions import ParameterValidationError, RelaxationTooLargeError
 from ..problem import EIVProblem
 
 __all__ = ["MOMENT_MAX_WORK", "MOMENT_WARN_WORK", "MomentSize", "check_moment_budget",
-           "check_work", "estimate_moment_relaxation"]
+           "check_work", "estimate_moment_relaxation", "solve_processes"]
 
 #: Estimated seconds (one core) above which building the relaxation is refused.
 MOMENT_MAX_WORK = 3600.0
@@ -278,6 +278,13 @@ def check_work(name: str, value, default: float = MOMENT_MAX_WORK) -> float:
         f"{name} must be a number > 0 (a budget on the estimated seconds, one core, of "
         f"building and solving the moment relaxation, default {default:g}; float('inf') "
         f"lifts it); got {value!r}.")
+
+
+def solve_processes(n_jobs, p: int) -> int:
+    """Worker processes :func:`.relaxation.moment_bounds` solves its ``2 p`` objectives on
+    (each holds a copy of the relaxation): ``n_jobs``, at least one, at most one per
+    objective."""
+    return max(1, min(int(n_jobs), 2 * p))
 
 
 def check_moment_budget(size: MomentSize, max_work: float | None = None,

@@ -48,9 +48,6 @@ import pytest
 #: node id from the test file's name on (``test_x.py::...``, whatever its folder), and why
 #: the case can wait for the deep tier
 DEEP = {
-    "test_reliability.py::test_badly_scaled_stage_two[0.0001-10000.0-exact]":
-        "exact method on outputs of order 1e-4: 4-10 min on 2 cores (the other scales and "
-        "methods stay quick)",
     "test_cli_subprocess.py::test_demo_*":
         "the whole demo in a fresh interpreter, 7-9 s each (test_cli.py and test_chapter.py "
         "run the demo in process)",

@@ -21,6 +21,7 @@ Every reported number is a *guaranteed* bound (dual bound, see :mod:`._highs`).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import time
 import warnings
@@ -34,6 +35,7 @@ from ..status import BOX, LIMIT, OPTIMAL
 from ..tolerances import feasibility_tol
 from .problem import EIVProblem
 from .result import BoundInfo, IntervalResult, LPDetails, Polytope
+from .units import Units
 
 __all__ = ["lp_bounds", "orthant_polytope"]
 
@@ -240,6 +242,26 @@ def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -
     UnboundedSetError
         A bound coincides with the a priori box (``check_box=True``).
     """
+    units = Units.of(problem)
+    return _results_back(_lp_bounds(units.problem(problem), n_jobs, check_box), units)
+
+
+def _results_back(res: IntervalResult, units: Units) -> IntervalResult:
+    """A result of the problem in ``units`` (:mod:`.units`), in the data's units: the
+    ``b_j`` columns of bounds, ends and polytopes times the input factor (exact)."""
+    if units.input == 1.0:
+        return res
+    infos = tuple(dataclasses.replace(
+        i, bound=i.bound * units.factor(n // 2),
+        solver_value=i.solver_value * units.factor(n // 2)) for n, i in enumerate(res.infos))
+    scale = units.back(np.ones(res.bounds.shape[0]))  # theta = scale * theta_search
+    polys = tuple(Polytope(q.signs, q.A / scale, q.b) for q in res.polytopes)
+    return dataclasses.replace(res, bounds=units.back(res.bounds), infos=infos,
+                               polytopes=polys)
+
+
+def _lp_bounds(problem: EIVProblem, n_jobs: int, check_box: bool) -> IntervalResult:
+    """:func:`lp_bounds` on a problem in the units it is solved in."""
     t0 = time.perf_counter()
     p = problem.p
     orthants = []

@@ -11,7 +11,9 @@ For every parameter ``theta_k`` and both senses the exact extreme value over the
   :func:`.problem.check_theta` (with its witness ``eta``, ``dx``).
 
 The difference is the certified gap. The search stops when the gap is below
-``tol * max(1, |value|)``; node and time limits return the still-valid outer bound with
+``tol * max(1, |value|)`` in the units it searches in (:mod:`..units`: for a ``b_j``,
+``tol * max(G, |value|)`` with ``G`` a power of two near the data's gain scale
+``max |y| / max |x|``); node and time limits return the still-valid outer bound with
 status ``"limit"``.
 
 This module runs the LP, OBBT (:mod:`.obbt`) and the first verified points, then one
@@ -73,8 +75,9 @@ import numpy as np
 from ...exceptions import EmptyFeasibleSetError
 from ...solvers.highs import past
 from ..lp import end_statuses, lp_bounds, raise_if_box_limited
-from ..problem import EIVProblem, unit_scale
+from ..problem import EIVProblem
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
+from ..units import Units
 from .local import polish, restore
 from .mccormick import shared_groups
 from .obbt import _obbt
@@ -138,9 +141,10 @@ def exact_bounds(
     (:func:`.lp.lp_bounds`) shrunk by OBBT: a node or time limit returns the best certified
     outer bound found so far (status ``"limit"``), never a wider or infinite one.
 
-    The search runs on the data multiplied by a power of two that brings them to order one
-    (:func:`.problem.unit_scale`; exact, the set in theta is the same). A node LP that HiGHS
-    refuses on every attempt (:meth:`._highs.HighsLP.solve`) keeps its parent's certified
+    The search runs on data brought to order one by powers of two (:mod:`..units`: outputs
+    and inputs; exact, the set in theta is the same up to a factor of the ``b_j``, mapped
+    back exactly), so the answer does not depend on the units of the data. A node LP that
+    HiGHS refuses on every attempt (:meth:`._highs.HighsLP.solve`) keeps its parent's certified
     bound, and the end's message says so. Each end's witness is polished a little into the
     set (:func:`.local.polish`).
 
@@ -150,7 +154,9 @@ def exact_bounds(
         The EIV problem (22.34).
     tol : float, default 1e-4
         Stop an interval end when ``value - bound <= tol * max(1, |value|)`` (absolute for
-        small parameters, relative for large ones).
+        small parameters, relative for large ones); for a ``b_j``, ``tol * max(G, |value|)``
+        with ``G`` a power of two near the data's gain scale ``max |y| / max |x|``
+        (1 for data of order one), so that the units of the data do not matter.
     max_nodes : int, default 20000
         Node limit per interval end.
     time_limit : float, default 600
@@ -213,17 +219,17 @@ def exact_bounds(
     # same set in theta on data of order one (exact power-of-two scaling): HiGHS's
     # absolute tolerances then act relatively; the witnesses' errors are scaled back below
     lp = lp_bounds(problem, check_box=False)
-    scale = unit_scale(problem)
-    if scale != 1.0:
-        problem = problem.scaled(scale)
+    given, units = problem, Units.of(problem)
+    problem = units.problem(problem)
+    lp_box = units.to_search(lp.bounds)
     if working_set is None:
         # not with shared input errors (two-level): their products couple every
         # equation, and full LPs with the SLP walk were 3-6x faster at N = 900
         working_set = (problem.equation_times.size >= AUTO_MIN_EQUATIONS
                        and not shared_groups(problem))
-    ws = initial_equations(problem, lp.bounds) if working_set else None
+    ws = initial_equations(problem, lp_box) if working_set else None
     jobs = [(k, s) for k in range(problem.p) for s in (1.0, -1.0)]
-    box, ws, outs = _search_all(problem, lp.bounds, jobs, ws, n_jobs, deadline, options,
+    box, ws, outs = _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options,
                                 dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit,
                                      progress=progress))
     polished = _polished(problem, jobs, outs, tol, options, deadline)
@@ -234,14 +240,15 @@ def exact_bounds(
             "the branch-and-bound certified every node of the McCormick relaxation of "
             "(22.34) infeasible: no theta explains the data within the error bounds (the "
             "polytopic LP set is a strict outer approximation).", first_index=None)
-    bounds, inner, infos = _end_infos(problem, jobs, outs, polished, lp.bounds, scale)
+    bounds, inner, infos = _end_infos(problem, jobs, outs, polished, lp.bounds, units)
     names = problem.param_names
     if check_box:
-        raise_if_box_limited(bounds, problem.theta_box, names)
+        raise_if_box_limited(bounds, given.theta_box, names)
     return IntervalResult(
         param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="exact",
         time=time.perf_counter() - t0,
-        status=end_statuses(names, infos, bounds, problem.theta_box), lp=lp, root_box=box,
+        status=end_statuses(names, infos, bounds, given.theta_box), lp=lp,
+        root_box=units.back(box),
         inner=inner, details=ExactDetails(None if ws is None else int(ws.size)),
     )
 
@@ -292,30 +299,31 @@ def _polished(problem, jobs, outs, tol, options, deadline):
     return polish(problem, witnesses, keep=keep)
 
 
-def _end_infos(problem, jobs, outs, polished, lp_box, scale):
-    """``(bounds (p, 2), inner (p, 2), infos)`` of the ends' results; the witnesses'
-    errors are scaled back by ``scale`` (the data's :func:`.problem.unit_scale`)."""
+def _end_infos(problem, jobs, outs, polished, lp_box, units):
+    """``(bounds (p, 2), inner (p, 2), infos)`` of the ends' results, in the data's units
+    (``problem`` is in the search's :class:`..units.Units`; ``lp_box`` in the data's)."""
     p = problem.p
     bounds = np.zeros((p, 2))
     inner = np.full((p, 2), np.nan)
     infos = []
     for (k, s), o, wit in zip(jobs, outs, polished, strict=True):
         e = 0 if s > 0 else 1
+        f = units.factor(k)  # the parameter's search units -> the data's
         value = s * float(wit.theta[k]) if wit is not None else o.value
+        theta = None if wit is None else units.back(wit.theta)
         # never wider than the LP bound (the OBBT box lies inside it; kept explicit)
-        bounds[k, e] = max(s * o.bound, lp_box[k, 0]) if e == 0 else \
-            min(s * o.bound, lp_box[k, 1])
+        bounds[k, e] = max(f * s * o.bound, lp_box[k, 0]) if e == 0 else \
+            min(f * s * o.bound, lp_box[k, 1])
         if wit is not None:
-            inner[k, e] = wit.theta[k]
+            inner[k, e] = theta[k]
         infos.append(BoundInfo(
             param=problem.param_names[k], sense="min" if s > 0 else "max",
-            bound=float(bounds[k, e]), solver_value=float(s * o.solver_value),
+            bound=float(bounds[k, e]), solver_value=float(f * s * o.solver_value),
             status=o.status, certified=True, time=o.time, iterations=o.iterations,
-            gap=max(float(value - o.bound), 0.0) if np.isfinite(value) else None,
-            witness=None if wit is None else wit.theta.copy(), nodes=o.nodes,
-            message=o.message,
-            point=None if wit is None else VerifiedPoint(wit.theta.copy(), wit.eta / scale,
-                                                         wit.dx / scale),
-            inner=None if wit is None else float(wit.theta[k]),
+            gap=max(f * float(value - o.bound), 0.0) if np.isfinite(value) else None,
+            witness=theta, nodes=o.nodes, message=o.message,
+            point=None if wit is None else VerifiedPoint(
+                theta.copy(), *units.errors_back(wit.eta, wit.dx)),
+            inner=None if wit is None else float(theta[k]),
         ))
     return bounds, inner, infos

@@ -30,6 +30,7 @@ from .problem import RecordProblem
 from .progress import RecordProgress
 from .search import search_end
 from .tighten import map_jobs, outer_leaves, workers
+from .units import RecordUnits
 
 __all__ = ["RecordDetails", "record_bounds"]
 
@@ -132,7 +133,10 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         ``"lp"``: the OBBT box of the relaxation (certified, not tight); ``"exact"``:
         branch-and-bound to ``tol``.
     tol : float
-        An end stops when ``value - bound <= tol * max(1, |value|)``.
+        An end stops when ``value - bound <= tol * max(1, |value|)`` in the units the search
+        runs in (:mod:`.units`: input and output scaled to order one by powers of two, so
+        the units of the record do not matter; ``m_l, m_r`` in units of the record's
+        ``range(y) / range(u)`` scale, ``c_l, c_r`` of its ``u`` scale).
     max_nodes, time_limit : per interval end; ``deadline``: absolute :func:`time.time`.
     n_jobs : int
         Interval ends searched in parallel (joblib).
@@ -149,6 +153,40 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
     EmptyFeasibleSetError
         The relaxation is certified infeasible: nothing explains the record.
     """
+    units = RecordUnits.of(problem)
+    if skip is not None and not units.identity:
+        skip = _skip_in(skip, units.factors(problem.p))
+    res = _record_bounds(units.problem(problem), method=method, tol=tol, max_nodes=max_nodes,
+                         time_limit=time_limit, deadline=deadline, n_jobs=n_jobs, skip=skip,
+                         progress=progress)
+    return res if units.identity else _result_back(res, units, problem.p)
+
+
+def _skip_in(skip, factors):
+    """``skip`` (of bounds in the data's units) for bounds in the search's units."""
+    return lambda k, sense, bound: skip(k, sense, bound / factors[k])
+
+
+def _result_back(res: IntervalResult, units: RecordUnits, p: int) -> IntervalResult:
+    """A result of the search (in ``units``) in the data's units: every bound, value,
+    gap, witness and pool point divided by its row's factor (exact powers of two)."""
+    f = units.factors(p)
+    infos = []
+    for i, info in enumerate(res.infos):
+        k = i // 2
+        infos.append(replace(
+            info, bound=info.bound / f[k], solver_value=info.solver_value / f[k],
+            gap=None if info.gap is None else info.gap / f[k],
+            witness=None if info.witness is None else units.back(info.witness, p),
+            point=units.witness_back(info.point, p)))
+    pool = None if res.pool is None else tuple(units.witness_back(w, p) for w in res.pool)
+    return replace(res, bounds=units.back(res.bounds, p), infos=tuple(infos),
+                   root_box=units.back(res.root_box, p), pool=pool)
+
+
+def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit, deadline,
+                   n_jobs, skip, progress) -> IntervalResult:
+    """:func:`record_bounds` on a problem in the units it is searched in."""
     t0 = time.perf_counter()
     points = []
     stops = []

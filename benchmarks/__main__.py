@@ -10,6 +10,7 @@
     python -m benchmarks weights                # certified uncertainty weights by order
     python -m benchmarks orders [--orders 2 3 4 5 6]  # LP time by model order, guard refusals
     python -m benchmarks lric                   # the LRIC exam record (../shared/data/lric/)
+    python -m benchmarks units [--no-units]     # the same records in other units
     python -m benchmarks report                 # regenerate docs/benchmarks.md from results/
     python -m benchmarks all --quick            # every benchmark, then the report
 
@@ -31,6 +32,7 @@ COMMANDS = {
     "weights": "weights",
     "orders": "lp_orders",
     "lric": "lric",
+    "units": "units",
     "report": "report",
 }
 

@@ -166,6 +166,13 @@ def run_method(example, label: str, *, n_jobs: int = 2, time_limit: float = 600.
     }
 
 
+def markdown_table(header, rows) -> str:
+    """A Markdown table of ``rows`` (lists of cells) under ``header``."""
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
 def write_csv(rows: list[dict], path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     keys: list[str] = []

@@ -15,12 +15,13 @@ import numpy as np
 
 try:
     from benchmarks import _common as C
-    from benchmarks import default_method
+    from benchmarks import default_method, units
     from benchmarks import report_one_record as R1
 except ImportError:  # run as a script
     import _common as C
     import default_method
     import report_one_record as R1
+    import units
 
 OUT = C.ROOT / "docs" / "benchmarks.md"
 NOTES = C.HERE / "report_notes.md"
@@ -59,10 +60,7 @@ def fs(v):
     return f"{x:.3f}" if x < 1 else (f"{x:.2f}" if x < 10 else f"{x:.1f}")
 
 
-def table(header, rows):
-    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return "\n".join(out)
+table = C.markdown_table
 
 
 def notes_section(key):
@@ -828,6 +826,8 @@ def main(argv=None):
            "### Order-2 moment relaxation at the chapter's size\n", notes_section("moment2-intro"),
            section_moment2(), notes_section("moment2-findings"),
            "### LRIC exam record\n", section_lric(),
+           "### The same records in other units\n", notes_section("units-intro"),
+           units.report_section(), notes_section("units-findings"),
            "### Exact intervals on long records\n", section_scaling(),
            notes_section("scaling-findings"),
            "### Exact witnesses against an independent LP\n", notes_section("witness-intro"),

@@ -58,9 +58,19 @@ class Units:
     na: int
 
     @classmethod
-    def of(cls, problem: EIVProblem) -> Units:
+    def of(cls, problem: EIVProblem, b_bounds=None) -> Units:
+        """The units of ``problem``: the output scaled by :func:`..problem.unit_scale`; the
+        input by :func:`input_scale`, or, given bounds of the ``b_j`` (e.g. the LP
+        method's, shape (nb', 2)), by the power of two nearest their largest magnitude
+        unless that is of order one (then the ``b_j`` are of order one in the search's
+        units, and a tolerance relative to ``max(1, |b_j|)`` there is relative to the
+        ``b_j`` of the record, whatever its units)."""
         c = unit_scale(problem)
-        s = input_scale(problem.scaled(c) if c != 1.0 else problem)
+        mag = 0.0 if b_bounds is None else float(np.max(np.abs(b_bounds), initial=0.0))
+        if np.isfinite(mag) and mag > 0:
+            s = 1.0 / power_of_two_scale(mag)
+        else:
+            s = input_scale(problem.scaled(c) if c != 1.0 else problem)
         return cls(c, s, problem.na)
 
     def problem(self, problem: EIVProblem) -> EIVProblem:

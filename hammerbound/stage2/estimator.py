@@ -126,8 +126,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         lies in it) and ``|b_j| <= 1e4``.
     tol, max_nodes, time_limit : float, int, float
         Stopping rules of the exact method, per interval end (gap ``<= tol * max(1, |v|)``;
-        for a ``b_j`` ``tol * max(G, |v|)``, ``G`` a power of two near the data's gain
-        scale ``max |y| / max |x|``, 1 for data of order one).
+        for a ``b_j`` ``tol * max(G, |v|)``, ``G`` the power of two nearest the largest
+        ``|b_j|`` of the LP bounds, 1 when that lies in ``[1/8, 8]``).
         An end stopped by ``max_nodes`` or ``time_limit`` reports the best certified outer
         bound found so far (never wider than the LP bound) with status ``"limit"``, and
         the fit warns (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends.

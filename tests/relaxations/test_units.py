@@ -85,10 +85,11 @@ def test_exact_intervals_in_other_units_are_the_same(sx, sy):
     truth = theta.copy()
     truth[2:] *= g
     assert np.all((res.bounds[:, 0] <= truth) & (truth <= res.bounds[:, 1]))
+    # the b_j close to a tolerance relative to the largest |b_j| (as a power of two), not
+    # to 1e-4 absolute whatever the units
+    b_scale = np.sqrt(2.0) * abs(g) * np.max(np.abs(ref.bounds[2:]))
     for info in res.infos:
-        # each end closed to the tolerance in the record's own scale (b_j in units of g:
-        # relative here, |b_j| / g > 1), not to 1e-4 absolute whatever the units
-        unit = abs(g) if info.param.startswith("b") else 1.0
+        unit = b_scale if info.param.startswith("b") else 1.0
         assert info.gap <= TOL * max(unit, abs(info.inner)), info
         # the witness explains the record in the units it was given in
         assert explains(scaled, info.witness, rtol=1e-6), info

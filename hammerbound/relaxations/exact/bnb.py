@@ -12,9 +12,9 @@ For every parameter ``theta_k`` and both senses the exact extreme value over the
 
 The difference is the certified gap. The search stops when the gap is below
 ``tol * max(1, |value|)`` in the units it searches in (:mod:`..units`: for a ``b_j``,
-``tol * max(G, |value|)`` with ``G`` a power of two near the data's gain scale
-``max |y| / max |x|``); node and time limits return the still-valid outer bound with
-status ``"limit"``.
+``tol * max(G, |value|)`` with ``G`` the power of two nearest the largest ``|b_j|`` of the
+LP bounds, 1 when that lies in ``[1/8, 8]``); node and time limits return the
+still-valid outer bound with status ``"limit"``.
 
 This module runs the LP, OBBT (:mod:`.obbt`) and the first verified points, then one
 search per interval end (:mod:`.search`, serially or on joblib workers), and assembles the
@@ -155,8 +155,8 @@ def exact_bounds(
     tol : float, default 1e-4
         Stop an interval end when ``value - bound <= tol * max(1, |value|)`` (absolute for
         small parameters, relative for large ones); for a ``b_j``, ``tol * max(G, |value|)``
-        with ``G`` a power of two near the data's gain scale ``max |y| / max |x|``
-        (1 for data of order one), so that the units of the data do not matter.
+        with ``G`` the power of two nearest the largest ``|b_j|`` of the LP bounds (1 when
+        that lies in ``[1/8, 8]``), so that the units of the data do not matter.
     max_nodes : int, default 20000
         Node limit per interval end.
     time_limit : float, default 600
@@ -219,7 +219,7 @@ def exact_bounds(
     # same set in theta on data of order one (exact power-of-two scaling): HiGHS's
     # absolute tolerances then act relatively; the witnesses' errors are scaled back below
     lp = lp_bounds(problem, check_box=False)
-    given, units = problem, Units.of(problem)
+    given, units = problem, Units.of(problem, b_bounds=lp.bounds[problem.na:])
     problem = units.problem(problem)
     lp_box = units.to_search(lp.bounds)
     if working_set is None:

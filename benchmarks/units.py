@@ -46,7 +46,7 @@ def _no_units():
 
     class _U(Units):
         @classmethod
-        def of(cls, problem):
+        def of(cls, problem, b_bounds=None):
             return Units(1.0, 1.0, problem.na)
 
     class _R(RecordUnits):

@@ -22,6 +22,7 @@ from ..joint import (
     GAMMA_NAMES,
     GammaPrior,
     RecordProblem,
+    at_prior_limit,
     default_gamma_box,
     record_bounds,
     record_box,
@@ -120,8 +121,7 @@ def _at_assumed_limit(problem, prior):
         i, j = k - p, (0 if sense > 0 else 1)
         if not 0 <= i < 4 or not assumed[i, j]:
             return False
-        lim = prior.box[i, j]
-        return abs(bound - lim) <= 1e-6 * max(1.0, abs(lim))
+        return at_prior_limit(bound, prior.box, i, j)
 
     return skip
 

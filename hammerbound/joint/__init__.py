@@ -19,7 +19,14 @@ steady-state data).
 """
 
 from .bounds import record_bounds
-from .prior import GammaPrior, default_gamma_box, record_box, reversal_summary, unidentified
+from .prior import (
+    GammaPrior,
+    at_prior_limit,
+    default_gamma_box,
+    record_box,
+    reversal_summary,
+    unidentified,
+)
 from .problem import GAMMA_NAMES, RecordProblem, Witness, verify_point
 
 __all__ = [
@@ -27,6 +34,7 @@ __all__ = [
     "GammaPrior",
     "RecordProblem",
     "Witness",
+    "at_prior_limit",
     "default_gamma_box",
     "record_bounds",
     "record_box",

@@ -27,7 +27,8 @@ import numpy as np
 from ..exceptions import ParameterValidationError
 from .modes import band_range
 
-__all__ = ["GammaPrior", "default_gamma_box", "record_box", "reversal_summary", "unidentified"]
+__all__ = ["GammaPrior", "at_prior_limit", "default_gamma_box", "record_box",
+           "reversal_summary", "unidentified"]
 
 DEFAULT_B_BOUND = 1.0e4
 M_FACTOR = 1.0e2
@@ -70,6 +71,15 @@ def reversal_summary(u) -> dict:
     return {"down": down, "up": up, "monotone": down == 0.0 or up == 0.0}
 
 
+def at_prior_limit(bound, prior, i, j) -> bool:
+    """Whether ``bound`` sits at the a priori limit ``prior[i, j]``: within ``1e-6`` of
+    the limit's magnitude or of the row's width, whichever is larger (relative, so the
+    units of the record do not matter: an absolute ``1e-6`` took every identified end of a
+    slope below ``1e-6`` for one at its limit)."""
+    lim = prior[i, j]
+    return abs(bound - lim) <= 1e-6 * max(abs(lim), prior[i, 1] - prior[i, 0])
+
+
 def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps_stopped=0
                  ) -> list[tuple[str, str]]:
     """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
@@ -86,8 +96,7 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
         for j in (0, 1):
             if not assumed[i, j]:
                 continue
-            lim = prior[i, j]
-            if abs(bounds[i, j] - lim) > 1e-6 * max(1.0, abs(lim)):
+            if not at_prior_limit(bounds[i, j], prior, i, j):
                 continue
             if stopped_by_time:
                 cause = ("the time limit stopped the search before the record bounded it "

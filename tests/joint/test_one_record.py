@@ -195,6 +195,22 @@ def test_exact_witnesses_in_other_units_explain_the_record_as_given(noise):
         assert np.max(np.abs(w.eta)) <= deta * (1 + 1e-9)
 
 
+@pytest.mark.deep
+def test_not_identified_does_not_depend_on_units():
+    """Slopes of ~1e-9 (u * 2**14, y * 2**-14: an exact change of units): the ends the
+    record bounds stay finite and no other warning appears (an absolute 1e-6 took every
+    end of such a slope for one at its assumed limit: found by a new-user trial)."""
+    u = steps(40, seed=3, hold=(3, 8))
+    y = record(u, 0.05, "bound", seed=3)
+    ref, w_ref = fit(u, y, 0.05)
+    su, sy = 2.0 ** 14, 2.0 ** -14
+    other, w_other = fit(u * su, y * sy, 0.05 * sy)
+    assert np.array_equal(np.isfinite(bounds_of(other)), np.isfinite(bounds_of(ref)))
+    # the same parameters named (the messages quote reversals in the record's units)
+    assert [str(w.message).split(":")[0] for w in w_other] == \
+        [str(w.message).split(":")[0] for w in w_ref]
+
+
 # ------------------------------------------------------------------ honest limits
 def _assert_not_identified(f, caught):
     assert caught, "no NotIdentifiedWarning"

@@ -136,7 +136,7 @@ def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes
         An end stops when ``value - bound <= tol * max(1, |value|)`` in the units the search
         runs in (:mod:`.units`: input and output scaled to order one by powers of two, so
         the units of the record do not matter; ``m_l, m_r`` in units of the record's
-        ``range(y) / range(u)`` scale, ``c_l, c_r`` of its ``u`` scale).
+        ``max |y| / max |u|`` scale as powers of two, ``c_l, c_r`` of its ``max |u|``).
     max_nodes, time_limit : per interval end; ``deadline``: absolute :func:`time.time`.
     n_jobs : int
         Interval ends searched in parallel (joblib).

@@ -53,7 +53,11 @@ def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
     lines.append(f"{'parameter':<{w}} {'lower':>{cw}} {'centre':>{cw}} {'upper':>{cw}} "
                  f"{'half-width':>{cw}}  status")
     for r in recs:
-        nums = " ".join(f"{r[c]:>{cw}.{digits}f}" for c in ("lower", "centre", "upper",
-                                                            "half_width"))
+        # a row whose numbers are all below 0.01 (e.g. a slope in m3/s per %) in
+        # scientific notation: fixed decimals would print it as 0.0000
+        mag = max(abs(r["lower"]), abs(r["upper"]))
+        fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
+        nums = " ".join(f"{r[c]:>{cw}.{fmt}}" for c in ("lower", "centre", "upper",
+                                                        "half_width"))
         lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")
     return "\n".join(lines)

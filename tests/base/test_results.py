@@ -316,3 +316,18 @@ def test_identifier_intervals_stack_both_blocks():
     env = ident.output_envelope(ex.prbs.u, ex.prbs.y)
     lo, hi = env
     assert env.coverage() == 1.0 and np.isfinite(lo).sum() == ex.prbs.u.size - 2
+
+
+def test_summary_table_prints_small_parameters_with_their_digits():
+    """A slope of ~1e-5 (a valve in % driving a flow in m3/s) was printed as 0.0000 in the
+    summary table; a row below 0.01 now reads back to four significant digits."""
+    from hammerbound.tables import interval_text
+
+    b = np.array([[9.137e-6, 9.262e-6], [0.0, 0.0489], [-0.7612, -0.7537]])
+    text = interval_text(["ml", "cl", "a1"], b, ["optimal"] * 3)
+    rows = {line.split()[0]: line.split()[1:5] for line in text.splitlines()[1:]}
+    lo, mid, hi, half = (float(v) for v in rows["ml"])
+    np.testing.assert_allclose([lo, hi], b[0], rtol=1e-3)
+    assert half > 0
+    # rows of order one keep their fixed decimals
+    assert rows["a1"][0] == "-0.7612" and rows["cl"][0] == "0.0000"

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..relaxations.units import power_of_two_scale
+from ..relaxations.units import power_of_two_scale, rows_times
 from .problem import RecordProblem, Witness
 
 
@@ -62,12 +62,11 @@ class RecordUnits:
     def back(self, v, p: int):
         """Rows (or a vector) of ``[theta, m_l, c_l, m_r, c_r, z0]`` (or a prefix of them)
         in the data's units."""
-        v = np.asarray(v, dtype=float)
-        f = self.factors(p)[: v.shape[0]]
-        return v / (f[:, None] if v.ndim == 2 else f)
+        return rows_times(v, 1.0 / self.factors(p))
 
     def witness_back(self, w: Witness | None, p: int) -> Witness | None:
+        """A witness of the search in the data's units (the same object if none)."""
         if w is None or self.identity:
             return w
-        g = self.back(np.concatenate([np.zeros(p), w.gamma]), p)[p:]
-        return replace(w, gamma=g, z0=w.z0 / self.y, x=w.x / self.y, eta=w.eta / self.y)
+        return replace(w, gamma=w.gamma / self.factors(p)[p: p + 4], z0=w.z0 / self.y,
+                       x=w.x / self.y, eta=w.eta / self.y)

@@ -251,11 +251,11 @@ def _results_back(res: IntervalResult, units: Units) -> IntervalResult:
     ``b_j`` columns of bounds, ends and polytopes times the input factor (exact)."""
     if units.input == 1.0:
         return res
+    f = units.factors(res.bounds.shape[0])  # theta_search = f * theta
     infos = tuple(dataclasses.replace(
-        i, bound=i.bound * units.factor(n // 2),
-        solver_value=i.solver_value * units.factor(n // 2)) for n, i in enumerate(res.infos))
-    scale = units.back(np.ones(res.bounds.shape[0]))  # theta = scale * theta_search
-    polys = tuple(Polytope(q.signs, q.A / scale, q.b) for q in res.polytopes)
+        i, bound=i.bound / f[n // 2], solver_value=i.solver_value / f[n // 2])
+        for n, i in enumerate(res.infos))
+    polys = tuple(Polytope(q.signs, q.A * f, q.b) for q in res.polytopes)
     return dataclasses.replace(res, bounds=units.back(res.bounds), infos=infos,
                                polytopes=polys)
 

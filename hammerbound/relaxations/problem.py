@@ -310,7 +310,7 @@ class EIVProblem:
 
         The feasible set in ``theta`` is the same (every equation of (22.34) is multiplied
         by ``factor``; the gain equality does not involve the data); the errors of a point
-        scale by ``factor``. With a power of two (:func:`unit_scale`) the copy is exact.
+        scale by ``factor``. With a power of two (:func:`.units.unit_scale`) the copy is exact.
         """
         import dataclasses
 
@@ -322,32 +322,6 @@ class EIVProblem:
         """Residuals ``r_t(theta)`` of the nominal equations (zero iff the data fit exactly)."""
         phi, yt = self.regressors()
         return yt + phi @ np.asarray(theta, dtype=float)
-
-
-#: Output magnitudes (``max(|y|, Delta eta)``) from ``2**-UNIT_SCALE_EXP`` to
-#: ``2**UNIT_SCALE_EXP`` count as order one: :func:`unit_scale` leaves them alone.
-UNIT_SCALE_EXP = 3
-
-
-def unit_scale(problem: EIVProblem) -> float:
-    """A power of two that brings the problem's output magnitude to order one (or 1.0).
-
-    The magnitude is ``max(max |y|, max Delta eta)``: ``y_t`` and ``eta_t`` enter every
-    equation of (22.34) with coefficient one, so it is the scale of the equations and of
-    the McCormick rows. Solvers with absolute tolerances (HiGHS's ``1e-7``) act on
-    :meth:`EIVProblem.scaled` copies as if relatively. Measured on the two records with
-    ``|y| ~ 1e-3`` and noise at the bound of the shared reproducers
-    (``exact_small_scale.json``): unscaled, the exact method found no verified point for
-    either end of any parameter of the first in 60 s per end (HiGHS stopped with an error
-    on 336 node LPs, each solved again from scratch); scaled, the exact fits take 0.9 s and
-    5.1 s with every end closed.
-    """
-    mag = max(float(np.max(np.abs(problem.y), initial=0.0)),
-              float(np.max(problem.deta, initial=0.0)))
-    if not (np.isfinite(mag) and mag > 0):
-        return 1.0
-    e = int(np.round(np.log2(mag)))
-    return 1.0 if abs(e) <= UNIT_SCALE_EXP else float(2.0 ** -e)
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,8 @@ from hammerbound.exceptions import SolverError
 from hammerbound.relaxations.exact import mccormick
 from hammerbound.relaxations.exact.bnb import exact_bounds
 from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.problem import EIVProblem, check_theta, unit_scale
+from hammerbound.relaxations.problem import EIVProblem, check_theta
+from hammerbound.relaxations.units import unit_scale
 from hammerbound.solvers import highs as _highs
 
 ROOT = Path(__file__).resolve().parents[2]

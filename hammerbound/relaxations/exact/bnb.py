@@ -306,9 +306,10 @@ def _end_infos(problem, jobs, outs, polished, lp_box, units):
     bounds = np.zeros((p, 2))
     inner = np.full((p, 2), np.nan)
     infos = []
+    to_data = 1.0 / units.factors(p)  # per parameter: search units -> the data's
     for (k, s), o, wit in zip(jobs, outs, polished, strict=True):
         e = 0 if s > 0 else 1
-        f = units.factor(k)  # the parameter's search units -> the data's
+        f = to_data[k]
         value = s * float(wit.theta[k]) if wit is not None else o.value
         theta = None if wit is None else units.back(wit.theta)
         # never wider than the LP bound (the OBBT box lies inside it; kept explicit)

@@ -103,6 +103,19 @@ class Units:
             s = input_scale(problem.scaled(c) if c != 1.0 else problem)
         return cls(c, s, problem.na)
 
+    @classmethod
+    def of_lp(cls, problem: EIVProblem, lp_bounds) -> Units:
+        """The units of ``problem`` with the ``b_j``'s scale from ``lp_bounds`` (p, 2), the
+        LP method's intervals (:meth:`of`), unless a ``b_j`` end sits at the a priori box:
+        then they say nothing of that scale (``|b_j| <= 1e4`` for ``b_j ~ 1e-8`` gave a
+        factor ``2**13`` and a 300 s fit) and the input's magnitude sets it."""
+        from .lp import touches_box
+
+        na = problem.na
+        if touches_box(np.asarray(lp_bounds), problem.theta_box)[na:].any():
+            return cls.of(problem)
+        return cls.of(problem, b_bounds=np.asarray(lp_bounds)[na:])
+
     def problem(self, problem: EIVProblem) -> EIVProblem:
         """The problem in these units (the same object when both factors are one)."""
         if self.output != 1.0:

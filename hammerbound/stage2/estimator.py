@@ -127,7 +127,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     tol, max_nodes, time_limit : float, int, float
         Stopping rules of the exact method, per interval end (gap ``<= tol * max(1, |v|)``;
         for a ``b_j`` ``tol * max(G, |v|)``, ``G`` the power of two nearest the largest
-        ``|b_j|`` of the LP bounds, 1 when that lies in ``[1/8, 8]``).
+        ``|b_j|`` of the LP bounds, 1 when that lies in ``[1/8, 8]``, from the input's
+        magnitude when such a bound sits at the a priori box).
         An end stopped by ``max_nodes`` or ``time_limit`` reports the best certified outer
         bound found so far (never wider than the LP bound) with status ``"limit"``, and
         the fit warns (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends.

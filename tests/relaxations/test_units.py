@@ -116,3 +116,20 @@ def test_search_units_map_back_exactly():
     row, rhs = sp.gain_row()
     row0, rhs0 = pr.gain_row()
     assert np.isclose(row @ u.to_search(theta) - rhs, (row0 @ theta - rhs0) / u.input)
+
+
+def test_lp_bounds_at_the_a_priori_box_do_not_set_the_b_scale():
+    """b_j ~ 1e-8 with the default box |b_j| <= 1e4: the LP's b bounds sit at the box and
+    say nothing of the b_j's scale; the input's magnitude sets it (from the box the exact
+    fit of the tests' badly scaled case took 300 s instead of 1 s). With a box that the
+    LP bounds leave, their largest |b_j| does."""
+    data, _ = chapter_eiv_data(N=80, deta=0.02, dx=0.0, seed=7)
+    g = 1e-8
+    pr = EIVProblem(**_scaled(data, 1e4, 1e-4))
+    lp = lp_bounds(pr, check_box=False)
+    assert np.any(np.isclose(np.abs(lp.bounds[2:]), 1e4)), lp.bounds  # at the box
+    assert Units.of_lp(pr, lp.bounds) == Units.of(pr)
+    pr = EIVProblem(**_scaled(data, 1e4, 1e-4), theta_box=_box(g))
+    lp = lp_bounds(pr)
+    mag = np.max(np.abs(lp.bounds[2:]))
+    assert Units.of_lp(pr, lp.bounds).input == 2.0 ** np.round(np.log2(mag))

@@ -13,7 +13,8 @@ For every parameter ``theta_k`` and both senses the exact extreme value over the
 The difference is the certified gap. The search stops when the gap is below
 ``tol * max(1, |value|)`` in the units it searches in (:mod:`..units`: for a ``b_j``,
 ``tol * max(G, |value|)`` with ``G`` the power of two nearest the largest ``|b_j|`` of the
-LP bounds, 1 when that lies in ``[1/8, 8]``); node and time limits return the
+LP bounds, 1 when that lies in ``[1/8, 8]``, from the input's magnitude when such a
+bound sits at the a priori box); node and time limits return the
 still-valid outer bound with status ``"limit"``.
 
 This module runs the LP, OBBT (:mod:`.obbt`) and the first verified points, then one
@@ -156,7 +157,8 @@ def exact_bounds(
         Stop an interval end when ``value - bound <= tol * max(1, |value|)`` (absolute for
         small parameters, relative for large ones); for a ``b_j``, ``tol * max(G, |value|)``
         with ``G`` the power of two nearest the largest ``|b_j|`` of the LP bounds (1 when
-        that lies in ``[1/8, 8]``), so that the units of the data do not matter.
+        that lies in ``[1/8, 8]``; from the input's magnitude when such a bound sits at the
+        a priori box), so that the units of the data do not matter.
     max_nodes : int, default 20000
         Node limit per interval end.
     time_limit : float, default 600
@@ -219,7 +221,7 @@ def exact_bounds(
     # same set in theta on data of order one (exact power-of-two scaling): HiGHS's
     # absolute tolerances then act relatively; the witnesses' errors are scaled back below
     lp = lp_bounds(problem, check_box=False)
-    given, units = problem, Units.of(problem, b_bounds=lp.bounds[problem.na:])
+    given, units = problem, Units.of_lp(problem, lp.bounds)
     problem = units.problem(problem)
     lp_box = units.to_search(lp.bounds)
     if working_set is None:
@@ -231,7 +233,7 @@ def exact_bounds(
     jobs = [(k, s) for k in range(problem.p) for s in (1.0, -1.0)]
     box, ws, outs = _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options,
                                 dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit,
-                                     progress=progress))
+                                     progress=progress, to_data=1.0 / units.factors(problem.p)))
     polished = _polished(problem, jobs, outs, tol, options, deadline)
     if any(o.bound == np.inf for o in outs):
         # every leaf of a search was certified infeasible and no point was verified: the

@@ -189,3 +189,28 @@ def test_exact_progress_bar_and_limits():
     limited = [i for i in est.bound_info_ if i.status == "limit"]
     for info in limited:  # a stopped search still reports a valid outer bound and says so
         assert "limit" in info.message and info.gap is not None and info.gap >= 0
+
+
+def _progress_gaps(x, y, scale, capsys):
+    """The gaps of the exact method's final progress lines (stderr is not a terminal) on
+    the input in units ``scale`` times smaller."""
+    capsys.readouterr()
+    LinearEIVSetEstimator(output_bound=0.05, method="exact", progress=True, max_nodes=2,
+                          n_jobs=1).fit(x / scale, y, input_bound=0.003 / scale)
+    out = capsys.readouterr()
+    assert out.out == ""  # stdout belongs to the program
+    lines = [ln for ln in out.err.splitlines() if "finished" in ln]
+    return {ln.split(":")[0]: float(ln.split(", gap ")[1].split(",")[0]) for ln in lines}
+
+
+def test_exact_progress_shows_the_gap_in_the_units_of_the_data(capsys):
+    """The input in units 1024 times smaller (b_j 1024 times larger; a power of two, so the
+    search runs the same path in its own units): the b_j gaps shown are 1024 times larger,
+    the a_i gaps the same (before, the search's units were shown: the same gaps)."""
+    x, y, _, _ = _data(N=40, deta=0.05)
+    ref = _progress_gaps(x, y, 1.0, capsys)
+    big = _progress_gaps(x, y, 1024.0, capsys)
+    assert len(ref) == 8 and ref.keys() == big.keys()
+    for label, g in ref.items():
+        want = g * 1024.0 if " b" in label else g
+        assert big[label] == pytest.approx(want, rel=2e-3), label  # 3 digits shown

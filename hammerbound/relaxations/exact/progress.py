@@ -18,18 +18,20 @@ class _GapBar:
     done when the gap is below ``tol``, so 100 % means done. On a terminal a tqdm bar whose
     postfix shows the gap, the nodes and the time left before the time limit stops the
     search; otherwise (a pipe, a file) plain lines without cursor codes: one every
-    :data:`_LINE_EVERY` seconds and one when the end is done.
+    :data:`_LINE_EVERY` seconds and one when the end is done. The search gives its gaps in
+    its own units (:mod:`..units`); ``unit`` converts them to the data's for display.
     """
 
-    def __init__(self, label, position, gap0, stop_at):
+    def __init__(self, label, position, gap0, stop_at, unit=1.0):
         import sys
 
+        self.unit = float(unit)
         self.gap0 = max(float(gap0), 1e-300)
         self.stop_at = stop_at
         self.shown = 0.0
         self.label = label
         self.t0 = self.last = time.perf_counter()
-        self.state = (0.0, float(gap0), 0)
+        self.state = (0.0, float(gap0) * self.unit, 0)
         self.bar = None
         if is_terminal(sys.stderr):
             from tqdm.auto import tqdm
@@ -42,14 +44,15 @@ class _GapBar:
         gap = max(float(gap), 0.0)
         done = 1.0 - max(gap - target, 0.0) / max(self.gap0 - target, 1e-300)
         pct = 100.0 * min(max(done, 0.0), 1.0)
-        self.state = (pct, gap, nodes)
+        self.state = (pct, gap * self.unit, nodes)
         if self.bar is None:
             if time.perf_counter() - self.last >= _LINE_EVERY:
                 self._line("searching")
             return
         left = self.stop_at - time.perf_counter()
-        self.bar.set_postfix_str(f"gap {gap:.3g}, {nodes} nodes, stops within {max(left, 0):.0f} s"
-                                 if np.isfinite(left) else f"gap {gap:.3g}, {nodes} nodes",
+        shown = gap * self.unit
+        self.bar.set_postfix_str(f"gap {shown:.3g}, {nodes} nodes, stops within {max(left, 0):.0f} s"
+                                 if np.isfinite(left) else f"gap {shown:.3g}, {nodes} nodes",
                                  refresh=False)
         if pct > self.shown:
             self.bar.update(pct - self.shown)

@@ -105,7 +105,8 @@ def _stop_time(t0, time_limit, deadline):
 
 
 def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, progress,
-               position, deadline=None, ws=None, options=None, workspace=None) -> EndResult:
+               position, deadline=None, ws=None, options=None, workspace=None, to_data=None
+               ) -> EndResult:
     """Minimise ``sense * theta_k`` over the EIV set by branch-and-bound (one interval end).
 
     ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None). ``box0`` is the
@@ -114,7 +115,9 @@ def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit
     ``time_limit`` seconds and stops at ``deadline`` (a :func:`time.time` timestamp, the
     total budget of the fit); an end whose budget is used up before it starts reports the
     box end with status ``"limit"``. ``options``: :class:`SearchOptions`; ``workspace``: a
-    :class:`Workspace` shared with the other ends of this process, or None.
+    :class:`Workspace` shared with the other ends of this process, or None; ``to_data``:
+    per parameter, the factor from the search's units to the data's (the progress shows
+    the gap in the data's units), or None (the same units).
     """
     t0 = time.perf_counter()
     stop_at, by_budget = _stop_time(t0, time_limit, deadline)
@@ -125,7 +128,8 @@ def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit
     s.start(points, root)
     if progress:
         s.bar = _GapBar(f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}",
-                        position, min(s.ub, s.top) - s.end0, stop_at)
+                        position, min(s.ub, s.top) - s.end0, stop_at,
+                        1.0 if to_data is None else float(to_data[k]))
     s.run()
     return s.result(t0, by_budget)
 

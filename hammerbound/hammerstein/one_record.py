@@ -86,12 +86,14 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     return tuple(out)
 
 
-def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0):
+def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
+                         method="exact"):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
     p = problem.p
     gb = bounds[p: p + 4].copy()
     found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed(),
-                         stopped_by_time=stopped_by_time, lps_stopped=lps_stopped)
+                         stopped_by_time=stopped_by_time, lps_stopped=lps_stopped,
+                         method=method)
     if not found:
         return gb, ()
     for name, _cause in found:
@@ -146,7 +148,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
-                                     0 if d is None else d.lps_stopped)
+                                     0 if d is None else d.lps_stopped, lin.method)
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,

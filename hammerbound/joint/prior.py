@@ -80,15 +80,16 @@ def at_prior_limit(bound, prior, i, j) -> bool:
     return abs(bound - lim) <= 1e-6 * max(abs(lim), prior[i, 1] - prior[i, 0])
 
 
-def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps_stopped=0
-                 ) -> list[tuple[str, str]]:
+def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps_stopped=0,
+                 method="exact") -> list[tuple[str, str]]:
     """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
 
     ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)
     array marking the prior limits that are assumptions (not the chapter's model);
     ``stopped_by_time``: the time limit stopped the search; ``lps_stopped``: that many
     relaxation LPs ended before optimality (their own time limit, or a solver failure);
-    either is then the cause named, not the input.
+    either is then the cause named, not the input; ``method``: the method that ran (the
+    exact one is suggested only after the LP method).
     """
     rev = reversal_summary(u)
     out = []
@@ -111,12 +112,15 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
                 cause = ("the input never reverses, so only one line of the backlash is "
                          "ever active")
             elif name.startswith("c") or name.startswith("m"):
+                fix = ("a narrower gamma_box from what you know of the actuator, or "
+                       "method='exact', usually bounds it" if method == "lp" else
+                       "a narrower gamma_box from what you know of the actuator usually "
+                       "bounds it")
                 cause = (f"the relaxation does not bound it below the assumed limit. "
                          f"Either the input never moves back by more than the dead band "
                          f"(largest reversals: {rev['down']:.4g} down, {rev['up']:.4g} up), "
                          f"or the relaxation over the wide a priori box is too weak to tell: "
-                         f"a narrower gamma_box from what you know of the "
-                         f"actuator, or method='exact', usually bounds it")
+                         f"{fix}")
             else:
                 cause = "the record does not excite this parameter"
             out.append((name, cause))

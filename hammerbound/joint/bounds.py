@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..relaxations.result import BoundInfo, IntervalResult
-from ..solvers.highs import past
+from ..solvers.highs_process import past
 from ..status import BOX, LIMIT, RELAXATION
 from .local import restore
 from .problem import RecordProblem

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
-from ..solvers.highs import past, seconds_left
+from ..solvers.highs_process import past, seconds_left
 from ..tolerances import FEASIBILITY_RTOL
 from .modes import INIT, LEFT, RIGHT, branch_forms
 from .problem import RecordProblem, Witness, verify_point

@@ -29,8 +29,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..solvers.highs import HighsLP
-from ..solvers.highs import round_down as _round_down
-from ..solvers.highs import round_up as _round_up
+from ..solvers.safe_lp import round_down as _round_down
+from ..solvers.safe_lp import round_up as _round_up
 from ..tolerances import FEASIBILITY_RTOL
 from .modes import AMBIG, DOWN, INIT, LEFT, RIGHT, UP, InnerStructure, inner_structure, line_range
 from .problem import RecordProblem

@@ -16,7 +16,7 @@ from functools import partial
 import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError
-from ..solvers.highs import past
+from ..solvers.highs_process import past
 from .prior import reversal_summary
 from .problem import RecordProblem
 from .relaxation import build_relaxation, solve_lp

@@ -30,7 +30,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..exceptions import EmptyFeasibleSetError, SolverError, UnboundedSetError
-from ..solvers.highs import RUN_TIME_LIMIT, HighsLP
+from ..solvers.highs import HighsLP
+from ..solvers.highs_process import RUN_TIME_LIMIT
 from ..status import BOX, LIMIT, OPTIMAL
 from ..tolerances import feasibility_tol
 from .problem import EIVProblem

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..solvers.highs import new_highs, past
+from ..solvers.highs_process import new_highs, past
 from .exact.local import colwise_structure, solve_colwise
 from .problem import EIVProblem, equation_scale
 
@@ -79,7 +79,7 @@ class WitnessLP:
         #: :func:`time.time` stamp at which a screening LP stops (None: only the run
         #: limit); a stopped LP screens nothing (violation +inf)
         self.deadline = None
-        self.h = new_highs()  # no "threads" option: see solvers.highs.new_highs
+        self.h = new_highs()  # no "threads" option: see solvers.highs_process.new_highs
         self.bases = {}
         self._last = None
         self._last_eqs = None

@@ -1,7 +1,8 @@
 """The solver layer: one module per solver, statuses as constants, one registry.
 
 LPs (the polytopic bounds, the exact method's node and witness LPs) are solved by HiGHS
-(:mod:`.highs`, with :mod:`.safe_lp` for certified infeasibility). The convex relaxations
+(:mod:`.highs`, with :mod:`.safe_lp` for the certified bounds and infeasibility and
+:mod:`.highs_process` for quiet instances and the time limits of their runs). The convex relaxations
 are *formulated* in PICOS and solved on the conic data extracted once from them
 (:mod:`.conic`), re-used across many objectives, by a conic backend:
 

@@ -15,21 +15,11 @@ evaluated in floating point and lowered by a rounding margin. With ``c = 0`` a p
 value of the right-hand side is a Farkas certificate of infeasibility; HiGHS's dual ray
 is tried for that, and :func:`.safe_lp.certify_infeasible` (phase 1) is the fallback.
 
-Clean stdout: highspy's C++ code prints its banner ("Running HiGHS ... Copyright ...") to
-file descriptor 1 when the *first* ``Highs`` object of a process is constructed, before any
-option can be set, so neither ``output_flag=False`` nor :func:`contextlib.redirect_stdout`
-stops it. This module constructs that first object at import time with descriptor 1
-pointed at ``os.devnull`` (:func:`silence_highs_banner`); every later ``Highs()`` in the
-process, ours or not, prints nothing. Use :func:`new_highs` to create a quiet instance.
-(scipy's ``linprog(method="highs")`` uses scipy's own HiGHS build, which prints nothing.)
+HiGHS instances are created quiet and their runs time-limited by :mod:`.highs_process`.
 """
 
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
-import threading
 import time
 from dataclasses import dataclass
 
@@ -38,134 +28,18 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..status import FAILED, INFEASIBLE, OPTIMAL
-from .safe_lp import certify_infeasible
+from .highs_process import RUN_TIME_LIMIT, _run_cap, limit_run, new_highs, past, seconds_left
+from .safe_lp import certify_infeasible, row_dual_bound
 
 #: LP status (not an interval-end status): the dual simplex proved the value exceeds the
 #: requested objective bound (the reported bound is rigorous).
 CUTOFF = "cutoff"
 
-EPS = np.finfo(float).eps
 INF = highspy.kHighsInf
-
-#: Longest one ``run()`` of a HiGHS instance may take in hammerbound (s) when its caller
-#: asks for no shorter limit (:func:`limit_run`). A run stopped there keeps the bound its
-#: duals certify (maybe none), and every caller then keeps the bound it already had. Seen
-#: in worker processes: one stage-2 screening LP (the witness search of a valve loop, with
-#: a 3 s budget) and one one-record relaxation LP ran for 14-15 min; both kinds normally
-#: take well under a second.
-RUN_TIME_LIMIT = 120.0
-
-_BANNER_LOCK = threading.Lock()
-_BANNER_DONE = False
-
-
-def _flush_c_stdio():
-    """Flush the C library's stdio buffers (text the C++ code wrote but did not flush)."""
-    try:
-        import ctypes
-
-        ctypes.CDLL(None).fflush(None)
-    except Exception:  # pragma: no cover - no C runtime reachable this way (e.g. Windows)
-        pass
-
-
-@contextlib.contextmanager
-def stdout_fd_to_devnull():
-    """Point file descriptor 1 at ``os.devnull`` inside the block (C-level output included).
-
-    Python's own ``sys.stdout`` is flushed first so that nothing already printed is lost;
-    if descriptor 1 is not open, the block runs unchanged.
-    """
-    with contextlib.suppress(Exception):
-        sys.stdout.flush()
-    try:
-        saved = os.dup(1)
-    except OSError:  # no descriptor 1 (e.g. closed by the caller): nothing to protect
-        yield
-        return
-    try:
-        null = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(null, 1)
-        finally:
-            os.close(null)
-        yield
-    finally:
-        _flush_c_stdio()
-        os.dup2(saved, 1)
-        os.close(saved)
-
-
-def silence_highs_banner() -> None:
-    """Let HiGHS print its once-per-process banner into ``os.devnull`` (idempotent).
-
-    Called when this module is imported, so any ``highspy.Highs()`` created afterwards in
-    the process (including by code that does not use :func:`new_highs`) is silent.
-    """
-    global _BANNER_DONE
-    if _BANNER_DONE:
-        return
-    with _BANNER_LOCK:
-        if _BANNER_DONE:
-            return
-        with stdout_fd_to_devnull():
-            h = highspy.Highs()
-            h.setOptionValue("output_flag", False)
-            del h
-        _BANNER_DONE = True
-
 
 def _joined(*notes) -> str:
     """Non-empty notes joined by "; "."""
     return "; ".join(n for n in notes if n)
-
-
-def new_highs(options=None):
-    """A ``highspy.Highs`` instance that prints nothing (banner silenced, ``output_flag`` off).
-
-    The option ``threads`` is never set here, on purpose: HiGHS keeps *one* thread
-    scheduler per process, sized by the first ``run()``, and a later ``run()`` whose
-    ``threads`` option is non-zero and different fails without solving ("the scheduler has
-    already been initialized to use 2 threads"). With the default (0) our LPs run whatever
-    HiGHS user came first in the process, and never break a later one.
-
-    Parameters
-    ----------
-    options : dict, optional
-        HiGHS options (name -> value) set after ``output_flag=False``.
-
-    Raises
-    ------
-    ValueError
-        HiGHS rejected an option.
-    """
-    silence_highs_banner()
-    h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
-    for name, value in (options or {}).items():
-        if h.setOptionValue(name, value) != highspy.HighsStatus.kOk:
-            raise ValueError(f"HiGHS rejected option {name}={value!r}")
-    return h
-
-
-silence_highs_banner()
-
-
-def past(deadline) -> bool:
-    """Whether the :func:`time.time` stamp ``deadline`` (None: no deadline) has passed."""
-    return deadline is not None and time.time() > deadline
-
-
-def seconds_left(cap, deadline=None) -> float:
-    """Seconds a solve may take: ``cap``, or less when ``deadline`` (a :func:`time.time`
-    stamp) comes first; at least 1 ms (a limit of 0 would be read as none)."""
-    left = float(cap) if deadline is None else min(float(cap), float(deadline) - time.time())
-    return max(left, 1e-3)
-
-
-def wall_stamp(stop_at):
-    """The :func:`time.time` stamp of a :func:`time.perf_counter` instant (None: None)."""
-    return None if stop_at is None else time.time() + (stop_at - time.perf_counter())
 
 
 def basis_arrays(basis):
@@ -173,104 +47,6 @@ def basis_arrays(basis):
     arrays of :meth:`HighsLP.get_basis` and :meth:`HighsLP.set_basis`."""
     return (np.fromiter((int(v) for v in basis.col_status), np.int8),
             np.fromiter((int(v) for v in basis.row_status), np.int8))
-
-
-def _run_cap(seconds=None) -> float:
-    """A run's own limit: ``seconds``, at most :data:`RUN_TIME_LIMIT` (None: that)."""
-    return RUN_TIME_LIMIT if seconds is None else min(float(seconds), RUN_TIME_LIMIT)
-
-
-def limit_run(h, seconds=None, deadline=None) -> float:
-    """Let the next ``run()`` of the HiGHS instance ``h`` stop after ``seconds`` (default
-    and most :data:`RUN_TIME_LIMIT`) or at ``deadline`` (a :func:`time.time` stamp),
-    whichever comes first; returns the seconds allowed.
-
-    HiGHS compares its ``time_limit`` option with the run time accumulated over *all* runs
-    of the instance, so a plain ``time_limit`` on a persistent instance caps the sum of its
-    solves; the limit is set relative to :meth:`getRunTime` instead. The option is
-    reserved for this function: :class:`HighsLP` refuses it among its options.
-    """
-    left = seconds_left(_run_cap(seconds), deadline)
-    h.setOptionValue("time_limit", float(h.getRunTime() + left))
-    return left
-
-
-def row_dual_bound(c, A, rl, ru, lb, ub, y, *, with_reduced=False):
-    """Rigorous lower bound of ``min c'z, rl <= Az <= ru, lb <= z <= ub`` from multipliers ``y``.
-
-    Parameters
-    ----------
-    c : ndarray, shape (n,)
-    A : scipy.sparse matrix, shape (m, n)
-    rl, ru : ndarray, shape (m,)
-        Row bounds (``-inf`` / ``+inf`` allowed).
-    lb, ub : ndarray, shape (n,)
-        Finite column bounds.
-    y : ndarray, shape (m,)
-        Any multipliers (e.g. HiGHS row duals, or a dual ray with ``c = 0``).
-
-    with_reduced : bool, default False
-        Also return the reduced costs ``r = c - A'(y+ + y-)`` behind the bound.
-
-    Returns
-    -------
-    float or (float, ndarray or None)
-        A lower bound of the exact LP value (``-inf`` if none can be certified); with
-        ``with_reduced`` also ``r`` (shape (n,)). The bound depends on the column bounds
-        only through ``sum_j min(r_j l_j, r_j u_j)``, so it stays valid, with that term
-        updated, for any other column box (reduced-cost bound tightening).
-    """
-    y = np.asarray(y, dtype=float)
-    if y.shape != (A.shape[0],) or not np.all(np.isfinite(y)):
-        return (-np.inf, None) if with_reduced else -np.inf
-    fin_l = np.isfinite(rl)
-    fin_u = np.isfinite(ru)
-    yp = np.where(fin_l, np.maximum(y, 0.0), 0.0)
-    yn = np.where(fin_u, np.minimum(y, 0.0), 0.0)
-    yy = yp + yn
-    r = np.asarray(c, dtype=float) - A.T @ yy
-    t_l = np.where(yp != 0.0, yp * np.where(fin_l, rl, 0.0), 0.0)
-    t_u = np.where(yn != 0.0, yn * np.where(fin_u, ru, 0.0), 0.0)
-    t_z = np.minimum(r * lb, r * ub)
-    terms = np.concatenate([t_l, t_u, t_z])
-    if not np.all(np.isfinite(terms)):
-        return (-np.inf, None) if with_reduced else -np.inf
-    total = float(np.sum(terms))
-    absz = np.maximum(np.abs(lb), np.abs(ub))
-    mag = float(np.sum(np.abs(terms)) + abs(A).T @ np.abs(yy) @ absz + np.abs(c) @ absz)
-    width = A.shape[0] + terms.size
-    bound = total - 4.0 * width * EPS * (mag + 1e-300) - 1e-300
-    return (bound, r) if with_reduced else bound
-
-
-def round_down(v):
-    """Next float towards ``-inf`` (outward rounding of computed lower data)."""
-    return np.nextafter(np.nextafter(v, -np.inf), -np.inf)
-
-
-def round_up(v):
-    """Next float towards ``+inf`` (outward rounding of computed upper data)."""
-    return np.nextafter(np.nextafter(v, np.inf), np.inf)
-
-
-def mul_down(a, b):
-    """A float ``<= a * b`` (exact): the rounded product moved outward, except that a
-    product with an exact zero factor stays ``0``.
-
-    A product with a zero factor (a theta box edge at 0, an input-error bound of 0) is
-    exact; rounding it outward gave ``-+1e-323`` (subnormal) bounds that HiGHS had to carry
-    as nonzero data (its log listed bounds and right-hand sides down to ``1e-323``).
-    """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    return np.where((a == 0.0) | (b == 0.0), 0.0, round_down(a * b))
-
-
-def mul_up(a, b):
-    """A float ``>= a * b`` (exact); see :func:`mul_down` (exact zeros stay ``0``)."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    return np.where((a == 0.0) | (b == 0.0), 0.0, round_up(a * b))
 
 
 @dataclass

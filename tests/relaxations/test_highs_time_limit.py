@@ -1,5 +1,5 @@
 """Every HiGHS solve of the package stops at its run limit or its caller's deadline
-(``hammerbound.solvers.highs.limit_run``), and a stopped solve never yields a bound or a
+(``hammerbound.solvers.highs_process.limit_run``), and a stopped solve never yields a bound or a
 witness it cannot stand behind.
 
 Seen before the fix: a stage-2 screening LP (the witness search of ``consistency``, 3 s
@@ -17,7 +17,8 @@ from oracles import chapter_eiv_data
 
 from hammerbound.relaxations.problem import EIVProblem
 from hammerbound.relaxations.witness import WitnessLP, seek_feasible
-from hammerbound.solvers.highs import RUN_TIME_LIMIT, HighsLP, limit_run, new_highs
+from hammerbound.solvers.highs import HighsLP
+from hammerbound.solvers.highs_process import RUN_TIME_LIMIT, limit_run, new_highs
 
 
 def _lp(n=1500, seed=0):

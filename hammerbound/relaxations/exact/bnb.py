@@ -74,7 +74,7 @@ import time
 import numpy as np
 
 from ...exceptions import EmptyFeasibleSetError
-from ...solvers.highs import past
+from ...solvers.highs_process import past
 from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint

@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ...solvers.highs import limit_run, new_highs, wall_stamp
+from ...solvers.highs_process import limit_run, new_highs, wall_stamp
 from ..problem import EIVProblem
 
 
@@ -59,7 +59,7 @@ def solve_colwise(h, st: dict, vals, cost, col_lo, col_hi, row_lo, row_hi, basis
     of the pattern ``st`` (:func:`colwise_structure`) and entry values ``vals`` to the HiGHS
     instance ``h``, warm-start it from ``basis`` (same pattern) and solve, stopping at
     ``deadline`` (:func:`time.time` stamp) or after
-    :data:`~hammerbound.solvers.highs.RUN_TIME_LIMIT` s. Returns the new basis, or None
+    :data:`~hammerbound.solvers.highs_process.RUN_TIME_LIMIT` s. Returns the new basis, or None
     when the LP is not solved to optimality (stopped ones included)."""
     import highspy as hs
 

@@ -23,7 +23,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ...solvers.highs import HighsLP, mul_down, mul_up
+from ...solvers.highs import HighsLP
+from ...solvers.safe_lp import mul_down, mul_up
 from ...tolerances import FEASIBILITY_RTOL
 from ..problem import EIVProblem, equation_scale
 

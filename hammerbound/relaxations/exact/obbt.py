@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from ...exceptions import EmptyFeasibleSetError
-from ...solvers.highs import past
+from ...solvers.highs_process import past
 from .mccormick import McCormickRelaxation
 from .points import _Screen
 from .working_set import WorkingSetRelaxation

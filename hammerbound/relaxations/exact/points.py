@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...exceptions import SolverError
-from ...solvers.highs import wall_stamp
+from ...solvers.highs_process import wall_stamp
 from ..problem import EIVProblem, check_theta
 from ..witness import WitnessLP, seek_feasible
 from ..witness import on_gain_plane as _on_gain_plane  # noqa: F401 - used by bnb

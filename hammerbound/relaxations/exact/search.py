@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...solvers.highs import wall_stamp
+from ...solvers.highs_process import wall_stamp
 from .local import improve, restore_near
 from .mccormick import shared_groups
 from .node_box import _box_end, _cap, _reduced_cost_tightening

@@ -7,8 +7,12 @@ import numpy as np
 
 try:
     from benchmarks import _common as C
+    from benchmarks.report_format import _json
+    from benchmarks.report_format import table as _table
 except ImportError:  # run as a script
     import _common as C
+    from report_format import _json
+    from report_format import table as _table
 
 PARAMS = ("ml", "cl", "mr", "cr", "a1", "a2", "b1", "b2")
 

@@ -42,7 +42,7 @@ from ..relaxations.moment.size import MOMENT_MAX_WORK
 from ..relaxations.problem import EIVProblem
 from ..stage1.feasible_set import FeasibleSet
 from ..status import BOX
-from ..tables import bound_text
+from .fitting import check_not_crossed, run_method, with_hints
 from .linear_model import LinearModelMixin
 from .orders import check_orders
 from .params import METHODS, check_params
@@ -302,84 +302,6 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
 
         return b_lags_of(self.nb, self._nk())
 
-    def _assumption_list(self, problem) -> list[str]:
-        """The assumptions that shaped the feasible set, one phrase each."""
-        g = self.steady_state_gain
-        gain = ("no steady-state gain constraint" if g is None else
-                f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8)")
-        box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
-               if self.theta_box is None else "user theta_box")
-        dx = bound_text(problem.input_bound)
-        shared = ("" if problem.n_groups == problem.N else
-                  f", shared by {problem.n_groups} sample groups")
-        exact = " (exact input)" if not np.any(problem.input_bound) else ""
-        return [f"output error bound |eta_t| <= {bound_text(problem.output_bound)}",
-                f"input error bound |dx_t| <= {dx}{exact}{shared}", gain, box]
-
-    def _assumptions(self, problem) -> str:
-        """One sentence naming every assumption that shaped the feasible set."""
-        lags = problem.b_lags
-        b_terms = " + ".join(f"b{j}" + (f" q^-{j}" if j else "") for j in lags)
-        a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
-        items = self._assumption_list(problem)
-        if self.steady_state_gain is not None:
-            items[2] = items[2][:-1] + "; pass steady_state_gain=None for a plain EIV problem)"
-        return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
-                f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
-
-    def _box_hint(self, problem) -> str:
-        """A hint for badly scaled data, whose true b_j may lie outside the default box."""
-        if self.theta_box is not None:
-            return ""
-        sx = float(np.max(np.abs(problem.x))) or 1.0
-        sy = float(np.max(np.abs(problem.y))) or 1.0
-        if 1e-3 <= sy / sx <= 1e3:
-            return ""
-        return (f"The data are badly scaled (max |x| = {sx:.3g}, max |y| = {sy:.3g}): the "
-                "b_j may lie outside the default box |b_j| <= 1e4 or be lost to the solver "
-                "tolerances. Rescale x and y to similar magnitudes (and steady_state_gain "
-                "accordingly) or pass a theta_box.")
-
-    def _check_box(self, problem, res):
-        """Decide what a bound that coincides with the a priori box means.
-
-        The default box on ``a`` (``|a_i| <= binom(na, i)``) contains every *stable* ``A``
-        (assumption A1), so a bound set by it is still guaranteed under A1; the result
-        gives it the status :data:`~hammerbound.status.BOX`. The same holds for a
-        user-supplied ``theta_box``
-        (the user's prior). The default box on ``b`` (``|b_j| <= 1e4``) is arbitrary:
-        touching it means the data do not bound that coefficient, which is an error.
-        """
-        from ..exceptions import UnboundedSetError
-        from ..relaxations.lp import box_limited_ends
-
-        ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
-        if self.theta_box is None:
-            bad = [lab for k, lab in ends if k >= problem.na]
-            if bad:
-                raise UnboundedSetError(
-                    "the data do not bound " + ", ".join(bad) + ": the bound reached the "
-                    "default box |b_j| <= 1e4. Supply more (or more exciting) data, a "
-                    "smaller output_bound if justified, or a theta_box with prior knowledge."
-                )
-
-    @staticmethod
-    def _warn_limits(res):
-        """Warn, naming the interval ends, when a search stopped at a node/time limit."""
-        import warnings
-
-        from ..exceptions import SearchLimitWarning
-
-        ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in res.infos
-                if i.status == "limit"]
-        if ends:
-            warnings.warn(
-                f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "
-                f"ends ({', '.join(ends)}): their bounds are guaranteed outer bounds (never "
-                "wider than the LP bound) but may be looser than the exact ones; raise "
-                "time_limit / total_time_limit / max_nodes for tighter ones (bound_info_ "
-                "gives each end's status and certified gap).", SearchLimitWarning, stacklevel=3)
-
     # ------------------------------------------------------------------ fit
     def fit(self, X, y=None, input_bound=0.0, input_groups=None, *, output_bound=None,
             groups=None):
@@ -449,70 +371,14 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         self._check_params()
         deadline = None if self.total_time_limit is None else t_fit + float(self.total_time_limit)
         problem = self._build_problem(X, y, input_bound, groups, output_bound)
-        from ..relaxations.lp import lp_bounds
-
         try:
-            if self.method == "lp":
-                res = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
-                self._check_box(problem, res)
-            elif self.method == "exact":
-                from ..relaxations.exact.bnb import exact_bounds
-
-                res = exact_bounds(problem, tol=self.tol, max_nodes=self.max_nodes,
-                                   time_limit=self.time_limit, n_jobs=self.n_jobs,
-                                   progress=self.progress, check_box=False,
-                                   deadline=deadline)
-                self._check_box(problem, res)
-                self._warn_limits(res)
-            else:
-                from ..relaxations.moment.relaxation import moment_bounds
-                from ..relaxations.moment.size import (
-                    check_moment_budget,
-                    estimate_moment_relaxation,
-                    solve_processes,
-                )
-                # (solver and options were checked by _check_params, before any work)
-                # memory/time guard before any work (refuses with the estimate, or warns)
-                check_moment_budget(estimate_moment_relaxation(
-                    problem, self.relaxation_order, basis=self.relaxation_basis),
-                    max_work=float(self.relaxation_max_work), option="relaxation_max_work",
-                    processes=solve_processes(self.n_jobs, problem.p))
-                lp = lp_bounds(problem, n_jobs=self.n_jobs, check_box=False)
-                self._check_box(problem, lp)
-                # the LP bounds are the a priori box and the fallback; kept as res.lp
-                res = moment_bounds(problem, order=self.relaxation_order, solver=self.solver,
-                                    solver_options=self.solver_options, n_jobs=self.n_jobs,
-                                    on_failure=self.on_failure, max_work=float("inf"),
-                                    basis=self.relaxation_basis, lp=lp)
+            res = run_method(self, problem, deadline)
         except (EmptyFeasibleSetError, UnboundedSetError) as exc:
-            hint = " ".join(h for h in (self._box_hint(problem), self._assumptions(problem))
-                            if h)
-            kw = {"side": exc.side, "first_index": exc.first_index} \
-                if isinstance(exc, EmptyFeasibleSetError) else {}
-            if isinstance(exc, EmptyFeasibleSetError) and data is None:
-                hint += (" If these samples were cut by a cross-validation splitter (e.g. "
-                         "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
-                         "IOData, which refuses such cuts.")
-            raise type(exc)(f"{exc} {hint}", **kw) from exc
+            raise with_hints(exc, self, problem, data) from exc
         self.problem_ = problem
         self.result_ = res
         self.bounds_ = np.array(res.bounds, dtype=float)
-        if not np.all(np.isfinite(self.bounds_)):  # pragma: no cover - every method clips
-            from ..exceptions import SolverError
-
-            raise SolverError(f"internal error: non-finite bounds {self.bounds_.tolist()}; "
-                              "please report it.")
-        crossed = np.flatnonzero(self.bounds_[:, 0] > self.bounds_[:, 1])
-        if crossed.size:
-            # both ends are certified outer bounds (lower <= min, max <= upper over the set,
-            # relaxed outward by the tolerance policy): if they cross, no parameter vector
-            # is feasible, beyond the tolerance
-            k = int(crossed[0])
-            name = problem.param_names[k]
-            raise EmptyFeasibleSetError(
-                f"no parameters explain the data within the bounds: the certified bounds on "
-                f"{name} cross ({self.bounds_[k, 0]:.6g} > {self.bounds_[k, 1]:.6g}). "
-                f"{self._assumptions(problem)}")
+        check_not_crossed(self, problem, self.bounds_)
         self.intervals_ = res
         self.center_ = res.center
         self.radius_ = res.radius

@@ -19,6 +19,7 @@ from ..data.iodata import signal_label
 from ..data.validation import as_bound, as_signal, as_theta
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..results import OutputEnvelope
+from .fitting import assumption_list
 
 __all__ = ["LinearModelMixin", "is_vector_like"]
 
@@ -66,7 +67,7 @@ class LinearModelMixin:
                            getattr(self, "signal_units_", ("", "")))
         if sig:
             head += f"\nsignals: {sig}"
-        head += "\nassumptions: " + "; ".join(self._assumption_list(pr))
+        head += "\nassumptions: " + "; ".join(assumption_list(self, pr))
         return self.intervals_.summary(title=head)
 
     def method_label(self) -> str:

@@ -1,0 +1,167 @@
+"""Stage 2's fit from a built problem to bounds: the method's run, what a bound at the a
+priori box means, and the messages that name the assumptions behind a refusal.
+
+Used by :class:`~.estimator.LinearEIVSetEstimator` (``est``: the estimator, read only).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import EmptyFeasibleSetError, UnboundedSetError
+from ..tables import bound_text
+
+
+def run_method(est, problem, deadline):
+    """The interval result of ``est.method`` on ``problem`` (stopping at ``deadline``, a
+    :func:`time.time` stamp, or None); a ``b_j`` at the default box raises
+    :class:`UnboundedSetError`, the exact method's stopped ends warn."""
+    from ..relaxations.lp import lp_bounds
+
+    if est.method == "lp":
+        res = lp_bounds(problem, n_jobs=est.n_jobs, check_box=False)
+        check_box(est, problem, res)
+        return res
+    if est.method == "exact":
+        from ..relaxations.exact.bnb import exact_bounds
+
+        res = exact_bounds(problem, tol=est.tol, max_nodes=est.max_nodes,
+                           time_limit=est.time_limit, n_jobs=est.n_jobs,
+                           progress=est.progress, check_box=False, deadline=deadline)
+        check_box(est, problem, res)
+        warn_limits(res)
+        return res
+    return _moment(est, problem)
+
+
+def _moment(est, problem):
+    """The moment method, after its size guard (solver and options were checked before)."""
+    from ..relaxations.lp import lp_bounds
+    from ..relaxations.moment.relaxation import moment_bounds
+    from ..relaxations.moment.size import (
+        check_moment_budget,
+        estimate_moment_relaxation,
+        solve_processes,
+    )
+
+    # memory/time guard before any work (refuses with the estimate, or warns)
+    check_moment_budget(estimate_moment_relaxation(
+        problem, est.relaxation_order, basis=est.relaxation_basis),
+        max_work=float(est.relaxation_max_work), option="relaxation_max_work",
+        processes=solve_processes(est.n_jobs, problem.p))
+    lp = lp_bounds(problem, n_jobs=est.n_jobs, check_box=False)
+    check_box(est, problem, lp)
+    # the LP bounds are the a priori box and the fallback; kept as res.lp
+    return moment_bounds(problem, order=est.relaxation_order, solver=est.solver,
+                         solver_options=est.solver_options, n_jobs=est.n_jobs,
+                         on_failure=est.on_failure, max_work=float("inf"),
+                         basis=est.relaxation_basis, lp=lp)
+
+
+def with_hints(exc, est, problem, data):
+    """``exc`` (empty or unbounded set) again, its message naming the assumptions, a badly
+    scaled record and, for samples that are not an IOData, cross-validation cuts."""
+    hint = " ".join(h for h in (box_hint(est, problem), assumptions(est, problem)) if h)
+    kw = {"side": exc.side, "first_index": exc.first_index} \
+        if isinstance(exc, EmptyFeasibleSetError) else {}
+    if isinstance(exc, EmptyFeasibleSetError) and data is None:
+        hint += (" If these samples were cut by a cross-validation splitter (e.g. "
+                 "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
+                 "IOData, which refuses such cuts.")
+    return type(exc)(f"{exc} {hint}", **kw)
+
+
+def check_not_crossed(est, problem, bounds):
+    """Refuse bounds whose ends cross. Both ends are certified outer bounds (lower <= min,
+    max <= upper over the set, relaxed outward by the tolerance policy): if they cross, no
+    parameter vector is feasible, beyond the tolerance."""
+    if not np.all(np.isfinite(bounds)):  # pragma: no cover - every method clips
+        from ..exceptions import SolverError
+
+        raise SolverError(f"internal error: non-finite bounds {bounds.tolist()}; "
+                          "please report it.")
+    crossed = np.flatnonzero(bounds[:, 0] > bounds[:, 1])
+    if crossed.size:
+        k = int(crossed[0])
+        name = problem.param_names[k]
+        raise EmptyFeasibleSetError(
+            f"no parameters explain the data within the bounds: the certified bounds on "
+            f"{name} cross ({bounds[k, 0]:.6g} > {bounds[k, 1]:.6g}). "
+            f"{assumptions(est, problem)}")
+
+
+def assumption_list(est, problem) -> list[str]:
+    """The assumptions that shaped the feasible set, one phrase each."""
+    g = est.steady_state_gain
+    gain = ("no steady-state gain constraint" if g is None else
+            f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8)")
+    box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
+           if est.theta_box is None else "user theta_box")
+    dx = bound_text(problem.input_bound)
+    shared = ("" if problem.n_groups == problem.N else
+              f", shared by {problem.n_groups} sample groups")
+    exact = " (exact input)" if not np.any(problem.input_bound) else ""
+    return [f"output error bound |eta_t| <= {bound_text(problem.output_bound)}",
+            f"input error bound |dx_t| <= {dx}{exact}{shared}", gain, box]
+
+def assumptions(est, problem) -> str:
+    """One sentence naming every assumption that shaped the feasible set."""
+    lags = problem.b_lags
+    b_terms = " + ".join(f"b{j}" + (f" q^-{j}" if j else "") for j in lags)
+    a_terms = "".join(f" + a{i} q^-{i}" for i in range(1, problem.na + 1))
+    items = assumption_list(est, problem)
+    if est.steady_state_gain is not None:
+        items[2] = items[2][:-1] + "; pass steady_state_gain=None for a plain EIV problem)"
+    return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
+            f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
+
+def box_hint(est, problem) -> str:
+    """A hint for badly scaled data, whose true b_j may lie outside the default box."""
+    if est.theta_box is not None:
+        return ""
+    sx = float(np.max(np.abs(problem.x))) or 1.0
+    sy = float(np.max(np.abs(problem.y))) or 1.0
+    if 1e-3 <= sy / sx <= 1e3:
+        return ""
+    return (f"The data are badly scaled (max |x| = {sx:.3g}, max |y| = {sy:.3g}): the "
+            "b_j may lie outside the default box |b_j| <= 1e4 or be lost to the solver "
+            "tolerances. Rescale x and y to similar magnitudes (and steady_state_gain "
+            "accordingly) or pass a theta_box.")
+
+def check_box(est, problem, res):
+    """Decide what a bound that coincides with the a priori box means.
+
+    The default box on ``a`` (``|a_i| <= binom(na, i)``) contains every *stable* ``A``
+    (assumption A1), so a bound set by it is still guaranteed under A1; the result
+    gives it the status :data:`~hammerbound.status.BOX`. The same holds for a
+    user-supplied ``theta_box``
+    (the user's prior). The default box on ``b`` (``|b_j| <= 1e4``) is arbitrary:
+    touching it means the data do not bound that coefficient, which is an error.
+    """
+    from ..relaxations.lp import box_limited_ends
+
+    ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
+    if est.theta_box is None:
+        bad = [lab for k, lab in ends if k >= problem.na]
+        if bad:
+            raise UnboundedSetError(
+                "the data do not bound " + ", ".join(bad) + ": the bound reached the "
+                "default box |b_j| <= 1e4. Supply more (or more exciting) data, a "
+                "smaller output_bound if justified, or a theta_box with prior knowledge."
+            )
+
+def warn_limits(res, stacklevel=4):
+    """Warn, naming the interval ends, when a search stopped at a node/time limit."""
+    import warnings
+
+    from ..exceptions import SearchLimitWarning
+
+    ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in res.infos
+            if i.status == "limit"]
+    if ends:
+        warnings.warn(
+            f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "
+            f"ends ({', '.join(ends)}): their bounds are guaranteed outer bounds (never "
+            "wider than the LP bound) but may be looser than the exact ones; raise "
+            "time_limit / total_time_limit / max_nodes for tighter ones (bound_info_ "
+            "gives each end's status and certified gap).", SearchLimitWarning, stacklevel=stacklevel)

@@ -43,10 +43,14 @@ def own_feasible(theta, y, x, dx, deta, na, b_lags, tol=1e-8):
     rows, cols, vals = [np.arange(m)], [t], [np.ones(m)]
     rhs = y[t].copy()
     for i in range(1, na + 1):
-        rows.append(np.arange(m)); cols.append(t - i); vals.append(np.full(m, a[i - 1]))
+        rows.append(np.arange(m))
+        cols.append(t - i)
+        vals.append(np.full(m, a[i - 1]))
         rhs += a[i - 1] * y[t - i]
     for k, j in enumerate(b_lags):
-        rows.append(np.arange(m)); cols.append(n + t - j); vals.append(np.full(m, -b[k]))
+        rows.append(np.arange(m))
+        cols.append(n + t - j)
+        vals.append(np.full(m, -b[k]))
         rhs -= b[k] * x[t - j]
     M = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(m, 2 * n))

@@ -86,7 +86,8 @@ def test_zonotope_extremes_match_brute_force():
         assert Z.max_abs()[0] >= np.max(np.abs(corners))
         assert Z.max_abs()[0] <= np.max(np.abs(corners)) * (1 + 1e-9)
         # own convex QP for the distance from 0
-        f = lambda s: abs(c + np.dot(s, g)) ** 2  # noqa: E731
+        def f(s, c=c, g=g):
+            return abs(c + np.dot(s, g)) ** 2
         best = min(minimize(f, s0, bounds=[(-1, 1)] * k, method="L-BFGS-B").fun
                    for s0 in rng.uniform(-1, 1, (3, k)))
         dist = np.sqrt(best)

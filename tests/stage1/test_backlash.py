@@ -17,7 +17,8 @@ from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS, chapter_exampl
 
 
 def _random_side_data(rng, M):
-    ml, cl, mr, cr = rng.uniform(0.1, 2, 1)[0], rng.uniform(0.01, 0.3, 1)[0], rng.uniform(0.1, 2, 1)[0], rng.uniform(0.01, 0.3, 1)[0]
+    ml, cl = rng.uniform(0.1, 2, 1)[0], rng.uniform(0.01, 0.3, 1)[0]
+    mr, cr = rng.uniform(0.1, 2, 1)[0], rng.uniform(0.01, 0.3, 1)[0]
     amps = rng.uniform(0.5, 3, M)
     d = rng.uniform(0.001, 0.1)
     u = np.concatenate([amps, -amps])
@@ -175,18 +176,18 @@ def test_sklearn_common_checks(estimator, check):
 @pytest.mark.parametrize(
     "X, y, kwargs, err, match",
     [
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": 0.0}, ParameterValidationError, "> 0"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": -1}, ParameterValidationError, "> 0"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": 0.0}, ParameterValidationError, "> 0"),  # noqa: E501
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": -1}, ParameterValidationError, "> 0"),  # noqa: E501
         ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, np.nan], {}, DataValidationError, "NaN"),
         ([1.0, np.inf, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "infinity|NaN"),
-        ([1.0, 2.0, -1.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "inconsistent numbers of samples"),
+        ([1.0, 2.0, -1.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "inconsistent numbers of samples"),  # noqa: E501
         ([1.0, 1.0, -1.0, -2.0], [0.2, 0.2, -0.2, -0.4], {}, NotEnoughAmplitudesError, "Remark 22.2"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"method": "qhull"}, ParameterValidationError, "method"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"method": "qhull"}, ParameterValidationError, "method"),  # noqa: E501
         ([1.0, 0.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {}, DataValidationError, "non-zero"),
         ([[1.0, 2.0], [1, 2]], [0.2, 0.4], {}, DataValidationError, "Reshape"),
         ([], [], {}, DataValidationError, "0 sample"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": [0.1, 0.1]}, ParameterValidationError, "one value per sample"),
-        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": "0.1"}, ParameterValidationError, "number"),
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": [0.1, 0.1]}, ParameterValidationError, "one value per sample"),  # noqa: E501
+        ([1.0, 2.0, -1.0, -2.0], [0.2, 0.4, -0.2, -0.4], {"output_bound": "0.1"}, ParameterValidationError, "number"),  # noqa: E501
     ],
 )
 def test_bad_input(X, y, kwargs, err, match):

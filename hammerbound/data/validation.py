@@ -253,6 +253,28 @@ def check_excited(where: str, input_name: str, u, output_name: str, y) -> None:
         )
 
 
+def warn_bound_covers_output(where: str, output_name: str, y, bound, *,
+                             stacklevel: int = 4) -> None:
+    """Warn (:class:`DataWarning`) when the output error bound is at least half the
+    output's range on every sample: a constant output then explains the record within the
+    bound, so the record can bound nothing (the intervals stay guaranteed, only as wide as
+    the a priori box). Usually the bound and the output are in different units."""
+    y = np.asarray(y, dtype=float)
+    half = 0.5 * float(np.max(y) - np.min(y)) if y.size else 0.0
+    low = float(np.min(bound))
+    if y.size and low >= half:
+        import warnings
+
+        from ..exceptions import DataWarning
+
+        warnings.warn(
+            f"{where}: the output error bound ({low:.4g}) is at least half the range of the "
+            f"output {output_name} ({2 * half:.4g}), so a constant output explains the record "
+            "within it and nothing can be identified (the intervals stay guaranteed, as wide "
+            "as the a priori box). Check that the bound and the output are in the same units.",
+            DataWarning, stacklevel=stacklevel)
+
+
 # ------------------------------------------------------------------------------ scale
 #: Smallest and largest magnitude ``max_t |s_t|`` of a signal the bounds are certified for.
 SCALE_MIN = 1e-7

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..data.validation import warn_bound_covers_output
 from ..exceptions import NotIdentifiedWarning, ParameterValidationError
 from ..joint import (
     GAMMA_NAMES,
@@ -77,7 +78,10 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     out = [f"output errors |eta_t| <= {float(np.max(problem.deta)):g} on every sample",
            "the input is known exactly",
            "linear block of unit steady-state gain (22.8), stable A (|a_i| <= binom(na, i))",
-           prior.describe()]
+           prior.describe(),
+           f"the backlash lines do not cross over the record's inputs "
+           f"[{float(np.min(problem.u)):.4g}, {float(np.max(problem.u)):.4g}] "
+           "(m_l (u + c_l) >= m_r (u - c_r): a well-posed backlash)"]
     if lin.theta_box is None:
         out.append("|b_j| <= 1e4 (default theta box; pass theta_box to change)")
     if steady is not None:
@@ -105,10 +109,22 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
     warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
-                  "Use a record whose input reverses by more than the dead band, or give more "
-                  "time (total_time_limit) or a gamma_box.",
+                  + _advice(stopped_by_time, lps_stopped, causes),
                   NotIdentifiedWarning, stacklevel=4)
     return gb, tuple(found)
+
+
+def _advice(stopped_by_time, lps_stopped, causes) -> str:
+    """What to do about ends the record did not bound, for the causes named: more time
+    when a limit stopped the search, another record when the input is the cause."""
+    fixes = []
+    if stopped_by_time or lps_stopped:
+        fixes.append("give more time (total_time_limit)")
+    if "reverses" in causes or "dead band" in causes:
+        fixes.append("use a record whose input reverses by more than the dead band")
+    fixes.append("give a gamma_box")
+    text = ", or ".join(fixes) + "."
+    return text[0].upper() + text[1:]
 
 
 def _at_assumed_limit(problem, prior):
@@ -139,6 +155,8 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
             "estimator.")
     ob = lin._output_bound(data.N, output_bound)
     prior = _gamma_prior(gamma_box, data.u, data.y, ob)
+    warn_bound_covers_output("HammersteinBacklashIdentifier.fit", data.output_name or "y",
+                             data.y, ob, stacklevel=5)
     problem = _problem(lin, data, prior, steady, steady_bound, ob)
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
     res = record_bounds(problem, method=lin.method, tol=float(lin.tol),

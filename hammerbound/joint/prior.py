@@ -24,7 +24,7 @@ from math import comb
 
 import numpy as np
 
-from ..exceptions import ParameterValidationError
+from ..exceptions import DataValidationError
 from .modes import band_range
 
 __all__ = ["GammaPrior", "at_prior_limit", "default_gamma_box", "record_box",
@@ -39,7 +39,7 @@ def default_gamma_box(u, y, deta) -> np.ndarray:
     du = float(np.ptp(u))
     dy = float(np.ptp(y)) + 2.0 * float(np.max(deta))
     if du <= 0:
-        raise ParameterValidationError(
+        raise DataValidationError(
             "the input is constant: a record must move the input to identify anything.")
     m_max = M_FACTOR * dy / du
     return np.array([[0.0, m_max], [0.0, du], [0.0, m_max], [0.0, du]])

@@ -37,7 +37,11 @@ LEAF_SHRINK = 0.05
 #: What an EmptyFeasibleSetError of the one-record search suggests.
 EMPTY_HINT = ("Check the output bound (every error within it?), the orders na, nb and the "
               "delay nk, and any gamma_box you gave; an output bound too small for the "
-              "noise, or a model of the wrong order, leaves nothing to explain the record.")
+              "noise, or a model of the wrong order, leaves nothing to explain the record. "
+              "The model also needs a backlash whose lines do not cross inside the "
+              "record's input range (m_l (u + c_l) >= m_r (u - c_r) at every input; unequal "
+              "slopes cross at u = (m_l c_l + m_r c_r) / (m_r - m_l)): a record that drives "
+              "an actuator past that point is explained by no backlash of this model.")
 
 # the partition of the backlash box stops splitting at this many boxes (a record that
 # cannot tell the slopes or gaps apart would otherwise give parts**4 of them)

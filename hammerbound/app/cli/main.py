@@ -35,6 +35,21 @@ def _version() -> str:
     return __version__
 
 
+#: flags a newcomer guesses for an option the command spells otherwise
+_GUESSED = {"--noise": "--output-bound", "--noise-bound": "--output-bound",
+            "--deta": "--output-bound"}
+
+
+def _guessed_flag(argv) -> str | None:
+    """A usage error for a guessed flag in ``argv`` (say which flag is meant), or None."""
+    for a in argv:
+        flag = a.split("=", 1)[0]
+        if flag in _GUESSED:
+            return (f"unrecognized argument {flag}: the bound on the output errors is "
+                    f"{_GUESSED[flag]} (e.g. {_GUESSED[flag]} 0.05)")
+    return None
+
+
 def main(argv=None) -> int:
     """Run ``hammerbound ARGS``; returns the exit status (0 success, 1 a negative
     verdict, 2 invalid input or usage, 130 interrupted)."""
@@ -42,6 +57,10 @@ def main(argv=None) -> int:
     if argv[:2] == ["benchmark", "suite"]:
         return benchmark.run_suite(argv[2:])
     command = argv[0] if argv else None
+    guessed = _guessed_flag(argv)
+    if guessed is not None:
+        print(f"hammerbound {command}: error: {guessed}", file=sys.stderr)
+        return 2
     with cli_warnings(command or "hammerbound"):
         try:
             args = build_parser().parse_args(argv)

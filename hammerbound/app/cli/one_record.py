@@ -82,5 +82,5 @@ def _record(args, ident, data, output_bound, tf) -> dict:
                      "input": data.input_name, "output": data.output_name,
                      "output_bound": output_bound,
                      "steady": None if args.steady is None else str(args.steady)},
-            "assumptions": list(ident.assumptions_),
+            "assumptions": [cli_terms(a) for a in ident.assumptions_],
             "transfer_function": tf}

@@ -117,3 +117,21 @@ def test_a_guessed_noise_flag_points_to_output_bound(capsys):
     assert main(["identify", "--record", "r.csv", "--noise", "0.02"]) == 2
     err = capsys.readouterr().err
     assert "--noise" in err and "--output-bound" in err
+
+
+def test_cli_json_assumptions_are_in_command_line_terms(tmp_path, capsys):
+    import json
+
+    from hammerbound.app.cli.main import main
+
+    u = np.repeat([0.5, -1.5, 1.0, -1.0, 1.5, -0.5], 5)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.25, 0.06, 0.26, 0.05))
+    y = y + 0.01 * np.sign(np.sin(np.arange(u.size)))
+    hb.IOData(u, y, dt=1.0).to_csv(tmp_path / "r.csv")
+    rc = main(["identify", "--record", str(tmp_path / "r.csv"), "--output-bound", "0.01",
+               "--na", "1", "--nb", "1", "--nk", "1", "--method", "lp", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert rc == 0
+    text = " ".join(out["assumptions"])
+    assert "--gamma-box" in text and "pass gamma_box" not in text
+    assert "theta_box of the Python API" in text

@@ -29,10 +29,7 @@ the chapter's unrounded intervals.
 
 from __future__ import annotations
 
-import contextlib
-import json
 import numbers
-import os
 import sys
 import time
 
@@ -43,19 +40,16 @@ from ..stage1.estimator import BacklashSetEstimator, InnerSignalBounds
 from ..stage2.estimator import LinearEIVSetEstimator
 from ..systems.experiments import CHAPTER_NOISE_LEVELS, CHAPTER_U_STAR, chapter_example
 from ..systems.models import GAMMA_NAMES
+from .chapter_output import format_records
 
 __all__ = [
     "STAGE1_MODES",
     "chapter_inner_bounds",
     "chapter_reference",
     "fit_example",
-    "format_records",
     "reproduce_chapter",
     "reproduction_misses",
     "run_demo",
-    "stdout_to_stderr",
-    "records_json",
-    "write_records",
 ]
 
 STAGE1_MODES = ("experiment", "chapter")
@@ -258,7 +252,23 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
     if inner_signal == "two-level":
         mlabel += "-2level"
     note = progress or (lambda msg: None)
-    # stage 1 (cheap) here; the stage-2 fits are collected as tasks and run below
+    stage1_of, tasks = _stage1_and_tasks(stage1, Ns, levels, seeds, inner_ch, inner_signal)
+    # stage 2 of the chapter: the unit-gain normalisation (22.8) is imposed, as the
+    # identifier does
+    kw = dict(method=method, steady_state_gain=1.0, relaxation_order=relaxation_order,
+              solver=solver, n_jobs=n_jobs,
+              **{"time_limit": time_limit, **(linear_options or {})})
+    fitted = _fit_all(tasks, kw, n_jobs,
+                      lambda done, n, deta, seed, nn, dt: note(
+                          f"[{done}/{n}] delta_eta={deta:g} N={nn} seed={seed} {mlabel} "
+                          f"(stage 1: {stage1}): {dt:.1f} s"))
+    return _records(stage1_of, fitted, Ns, levels, seeds, ref, mlabel, stage1, rounding)
+
+
+def _stage1_and_tasks(stage1, Ns, levels, seeds, inner_ch, inner_signal):
+    """Stage 1 of every (noise level, seed) and the stage-2 fits to run: ``(stage1_of,
+    tasks)``, ``stage1_of[deta] = (gamma lows, gamma highs, inner lows, inner highs)`` per
+    seed, a task ``((deta, seed, N), x^c, y, dx, groups, snr_db)``."""
     stage1_of, tasks = {}, []
     for deta in levels:
         g_lo, g_hi, x_lo, x_hi = [], [], [], []
@@ -277,15 +287,18 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
                 groups = (ex.prbs.u < 0).astype(int) if inner_signal == "two-level" else None
                 tasks.append(((deta, seed, n), xc, ex.prbs.y, dx, groups, ex.prbs.snr_db))
         stage1_of[deta] = (g_lo, g_hi, x_lo, x_hi)
-    # The fits are independent: with n_jobs != 1 they run side by side (one worker each,
-    # the largest first), which balances two cores better than splitting every fit's 2 p
-    # interval ends; progress reports each fit as it finishes.
+    return stage1_of, tasks
+
+
+def _fit_all(tasks, kw, n_jobs, note):
+    """The stage-2 fits of ``tasks``: ``{(deta, seed, N): (bounds, snr_db, seconds,
+    certified)}``; ``note(done, total, deta, seed, N, seconds)`` as each one finishes.
+
+    The fits are independent: with ``n_jobs != 1`` they run side by side (one worker each,
+    the largest first), which balances two cores better than splitting every fit's 2 p
+    interval ends."""
     parallel_fits = n_jobs != 1 and len(tasks) > 1
-    # stage 2 of the chapter: the unit-gain normalisation (22.8) is imposed, as the
-    # identifier does
-    kw = dict(method=method, steady_state_gain=1.0, relaxation_order=relaxation_order,
-              solver=solver, n_jobs=1 if parallel_fits else n_jobs,
-              **{"time_limit": time_limit, **(linear_options or {})})
+    kw = dict(kw, n_jobs=1 if parallel_fits else n_jobs)
     calls = [(i, t[0][0], t[1], t[2], t[3], t[4]) for i, t in enumerate(tasks)]
     if parallel_fits:
         from joblib import Parallel, delayed
@@ -299,40 +312,51 @@ def reproduce_chapter(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NO
     for done, (i, bounds, dt, certified) in enumerate(outs, start=1):
         (deta, seed, n), snr = tasks[i][0], tasks[i][5]
         fitted[(deta, seed, n)] = (bounds, snr, dt, certified)
-        note(f"[{done}/{len(tasks)}] delta_eta={deta:g} N={n} seed={seed} {mlabel} "
-             f"(stage 1: {stage1}): {dt:.1f} s")
+        note(done, len(tasks), deta, seed, n, dt)
+    return fitted
+
+
+def _records(stage1_of, fitted, Ns, levels, seeds, ref, mlabel, stage1, rounding):
+    """The rows of Tables 22.1-22.3 (see :func:`reproduce_chapter`)."""
     records = []
     for deta in levels:
-        g_lo, g_hi, x_lo, x_hi = stage1_of[deta]
-        fits = {n: [fitted[(deta, seed, n)] for seed in seeds] for n in Ns}
         ex = chapter_example(deta, N=Ns[0], random_state=seeds[0])
-        bk = ex.system.backlash
-        u_star = ex.prbs.u_star
-        true_x = (bk.mr * (u_star - bk.cr), -bk.ml * (u_star - bk.cl))
-        for j, p in enumerate(GAMMA_NAMES):
-            records.append(_record("22.1", None, deta, p, ex.gamma_true[j], "polygon", stage1,
-                                   seeds, [g[j] for g in g_lo], [g[j] for g in g_hi],
-                                   ref.get(("22.1", None, deta, p))))
-        for j, p in enumerate(INNER_NAMES):
-            implied = None
-            if ("22.1", None, deta, "ml") in ref:
-                ib = chapter_inner_bounds(deta, u_star, rounding=rounding)
-                a, b = (ib.x_hi, ib.x_lo)[j]
-                implied = {"lower": a, "upper": b, "half_width": 0.5 * (b - a)}
-            records.append(_record("22.1", None, deta, p, true_x[j], "polygon", stage1, seeds,
-                                   [x[j] for x in x_lo], [x[j] for x in x_hi], implied,
-                                   u_star=u_star))
+        records += _table_22_1_rows(stage1_of[deta], ex, deta, seeds, ref, stage1, rounding)
         for n in Ns:
+            fits = [fitted[(deta, seed, n)] for seed in seeds]
             table = _TABLE_OF_N.get(n)
             for j, p in enumerate(THETA_NAMES):
                 rr = ref.get((table, n, deta, p)) if table else None
                 records.append(_record(
                     table or f"N={n}", n, deta, p, ex.theta_true[j], mlabel, stage1, seeds,
-                    [f[0][j, 0] for f in fits[n]], [f[0][j, 1] for f in fits[n]], rr,
-                    snr_db=[f[1] for f in fits[n]],
+                    [f[0][j, 0] for f in fits], [f[0][j, 1] for f in fits], rr,
+                    snr_db=[f[1] for f in fits],
                     chapter_snr_db=None if rr is None else rr["snr_db"],
-                    time_s=[f[2] for f in fits[n]], certified=[f[3] for f in fits[n]]))
+                    time_s=[f[2] for f in fits], certified=[f[3] for f in fits]))
     return records
+
+
+def _table_22_1_rows(stage1_seeds, ex, deta, seeds, ref, stage1, rounding):
+    """Table 22.1 rows of one noise level: the backlash and the inner-signal levels."""
+    g_lo, g_hi, x_lo, x_hi = stage1_seeds
+    bk = ex.system.backlash
+    u_star = ex.prbs.u_star
+    true_x = (bk.mr * (u_star - bk.cr), -bk.ml * (u_star - bk.cl))
+    rows = []
+    for j, p in enumerate(GAMMA_NAMES):
+        rows.append(_record("22.1", None, deta, p, ex.gamma_true[j], "polygon", stage1,
+                            seeds, [g[j] for g in g_lo], [g[j] for g in g_hi],
+                            ref.get(("22.1", None, deta, p))))
+    for j, p in enumerate(INNER_NAMES):
+        implied = None
+        if ("22.1", None, deta, "ml") in ref:
+            ib = chapter_inner_bounds(deta, u_star, rounding=rounding)
+            a, b = (ib.x_hi, ib.x_lo)[j]
+            implied = {"lower": a, "upper": b, "half_width": 0.5 * (b - a)}
+        rows.append(_record("22.1", None, deta, p, true_x[j], "polygon", stage1, seeds,
+                            [x[j] for x in x_lo], [x[j] for x in x_hi], implied,
+                            u_star=u_star))
+    return rows
 
 
 def _stage2_fit(i, deta, xc, y, dx, groups, kw):
@@ -349,51 +373,6 @@ def reproduction_misses(records, low=0.7, high=1.5) -> list[dict]:
     interval misses the truth for some seed (the issue's acceptance test)."""
     return [r for r in records if r["table"] in ("22.2", "22.3")
             and (r["ratio"] is None or not low <= r["ratio"] <= high or not all(r["inside"]))]
-
-
-# --------------------------------------------------------------------------- printing
-def _f(v, w=8, d=4):
-    return " " * (w - 1) + "-" if v is None else f"{v:{w}.{d}f}"
-
-
-def format_records(records, file=None) -> None:
-    """Print the records as tables: ours (median seed) beside the chapter's, ratio."""
-    file = sys.stdout if file is None else file
-    groups = []
-    for r in records:
-        key = (r["table"], r["N"])
-        if key not in groups:
-            groups.append(key)
-    for table, n in groups:
-        rows = [r for r in records if (r["table"], r["N"]) == (table, n)]
-        r0 = rows[0]
-        if table == "22.1":
-            title = ("Table 22.1 - backlash parameters (our exact stage 1) and inner-signal "
-                     f"levels for u* = {rows[-1].get('u_star', CHAPTER_U_STAR):g}")
-        else:
-            name = f"({table})" if table.startswith("N=") else table
-            title = (f"Table {name} - linear block, N = {n}, method {r0['method']}, "
-                     f"stage 1: {r0['stage1']}")
-        print(f"\n{title}", file=file)
-        print(f"  ours: interval of the median seed, median half-width (min-max) over "
-              f"{len(r0['seeds'])} seed(s); chapter in [ ]; ratio = our median half-width / "
-              "chapter's; * = truth inside for every seed (! = not)", file=file)
-        for deta in dict.fromkeys(r["delta_eta"] for r in rows):
-            sub = [r for r in rows if r["delta_eta"] == deta]
-            snr = sub[0].get("snr_db")
-            snr_t = "" if not snr else f"  (SNR median {np.median(snr):.1f} dB" + (
-                f", chapter {sub[0]['chapter_snr_db']:g} dB)" if sub[0].get("chapter_snr_db")
-                is not None else ")")
-            print(f"  delta_eta = {deta:g}{snr_t}", file=file)
-            for r in sub:
-                ch = "" if r["chapter_lower"] is None else (
-                    f"  [{r['chapter_lower']:.4f} {r['chapter_upper']:.4f} "
-                    f"({r['chapter_half_width']:.4f})]")
-                ratio = "" if r["ratio"] is None else f"  ratio {r['ratio']:5.2f}"
-                print(f"    {r['param']:7s} true {_f(r['true'])}  ours {_f(r['lower'])} "
-                      f"{_f(r['upper'])} ({r['median_half_width']:.4f}, "
-                      f"{r['half_width_min']:.4f}-{r['half_width_max']:.4f})"
-                      f"{'*' if all(r['inside']) else '! NOT INSIDE'}{ch}{ratio}", file=file)
 
 
 def run_demo(stage1="experiment", N=(100, 300), noise_levels=CHAPTER_NOISE_LEVELS,
@@ -450,54 +429,3 @@ def fit_example(delta_eta=0.05, N=100, seed=0, method="exact", *, inner_signal="
         inner_signal=inner_signal)
     ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
     return ex, ident
-
-
-# --------------------------------------------------------------------------- output
-@contextlib.contextmanager
-def stdout_to_stderr():
-    """Send everything written to stdout -- Python's and the C libraries' (file descriptor
-    1, e.g. a solver banner) -- to stderr while the block runs, so that stdout can carry
-    only a JSON document afterwards."""
-    sys.stdout.flush()
-    try:
-        fd = sys.__stdout__.fileno() if sys.__stdout__ is not None else 1
-        saved = os.dup(fd)
-    except (OSError, ValueError, AttributeError):  # no real stdout (embedded interpreter)
-        fd = saved = None
-    old = sys.stdout
-    if saved is not None:
-        os.dup2(sys.__stderr__.fileno() if sys.__stderr__ is not None else 2, fd)
-    sys.stdout = sys.stderr
-    try:
-        yield
-    finally:
-        sys.stdout = old
-        if saved is not None:
-            os.dup2(saved, fd)
-            os.close(saved)
-
-
-def records_json(records) -> str:
-    """The records as a JSON list (one object per table row)."""
-    return json.dumps(records, indent=1, default=_json_default)
-
-
-def write_records(records, path, *, file=None) -> None:
-    """Write the records as a JSON list to ``path`` (``"-"``: to ``file``, default stdout)."""
-    text = records_json(records)
-    if str(path) == "-":
-        out = sys.stdout if file is None else file
-        out.write(text + "\n")
-        out.flush()
-    else:
-        from pathlib import Path
-
-        Path(path).write_text(text + "\n")
-
-
-def _json_default(o):
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")

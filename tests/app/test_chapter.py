@@ -14,8 +14,8 @@ from hammerbound.app.chapter import (
     chapter_inner_bounds,
     reproduce_chapter,
     reproduction_misses,
-    stdout_to_stderr,
 )
+from hammerbound.app.chapter_output import stdout_to_stderr
 from hammerbound.app.cli import main
 from hammerbound.exceptions import ParameterValidationError
 from hammerbound.systems.experiments import CHAPTER_NOISE_LEVELS, CHAPTER_U_STAR, chapter_example

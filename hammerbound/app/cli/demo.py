@@ -50,7 +50,8 @@ def run(args) -> int:
     """Tables 22.1-22.3 over several noise draws beside the chapter's numbers
     (:func:`hammerbound.app.chapter.run_demo`)."""
     from ...systems.experiments import CHAPTER_NOISE_LEVELS
-    from ..chapter import DEMO_SEEDS, records_json, run_demo, stdout_to_stderr
+    from ..chapter import DEMO_SEEDS, run_demo
+    from ..chapter_output import records_json, stdout_to_stderr
     from ..paths import write_output_text
     from ..report import REPORT_FILES
 

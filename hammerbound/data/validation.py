@@ -255,10 +255,14 @@ def check_excited(where: str, input_name: str, u, output_name: str, y) -> None:
 
 def warn_bound_covers_output(where: str, output_name: str, y, bound, *,
                              stacklevel: int = 4) -> None:
-    """Warn (:class:`DataWarning`) when the output error bound is at least half the
-    output's range on every sample: a constant output then explains the record within the
-    bound, so the record can bound nothing (the intervals stay guaranteed, only as wide as
-    the a priori box). Usually the bound and the output are in different units."""
+    """Warn (:class:`DataWarning`) when the output error bound of a one-record fit is at
+    least half the output's range on every sample: a constant output then explains the
+    record within the bound, and a backlash whose dead band spans the input's range gives
+    one, with any linear block, so the record identifies nothing (the intervals stay
+    guaranteed). Often the bound and the output are in different units.
+
+    Only for the one-record identification: the linear block of stage 2 has no offset, so
+    there a constant output does not explain every record."""
     y = np.asarray(y, dtype=float)
     half = 0.5 * float(np.max(y) - np.min(y)) if y.size else 0.0
     low = float(np.min(bound))
@@ -270,9 +274,10 @@ def warn_bound_covers_output(where: str, output_name: str, y, bound, *,
         warnings.warn(
             f"{where}: the output error bound ({low:.4g}) is at least half the range of the "
             f"output {output_name} ({2 * half:.4g}), so a constant output explains the record "
-            "within it and nothing can be identified (the intervals stay guaranteed, as wide "
-            "as the a priori box). Check that the bound and the output are in the same units.",
-            DataWarning, stacklevel=stacklevel)
+            "within it (a dead band as wide as the input's range gives one) and the record "
+            "identifies nothing; the intervals stay guaranteed. Check that the bound and the "
+            "output are in the same units; if they are, the record is too small against its "
+            "noise.", DataWarning, stacklevel=stacklevel)
 
 
 # ------------------------------------------------------------------------------ scale

@@ -110,7 +110,8 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
             else "limited only by the gamma_box you gave")
     warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
                   + _advice(stopped_by_time, lps_stopped, causes),
-                  NotIdentifiedWarning, stacklevel=4)
+                  # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
+                  NotIdentifiedWarning, stacklevel=5)
     return gb, tuple(found)
 
 
@@ -118,7 +119,7 @@ def _advice(stopped_by_time, lps_stopped, causes) -> str:
     """What to do about ends the record did not bound, for the causes named: more time
     when a limit stopped the search, another record when the input is the cause."""
     fixes = []
-    if stopped_by_time or lps_stopped:
+    if stopped_by_time:  # (LPs stopped at their own cap: the cause says what helps)
         fixes.append("give more time (total_time_limit)")
     if "reverses" in causes or "dead band" in causes:
         fixes.append("use a record whose input reverses by more than the dead band")

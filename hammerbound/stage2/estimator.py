@@ -30,13 +30,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from .._compat import DEPRECATED, is_given, renamed_value
-from ..data.validation import (
-    as_bound,
-    as_signal,
-    check_excited,
-    check_scale,
-    warn_bound_covers_output,
-)
+from ..data.validation import as_bound, as_signal, check_excited, check_scale
 from ..exceptions import (
     DataValidationError,
     EmptyFeasibleSetError,
@@ -289,7 +283,6 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         deta = self._output_bound(n, output_bound)
         dx = as_bound("input_bound", input_bound, n, allow_zero=True)
         check_excited("LinearEIVSetEstimator.fit", "X", x, "y", yy)
-        warn_bound_covers_output("LinearEIVSetEstimator.fit", "y", yy, deta)
         check_scale("LinearEIVSetEstimator.fit", {"X": x, "y": yy},
                     {"output_bound": deta, "input_bound": dx},
                     hint=" (scaling X, y and both bounds by the same factor leaves theta "

@@ -48,7 +48,8 @@ def _moment(est, problem):
     check_moment_budget(estimate_moment_relaxation(
         problem, est.relaxation_order, basis=est.relaxation_basis),
         max_work=float(est.relaxation_max_work), option="relaxation_max_work",
-        processes=solve_processes(est.n_jobs, problem.p))
+        processes=solve_processes(est.n_jobs, problem.p),
+        stacklevel=5)  # warn -> here -> run_method -> fit -> the caller
     lp = lp_bounds(problem, n_jobs=est.n_jobs, check_box=False)
     check_box(est, problem, lp)
     # the LP bounds are the a priori box and the fallback; kept as res.lp

@@ -72,16 +72,30 @@ def test_an_output_bound_in_other_units_than_the_output_warns_at_once():
 
 
 def test_a_bound_below_half_the_output_range_does_not_warn():
-    rng = np.random.default_rng(0)
-    x = rng.uniform(-1, 1, 40)
-    y = lfilter([0.0, 0.5], [1.0, -0.5], x)
+    u = np.repeat([0.5, -1.5, 1.0, -1.0, 1.5, -0.5], 5)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.25, 0.06, 0.26, 0.05))
     half = 0.5 * (y.max() - y.min())
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.9 * half, method="lp").fit(x, y)
+        _fit(u, y, 0.9 * half, total_time_limit=1.0)
     assert not [w for w in caught if issubclass(w.category, DataWarning)]
-    with pytest.warns(DataWarning, match="same units"):
-        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=half, method="lp").fit(x, y)
+    with pytest.warns(DataWarning, match="same units") as caught:
+        _fit(u, y, half, total_time_limit=1.0)
+    assert [w.filename for w in caught if issubclass(w.category, DataWarning)] == [__file__]
+
+
+def test_stage_two_does_not_warn_of_a_constant_output():
+    """Stage 2 has no offset: a constant output does not explain every record there, so a
+    large bound is no sign of other units (the review found the warning firing on honest
+    bounds with b_1 still bounded)."""
+    rng = np.random.default_rng(0)
+    x = rng.uniform(-1, 1, 40)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], x)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.5 * (y.max() - y.min()),
+                                 theta_box=[[-0.9, 0.9], [-10, 10]], method="lp").fit(x, y)
+    assert not [w for w in caught if issubclass(w.category, DataWarning)]
 
 
 def test_a_constant_input_is_a_data_error():
@@ -101,6 +115,7 @@ def test_advice_follows_the_cause():
     msg = str(caught[0].message)
     assert "never reverses" in msg and "Use a record whose input reverses" in msg
     assert "total_time_limit" not in msg
+    assert caught[0].filename == __file__  # the warning points at the caller's line
 
 
 def test_the_advice_of_a_stopped_search_is_more_time():
@@ -109,14 +124,30 @@ def test_the_advice_of_a_stopped_search_is_more_time():
     text = _advice(True, 0, "the time limit stopped the search before the record bounded it")
     assert text.startswith("Give more time (total_time_limit)") and "reverses" not in text
     assert "reverses" in _advice(False, 0, "the input never reverses")
+    # LPs stopped at their own cap: more total time does not help (the cause names what does)
+    assert "total_time_limit" not in _advice(False, 3, "3 LP(s) of the relaxation ended")
 
 
 def test_a_guessed_noise_flag_points_to_output_bound(capsys):
     from hammerbound.app.cli.main import main
 
-    assert main(["identify", "--record", "r.csv", "--noise", "0.02"]) == 2
+    with pytest.raises(SystemExit) as exit_:
+        main(["identify", "--record", "r.csv", "--noise", "0.02"])
+    assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert "--noise" in err and "--output-bound" in err
+
+
+def test_flags_a_command_accepts_are_not_taken_for_guesses(capsys):
+    """--noise-bound is the deprecated spelling that eiv still takes, and --noise is
+    demo's abbreviation of --noise-levels: both parse (a first version refused them)."""
+    from hammerbound.app.cli.main import main
+
+    for argv in (["eiv", "--noise-bound", "0.02", "--help"], ["demo", "--noise", "0.05", "--help"]):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        assert exit_.value.code == 0, argv
+    capsys.readouterr()
 
 
 def test_cli_json_assumptions_are_in_command_line_terms(tmp_path, capsys):

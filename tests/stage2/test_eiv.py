@@ -214,3 +214,15 @@ def test_exact_progress_shows_the_gap_in_the_units_of_the_data(capsys):
     for label, g in ref.items():
         want = g * 1024.0 if " b" in label else g
         assert big[label] == pytest.approx(want, rel=2e-3), label  # 3 digits shown
+
+
+def test_the_large_relaxation_warning_points_at_the_caller(monkeypatch):
+    """The moment method's size warning names the user's line, not the library's (it
+    pointed inside stage2/fitting.py after fit was split)."""
+    from hammerbound.relaxations.moment import size
+
+    monkeypatch.setattr(size, "MOMENT_WARN_WORK", 0.0)
+    x, y, _, _ = _data(N=20, deta=0.05)
+    with pytest.warns(RuntimeWarning) as caught:
+        LinearEIVSetEstimator(output_bound=0.05, method="moment").fit(x, y, input_bound=0.003)
+    assert [w.filename for w in caught if "relaxation" in str(w.message)][:1] == [__file__]

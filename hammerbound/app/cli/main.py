@@ -17,7 +17,7 @@ __all__ = ["build_parser", "main"]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="hammerbound",
         description="Guaranteed bounds on backlash-Hammerstein systems (set-membership).",
         epilog=f"Output files are checked before any work starts and never overwritten "
@@ -26,6 +26,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     for module in (demo, identify, eiv, benchmark, diagnose):
         module.add_parser(sub)
+    parser.with_output_bound = frozenset(
+        name for name, p in sub.choices.items()
+        if any("--output-bound" in a.option_strings for a in p._actions))
     return parser
 
 
@@ -35,19 +38,26 @@ def _version() -> str:
     return __version__
 
 
-#: flags a newcomer guesses for an option the command spells otherwise
-_GUESSED = {"--noise": "--output-bound", "--noise-bound": "--output-bound",
-            "--deta": "--output-bound"}
+#: flags a newcomer guesses for the output error bound (an argparse error about one of them
+#: names ``--output-bound`` when the command has it)
+_GUESSED = ("--noise", "--noise-bound", "--deta")
 
 
-def _guessed_flag(argv) -> str | None:
-    """A usage error for a guessed flag in ``argv`` (say which flag is meant), or None."""
-    for a in argv:
-        flag = a.split("=", 1)[0]
-        if flag in _GUESSED:
-            return (f"unrecognized argument {flag}: the bound on the output errors is "
-                    f"{_GUESSED[flag]} (e.g. {_GUESSED[flag]} 0.05)")
-    return None
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose "unrecognized arguments" error names ``--output-bound`` for
+    a guessed spelling of it (:data:`_GUESSED`), when the command has that flag."""
+
+    with_output_bound: frozenset = frozenset()
+    command: str | None = None
+
+    def error(self, message):
+        words = message.replace(",", " ").split()
+        if (message.startswith("unrecognized arguments")
+                and self.command in self.with_output_bound
+                and any(w.split("=", 1)[0] in _GUESSED for w in words)):
+            message += " (the bound on the output errors is --output-bound, e.g. " \
+                       "--output-bound 0.05)"
+        super().error(message)
 
 
 def main(argv=None) -> int:
@@ -57,13 +67,11 @@ def main(argv=None) -> int:
     if argv[:2] == ["benchmark", "suite"]:
         return benchmark.run_suite(argv[2:])
     command = argv[0] if argv else None
-    guessed = _guessed_flag(argv)
-    if guessed is not None:
-        print(f"hammerbound {command}: error: {guessed}", file=sys.stderr)
-        return 2
     with cli_warnings(command or "hammerbound"):
         try:
-            args = build_parser().parse_args(argv)
+            parser = build_parser()
+            parser.command = command
+            args = parser.parse_args(argv)
             return args.func(args)
         except BrokenPipeError:  # the reader of stdout left (e.g. `| head`): stop quietly
             with contextlib.suppress(OSError, ValueError):

@@ -289,7 +289,7 @@ def solve_processes(n_jobs, p: int) -> int:
 
 def check_moment_budget(size: MomentSize, max_work: float | None = None,
                         warn_work: float | None = None, *, option: str = "max_work",
-                        processes: int = 1) -> None:
+                        processes: int = 1, stacklevel: int = 3) -> None:
     """Refuse or warn when a relaxation of ``size`` exceeds the budgets.
 
     ``option`` is the name of the caller's option that sets ``max_work`` (the refusal names
@@ -326,7 +326,7 @@ def check_moment_budget(size: MomentSize, max_work: float | None = None,
     if size.work > warn_work:
         warnings.warn(
             f"large moment relaxation: {size.describe()}. method='lp' or method='exact' "
-            "(with total_time_limit) may be faster.", RuntimeWarning, stacklevel=3)
+            "(with total_time_limit) may be faster.", RuntimeWarning, stacklevel=stacklevel)
 
 
 #: Memory limits of a container (cgroup v2, then v1), read by :func:`physical_memory`.

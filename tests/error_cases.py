@@ -206,7 +206,7 @@ CASES: list[ErrorCase] = [
     C("s1-one-amplitude", "stage 1", "too few amplitudes: one square wave only",
       "BacklashSetEstimator(0.05).fit(u_ss[:2], y_ss[:2])",
       lambda: hb.BacklashSetEstimator(0.05).fit(u_ss()[:2], y_ss()[:2]),
-      NotEnoughAmplitudesError, "at least two different amplitudes"),
+      NotEnoughAmplitudesError, "at least two different negative amplitudes"),
     C("s1-one-side", "stage 1", "too few amplitudes: no negative half-waves",
       "BacklashSetEstimator(0.05).fit(u_ss[u_ss > 0], y_ss[u_ss > 0])",
       lambda: hb.BacklashSetEstimator(0.05).fit(u_ss()[u_ss() > 0], y_ss()[u_ss() > 0]),

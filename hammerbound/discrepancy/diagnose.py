@@ -240,6 +240,10 @@ def _diagnose(s, u, y, bound, do_refit, skip, data, names, max_delay, grid_size,
         closest = tuple(pool)
     msg = _message(bound, gap_before, consistent_before, chosen, added, fits, combo_fits,
                    closest, removed, min_improvement, old)
+    untried = [n for n in _effects.REGISTRY if n not in names]
+    if not added and not consistent_before and untried:
+        msg += (f" Not tried: {', '.join(untried)} (candidates='all' tries every "
+                "registered effect).")
     keep = set(added) if added else (
         {c.name for c in fits if c.consistent} if consistent_before else
         {n for n, e in closest if removed(e) >= 0.5})

@@ -55,6 +55,14 @@ def _conditions(u, resid, flagged, scored, window):
     return tuple(out)
 
 
+#: the conditions of :func:`_conditions` as phrases ("... concentrate <phrase>")
+_WHERE = {"after_reversal": "after input reversals",
+          "after_input_change": "after input changes",
+          "steady_state": "in steady state",
+          "large_amplitude": "at large input amplitudes",
+          "small_amplitude": "at small input amplitudes"}
+
+
 def _best_lag(y, yh, max_lag):
     best, bestc = 0, -np.inf
     for k in range(-max_lag, max_lag + 1):
@@ -203,7 +211,7 @@ def locate_design(s, d: Design, u, y, bound, skip, window, max_lag, coef_box=1e3
         for c in conds:
             if np.isfinite(c.enrichment) and c.enrichment >= 1.5 and c.share_of_violations > 0.2:
                 hints.append((None,
-                    f"the largest disagreements concentrate {c.name.replace('_', ' ')} "
+                    f"the largest disagreements concentrate {_WHERE.get(c.name, c.name)} "
                     f"({100 * c.share_of_violations:.0f}% of them vs "
                     f"{100 * c.share_of_samples:.0f}% of samples)"
                 ))

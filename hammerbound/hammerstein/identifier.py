@@ -37,6 +37,14 @@ __all__ = ["HammersteinBacklashIdentifier"]
 
 
 
+def _theta_box_text(lin) -> str:
+    """The a priori box of the linear block that stage 2 assumed (a bound at it says
+    "from a priori box")."""
+    from ..stage2.fitting import assumption_list
+
+    return assumption_list(lin, lin.problem_)[3]
+
+
 def _central_system(backlash, A, B, dt=None):
     """The central model; its A need not be stable (the centre of intervals that contain
     stable A's may lie outside the stability region): warn instead of failing the fit."""
@@ -205,6 +213,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             f"inner signal within the stage-1 bounds |dx_t| <= "
             f"{bound_text(lin.problem_.input_bound)}",
             "linear block of unit steady-state gain (22.8)",
+            _theta_box_text(lin),
         )
         ml, cl, mr, cr = bl.gamma_center_
         self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, data.dt)
@@ -273,7 +282,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 f"{bound_text(self.backlash_.output_bound_)} (steady state), "
                 f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "
                 f"bounds |dx_t| <= {bound_text(pr.input_bound)}; unit steady-state gain of "
-                "the linear block (22.8)")
+                f"the linear block (22.8); {_theta_box_text(lin)}")
         return self.intervals_.summary(title=head)
 
     @property
@@ -388,8 +397,12 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         return tags
 
     # ------------------------------------------------------------------ model set (issue 16)
-    def sample(self, n, random_state=None):
+    def sample(self, n, random_state=None, *, seeds=None):
         """Certified samples of both blocks: ``(backlash_samples, linear_samples)``.
+
+        ``seeds`` (two-stage only): starting points of the linear block's sampler, rows of
+        ``theta`` (each verified first; see :meth:`LinearEIVSetEstimator.sample`), e.g. when
+        an LP fit's set is too thin for the sampler to find a member by itself.
 
         Two-stage: the stage-2 set does not depend on which feasible backlash is true (it
         accounts for all of them through the inner-signal bounds), so the joint set is the
@@ -402,9 +415,15 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         rng = np.random.default_rng(random_state) if not isinstance(
             random_state, np.random.Generator) else random_state
         if self.procedure_ == "one-record":
+            if seeds is not None:
+                raise ParameterValidationError(
+                    "seeds apply to the linear block of a two-stage fit; the one-record "
+                    "samples start from the witnesses of its search (fit with "
+                    "method='exact' for more of them).")
             smp = self.linear_.sample(n, random_state=rng)
             return smp, smp
-        return self.backlash_.sample(n, random_state=rng), self.linear_.sample(n, random_state=rng)
+        return (self.backlash_.sample(n, random_state=rng),
+                self.linear_.sample(n, random_state=rng, seeds=seeds))
 
     def _fitted_dt(self):
         """Sampling time of the fitted data, or None when it was not given."""

@@ -124,4 +124,31 @@ def choose_procedure(idf, u, steady_state) -> str:
         return "two-stage"
     if idf.procedure == "one-record" or steady_state is None:
         return "one-record"
-    return "two-stage" if _is_prbs(u, idf.prbs_level) else "one-record"
+    if _is_prbs(u, idf.prbs_level):
+        return "two-stage"
+    import warnings
+
+    from ..exceptions import DataWarning
+
+    warnings.warn(
+        f"steady-state data were given, but the record's input is not a two-level PRBS "
+        f"+-u* ({_not_two_level(u)}), so the two-stage method of the chapter does not apply: "
+        "the record is identified as one ordinary record, jointly with the steady-state "
+        "points. Pass procedure='one-record' to say so (and silence this), or fix the "
+        "record (swapped input and output columns?) and pass procedure='two-stage' to "
+        "require the two experiments.", DataWarning, stacklevel=3)
+    return "one-record"
+
+
+def _not_two_level(u) -> str:
+    """What keeps ``u`` from being a PRBS ``+-u*``: its first sample off the most common
+    magnitude, or its two levels that are not opposite."""
+    u = np.asarray(u, dtype=float)
+    levels = np.unique(u)
+    if levels.size == 2:
+        return f"its two levels {levels[0]:.6g} and {levels[1]:.6g} are not opposite"
+    mags, counts = np.unique(np.abs(u), return_counts=True)
+    star = mags[np.argmax(counts)]
+    t = int(np.flatnonzero(~np.isclose(np.abs(u), star, rtol=1e-9, atol=0))[0])
+    return (f"{levels.size} distinct values; u[{t}] = {u[t]:.6g}, where the most common "
+            f"level is +-{star:.6g}")

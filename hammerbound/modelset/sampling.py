@@ -224,9 +224,11 @@ def sample_eiv(problem, box, n, *, seeds=(), random_state=None, thin=1, max_shri
         out = list(chains[:n])
     if not chains:
         raise SolverError(
-            "no verified feasible starting point for the sampler: the seeds are all outside "
-            "the set. Fit with method='exact' (its witnesses are feasible points) or pass "
-            "seeds=... with a known feasible theta."
+            "no verified feasible starting point for the sampler: none of its starting "
+            "points (the centre of the intervals, the fit's witnesses, any seeds given) lies "
+            "in the set, and a search from them found no member (the set may be thin). Fit "
+            "with method='exact' (its witnesses are feasible points) or pass a known "
+            "feasible theta: sample(n, seeds=[theta])."
         )
     basis = _null_basis(problem, radius)
     steps = 0

@@ -180,7 +180,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             raise NotEnoughAmplitudesError(
                 f"the {side} side has {np.unique(u).size} distinct input amplitude(s); the "
                 "feasible set is unbounded with fewer than two (Remark 22.2). Add square waves "
-                "with at least two different amplitudes."
+                f"with at least two different {'positive' if side == 'right' else 'negative'} "
+                f"amplitudes (the {side} line is seen at u "
+                f"{'> 0' if side == 'right' else '< 0'})."
             )
         # the measured slabs relaxed outward by the tolerance policy, in centred and scaled
         # coordinates; "empty" only with an exact certificate (docs/tolerances.md)

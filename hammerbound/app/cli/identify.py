@@ -67,6 +67,9 @@ def _bounds(args):
         return out, out, given, [
             f"steady-state output error bound {out:g}, the same as --output-bound (same "
             "sensor; pass --steady-output-bound if it differs)"]
+    if not args.steady_output_bound > 0:  # (NaN included) named here, not as --output-bound
+        raise UsageError(f"--steady-output-bound must be a number > 0 (the bound on the "
+                         f"steady-state output errors); got {args.steady_output_bound:g}.")
     given.append(f"steady-state output error bound {args.steady_output_bound:g} "
                  "(--steady-output-bound)")
     return out, args.steady_output_bound, given, []

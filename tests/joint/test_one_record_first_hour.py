@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 import pytest
+from oracles import play as _play  # the tests' own play operator
 from scipy.signal import lfilter
 
 import hammerbound as hb
@@ -17,15 +18,6 @@ from hammerbound.exceptions import (
     EmptyFeasibleSetError,
     NotIdentifiedWarning,
 )
-
-
-def _play(u, ml, cl, mr, cr, x0=0.0):
-    """Own play operator: x_t = min(max(x_{t-1}, m_r (u_t - c_r)), m_l (u_t + c_l))."""
-    x, out = x0, np.empty(len(u))
-    for t, v in enumerate(u):
-        x = min(max(x, mr * (v - cr)), ml * (v + cl))
-        out[t] = x
-    return out
 
 
 def _lin(deta, **kw):

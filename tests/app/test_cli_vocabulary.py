@@ -295,3 +295,14 @@ def test_progress_into_a_file_has_no_cursor_codes(rec, tmp_path):
     assert "\r" not in text and "\x1b" not in text
     done = [ln for ln in text.splitlines() if ln.startswith("exact ") and "finished" in ln]
     assert len(done) == 8  # one line per interval end (a1 .. b2; lower and upper)
+
+
+def test_the_u_star_advice_names_no_python_call():
+    """The command line has no suggest_prbs_level(): its message keeps the admissible range
+    (found by a new-user trial)."""
+    from hammerbound.app.cli.console import to_cli
+
+    msg = ("u* = 0.03 is inside the dead zone: Result 1 needs u* > max(c_l^max, c_r^max) = "
+           "0.114626. Choose u* in (0.114626, 2.5), e.g. with suggest_prbs_level().")
+    out = to_cli(msg)
+    assert "suggest_prbs_level" not in out and out.endswith("Choose u* in (0.114626, 2.5).")

@@ -35,6 +35,8 @@ _TERMS = [
     (r"\boutput_bound\b", "--output-bound"),
     (r"\binput_bound=", "--input-bound "),
     (r"\binput_bound\b", "--input-bound"),
+    # (the command line has no call that suggests u*: the range given is the advice)
+    (r", e\.g\. with suggest_prbs_level\(\)", ""),
     # (the command line has no flag for the moment size budget)
     (r" \(\w*max_work; raise it to build anyway\)", ""),
     (r" \(\w*max_work=inf builds it anyway\)", ""),

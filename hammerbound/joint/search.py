@@ -27,7 +27,7 @@ from .local import restore, walk
 from .modes import DOWN, HOLD, UP
 from .problem import RecordProblem, Witness
 from .relaxation import build_relaxation, solve_lp
-from .warm import carry_basis
+from .warm import keyed_basis, start_from
 
 __all__ = ["EndResult", "search_end"]
 
@@ -74,15 +74,10 @@ def _solve(problem, box, col, sense, basis=None, cutoff=None, decisions=None, de
     lp.set_cost(c)
     lp.set_cutoff(cutoff)  # None or not finite: no cutoff
     if basis is not None:
-        snap, ck, rk = basis
-        if np.array_equal(ck, rel.col_keys) and np.array_equal(rk, rel.row_keys):
-            lp.restore(snap)
-        elif CARRY_BASIS:
-            lp.set_basis(carry_basis(snap, ck, rk, rel.col_keys, rel.row_keys, lp.rl, lp.ru))
+        start_from(rel, basis, carry=CARRY_BASIS)
     res = solve_lp(lp)
     x = None if res.x is None else res.x[rel.box_cols]
-    snap = lp.snapshot() if res.status == "optimal" else None
-    return res, x, (None if snap is None else (snap, rel.col_keys, rel.row_keys)), rel
+    return res, x, (keyed_basis(rel) if res.status == "optimal" else None), rel
 
 
 def _children(box, j, x):

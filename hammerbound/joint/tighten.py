@@ -20,7 +20,7 @@ from ..solvers.highs_process import past
 from .prior import reversal_summary
 from .problem import RecordProblem
 from .relaxation import build_relaxation, solve_lp
-from .warm import carry_basis
+from .warm import keyed_basis, start_from
 from .windows import window_problem, windows
 
 __all__ = ["obbt", "outer_leaves"]
@@ -73,7 +73,7 @@ def _tighten_one(problem, box, k, deadline=None, on_stop=None, basis=None):
     ``on_stop()`` is called for each LP that ended before optimality). ``basis``, from the
     previous row (:func:`obbt`), is where the first LP starts (see :data:`CARRY_BASIS`)."""
     rel = build_relaxation(problem, box, deadline=deadline)
-    warm = CARRY_BASIS and basis is not None and _start_from(rel, basis)
+    warm = CARRY_BASIS and basis is not None and start_from(rel, basis)
     out = box[k].copy()
     points = []
     for sense in (1.0, -1.0):
@@ -93,19 +93,8 @@ def _tighten_one(problem, box, k, deadline=None, on_stop=None, basis=None):
             out[1] = min(out[1], -res.bound)
         if res.x is not None:
             points.append(res.x[rel.box_cols])
-    last = (rel.lp.snapshot(), rel.col_keys, rel.row_keys) if res.status == "optimal" else None
+    last = keyed_basis(rel) if res.status == "optimal" else None
     return (None if out[0] > out[1] else out), points, last
-
-
-def _start_from(rel, basis) -> bool:
-    """Start the relaxation ``rel``'s LP from ``basis`` (another row's LP of the same
-    record: restored when the LPs have the same columns and rows, else carried over by
-    their keys, :func:`.warm.carry_basis`); whether it was set."""
-    snap, ck, rk = basis
-    if np.array_equal(ck, rel.col_keys) and np.array_equal(rk, rel.row_keys):
-        return bool(rel.lp.restore(snap))
-    carried = carry_basis(snap, ck, rk, rel.col_keys, rel.row_keys, rel.lp.rl, rel.lp.ru)
-    return carried is not None and bool(rel.lp.set_basis(carried))
 
 
 def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..solvers.highs import basis_arrays
 
-__all__ = ["carry_basis"]
+__all__ = ["carry_basis", "keyed_basis", "start_from"]
 
 _ST = highspy.HighsBasisStatus
 LOWER, BASIC, UPPER, ZERO = (int(_ST.kLower), int(_ST.kBasic), int(_ST.kUpper),
@@ -68,3 +68,22 @@ def carry_basis(snap, old_cols, old_rows, new_cols, new_rows, row_lo, row_hi):
         cand = np.flatnonzero(rs != BASIC)[::-1][: -excess]
         rs[cand] = BASIC
     return cs, rs
+
+
+def keyed_basis(rel):
+    """The basis of the relaxation ``rel``'s last solve with the keys of its columns and
+    rows (what :func:`start_from` takes)."""
+    return rel.lp.snapshot(), rel.col_keys, rel.row_keys
+
+
+def start_from(rel, basis, carry: bool = True) -> bool:
+    """Start the relaxation ``rel``'s LP from ``basis`` (:func:`keyed_basis` of another LP
+    of the same record): restored when the two LPs have the same columns and rows, else,
+    with ``carry``, carried over by their keys (:func:`carry_basis`); whether it was set."""
+    snap, ck, rk = basis
+    if np.array_equal(ck, rel.col_keys) and np.array_equal(rk, rel.row_keys):
+        return bool(rel.lp.restore(snap))
+    if not carry:
+        return False
+    carried = carry_basis(snap, ck, rk, rel.col_keys, rel.row_keys, rel.lp.rl, rel.lp.ru)
+    return bool(rel.lp.set_basis(carried))

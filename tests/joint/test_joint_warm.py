@@ -104,8 +104,8 @@ def test_obbt_from_the_previous_rows_basis_keeps_every_bound(monkeypatch):
     u, y, _ = one_record(80, 0.05, "bound", 2)
     pr = RecordProblem(u, y, 0.05, 2, 2, 1, record_box(2, 2, u, default_gamma_box(u, y, 0.05)))
     used = []
-    start = tighten._start_from
-    monkeypatch.setattr(tighten, "_start_from", lambda rel, b: used.append(1) or start(rel, b))
+    start = tighten.start_from
+    monkeypatch.setattr(tighten, "start_from", lambda rel, b: used.append(1) or start(rel, b))
     boxes = {}
     for carry in (False, True):
         monkeypatch.setattr(tighten, "CARRY_BASIS", carry)

@@ -7,16 +7,16 @@ import numpy as np
 
 try:
     from benchmarks import _common as C
-    from benchmarks.report_format import _json, env_line, f, fs, table
+    from benchmarks.report_format import _json, _with_rows, env_line, f, fs, table
 except ImportError:  # run as a script
     import _common as C
-    from report_format import _json, env_line, f, fs, table
+    from report_format import _json, _with_rows, env_line, f, fs, table
 
 
 def section_ablation():
     """What each part of the exact search buys (benchmarks/exact_ablation.py)."""
-    j = _json("exact_ablation.json")
-    if not j or not j.get("rows"):
+    j = _with_rows("exact_ablation.json")
+    if j is None:
         return ""
     rows = [[r["inner_signal"], f"{r['delta_eta']:g}", r["variant"], f"{fs(r['wall_s'])} s",
              r["nodes"], r["iterations"], ", ".join(r["statuses"]),
@@ -135,8 +135,8 @@ def section_exact_ratio():
 
 def section_scaling():
     """Exact intervals on long records (benchmarks/exact_scaling.py)."""
-    j = _json("exact_scaling.json")
-    if not j or not j.get("rows"):
+    j = _with_rows("exact_scaling.json")
+    if j is None:
         return ""
     rows = []
     for r in j["rows"]:
@@ -185,8 +185,8 @@ def section_witness_widening():
 
 def section_moment2():
     """Order-2 moment relaxation at the chapter's size (benchmarks/moment_order2.py)."""
-    j = _json("moment_order2.json")
-    if not j or not j.get("rows"):
+    j = _with_rows("moment_order2.json")
+    if j is None:
         return ""
     rows = sorted(j["rows"], key=lambda r: (r["N"], r["basis"] != "sparse"))
     out = [env_line(j)]
@@ -236,8 +236,8 @@ def section_moment2():
 
 def section_lric():
     """The third-party LRIC exam record (benchmarks/lric.py)."""
-    j = _json("lric.json")
-    if not j or not j.get("rows"):
+    j = _with_rows("lric.json")
+    if j is None:
         return ""
     rows = []
     for r in j["rows"]:

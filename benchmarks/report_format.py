@@ -28,6 +28,12 @@ def _json(name):
     return C.read_json(p) if p.exists() else None
 
 
+def _with_rows(name):
+    """The results file ``name`` if it exists and has rows (else None: no section)."""
+    j = _json(name)
+    return j if j and j.get("rows") else None
+
+
 def f(v, nd=4):
     if v is None or v == "":
         return "–"

@@ -7,11 +7,11 @@ import numpy as np
 
 try:
     from benchmarks import _common as C
-    from benchmarks.report_format import _json
+    from benchmarks.report_format import _json, _with_rows
     from benchmarks.report_format import table as _table
 except ImportError:  # run as a script
     import _common as C
-    from report_format import _json
+    from report_format import _json, _with_rows
     from report_format import table as _table
 
 PARAMS = ("ml", "cl", "mr", "cr", "a1", "a2", "b1", "b2")
@@ -188,8 +188,8 @@ def section_speed():
 
 
 def section_valve():
-    j = _json("valve_loops.json")
-    if not j or not j.get("rows"):
+    j = _with_rows("valve_loops.json")
+    if j is None:
         return ""
     rows = j["rows"]
     conf = j.get("confusion") or {}

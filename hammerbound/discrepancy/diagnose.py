@@ -145,138 +145,174 @@ def _diagnose(s, u, y, bound, do_refit, skip, data, names, max_delay, grid_size,
               coef_box, min_improvement, max_effects, bar):
     """:func:`diagnose` on checked arguments (``bar``: a :class:`SearchProgress`)."""
     t0 = time.perf_counter()
+    d = _Diagnosis(s, u, y, bound, do_refit, skip, max_delay, grid_size, coef_box, bar)
+    d.baseline(window)
+    fits = d.singles(names)
+    chosen, combo_fits = d.choose(max_effects)
+    closest = d.closest(fits, combo_fits, chosen, min_improvement)
+    return d.report(fits, combo_fits, chosen, closest, names, min_improvement, data,
+                    time.perf_counter() - t0)
 
-    origin = s if s.origin is None else s.origin
-    existing = tuple((_effects.get(n), tuple(th)) for n, th, _ in s.effect_params) \
-        if s.origin is not None else ()
-    ctx = Context(u_max=float(np.max(np.abs(u))), y_max=float(np.max(np.abs(y))),
-                  n=int(u.size), max_delay=max_delay, output_bound=bound)
-    pb = Problem(origin, u, y, bound, do_refit, skip, coef_box, grid_size, ctx, on_lp=bar.lp)
-    old = tuple(e for e, _ in existing)
-    cost = [0, 0]  # LPs solved, combinations fitted
 
-    def ok(cf):
-        return not np.any(outside(y, cf.prediction, bound, skip))
+class _Diagnosis:
+    """The state of one :func:`diagnose` search: the problem, the model's own effects
+    (``old``, refitted jointly), the fits so far and their cost."""
 
-    def fit(effs, **kw):
-        label = "+".join(e.name for e in effs[len(old):]) or "the model's own effects"
-        bar.start(label)
-        cf = fit_combination(pb, effs, **kw)
-        cost[0] += cf.n_evaluations
-        cost[1] += 1
-        bar.done(label, cf.error, ok(cf))
+    def __init__(self, s, u, y, bound, do_refit, skip, max_delay, grid_size, coef_box, bar):
+        self.s, self.u, self.y, self.bound, self.skip = s, u, y, bound, skip
+        self.do_refit, self.max_delay, self.coef_box, self.bar = do_refit, max_delay, \
+            coef_box, bar
+        self.origin = s if s.origin is None else s.origin
+        existing = tuple((_effects.get(n), tuple(th)) for n, th, _ in s.effect_params) \
+            if s.origin is not None else ()
+        self.ctx = Context(u_max=float(np.max(np.abs(u))), y_max=float(np.max(np.abs(y))),
+                           n=int(u.size), max_delay=max_delay, output_bound=bound)
+        self.pb = Problem(self.origin, u, y, bound, do_refit, skip, coef_box, grid_size,
+                          self.ctx, on_lp=bar.lp)
+        self.old = tuple(e for e, _ in existing)
+        self.old_thetas = tuple(th for _, th in existing)
+        self.have = {e.name for e in self.old}
+        self.cost = [0, 0]  # LPs solved, combinations fitted
+        self.single_fits = {}
+
+    # ---- helpers ----------------------------------------------------------------------
+    def ok(self, cf) -> bool:
+        return not np.any(outside(self.y, cf.prediction, self.bound, self.skip))
+
+    def frac(self, pred) -> float:
+        return float(np.mean(outside(self.y, pred, self.bound, self.skip)[self.skip:]))
+
+    def removed(self, err) -> float:
+        """Fraction of the gap excess (gap_before - output_bound) that a fit removes."""
+        if self.gap_before <= self.bound:
+            return 0.0
+        return float(np.clip((self.gap_before - err) / (self.gap_before - self.bound),
+                             0.0, 1.0))
+
+    def fit(self, effs, **kw):
+        label = "+".join(e.name for e in effs[len(self.old):]) or "the model's own effects"
+        self.bar.start(label)
+        cf = fit_combination(self.pb, effs, **kw)
+        self.cost[0] += cf.n_evaluations
+        self.cost[1] += 1
+        self.bar.done(label, cf.error, self.ok(cf))
         return cf
 
-    old_thetas = tuple(th for _, th in existing)
-    if existing:  # the effects already in the model are refitted (jointly)
-        bar.stage("refit of the model's effects", 1)
-        before = fit(old, starts=[old_thetas])
-        old_thetas = before.thetas
-        d_before, combo_before = before.design, tuple(zip(old, before.thetas, strict=True))
-    else:
-        combo_before = ()
-        d_before = design(origin, u, do_refit, (), y, bound)
-    disagreement, base_fit, nominal, tagged = locate_design(
-        s, d_before, u, y, bound, skip, window, max_delay, coef_box
-    )
-    gap_before = base_fit.error
-    consistent_before = not np.any(outside(y, base_fit.prediction, bound, skip))
-    base_model = rebuild(origin, do_refit, combo_before, d_before, base_fit)
+    # ---- the steps --------------------------------------------------------------------
+    def baseline(self, window):
+        """Step 1 on the model as it is (its own effects refitted jointly)."""
+        if self.old:
+            self.bar.stage("refit of the model's effects", 1)
+            before = self.fit(self.old, starts=[self.old_thetas])
+            self.old_thetas = before.thetas
+            d_before = before.design
+            combo_before = tuple(zip(self.old, before.thetas, strict=True))
+        else:
+            combo_before = ()
+            d_before = design(self.origin, self.u, self.do_refit, (), self.y, self.bound)
+        self.disagreement, base_fit, self.nominal, self.tagged = locate_design(
+            self.s, d_before, self.u, self.y, self.bound, self.skip, window, self.max_delay,
+            self.coef_box)
+        self.gap_before = base_fit.error
+        self.consistent_before = self.ok(base_fit)
+        self.pred_before = base_fit.prediction
+        self.base_model = rebuild(self.origin, self.do_refit, combo_before, d_before,
+                                  base_fit)
 
-    def frac(pred):
-        return float(np.mean(outside(y, pred, bound, skip)[skip:]))
+    def singles(self, names):
+        """Step 2: every candidate refitted (also when the model is already consistent, so
+        that the report always carries the evidence for each of them)."""
+        if self.consistent_before:  # nothing to decide: no refinement of errors at the bound
+            self.pb = replace(self.pb, refine_to_bound=False)
+        old, have = self.old, self.have
+        self.bar.stage("single candidates", sum(name not in have for name in names))
+        for name in names:
+            if name not in have:
+                e = _effects.get(name)
+                starts = [(*self.old_thetas, g) for g in e.initial_grid(self.ctx, 6)] \
+                    if old else None
+                self.single_fits[name] = self.fit((*old, e), starts=starts)
+        return tuple(_candidate_fit(cf, self.gap_before, self.ok(cf),
+                                    self.frac(cf.prediction), self.removed(cf.error))
+                     for cf in self.single_fits.values())
 
-    def removed(err):
-        """Fraction of the gap excess (gap_before - output_bound) that a fit removes."""
-        if gap_before <= bound:
-            return 0.0
-        return float(np.clip((gap_before - err) / (gap_before - bound), 0.0, 1.0))
+    def choose(self, max_effects):
+        """The fewest effects that make the data consistent (None) and the combinations
+        fitted on the way."""
+        chosen, combos = None, []
+        singles = self.single_fits
+        if not self.consistent_before:
+            good = [cf for cf in singles.values() if self.ok(cf)]
+            if good:
+                chosen = min(good, key=lambda c: (c.n_params, c.error))
+            elif max_effects >= 2 and len(singles) >= 2:
+                chosen, combos = _joint_search(self.fit, self.old, self.old_thetas, singles,
+                                               max_effects, self.ok, self.bar)
+            if chosen is not None and len(chosen.effects) > 1:
+                chosen = _prune(self.fit, chosen, self.ok, self.bar)
+        return chosen, tuple(_combination_fit(cf, len(self.old), self.ok(cf),
+                                              self.removed(cf.error)) for cf in combos)
 
-    # step 2: refit every candidate (also when the model is already consistent, so that
-    # the report always carries the evidence for each of them)
-    singles = {}
-    have = {e.name for e in old}
-    if consistent_before:  # nothing to decide: no refinement of errors at the bound
-        pb = replace(pb, refine_to_bound=False)
-    bar.stage("single candidates", sum(name not in have for name in names))
-    for name in names:
-        if name not in have:
-            e = _effects.get(name)
-            starts = [(*old_thetas, g) for g in e.initial_grid(ctx, 6)] if old else None
-            singles[name] = fit((*old, e), starts=starts)
-    fits = tuple(_candidate_fit(cf, gap_before, ok(cf), frac(cf.prediction),
-                                removed(cf.error)) for cf in singles.values())
-
-    chosen, combos = None, []
-    if not consistent_before:
-        good = [cf for cf in singles.values() if ok(cf)]
-        if good:
-            chosen = min(good, key=lambda c: (c.n_params, c.error))
-        elif max_effects >= 2 and len(singles) >= 2:
-            chosen, combos = _joint_search(fit, old, old_thetas, singles, max_effects, ok,
-                                           bar)
-        if chosen is not None and len(chosen.effects) > 1:
-            chosen = _prune(fit, chosen, ok, bar)
-    combo_fits = tuple(_combination_fit(cf, len(old), ok(cf), removed(cf.error))
-                       for cf in combos)
-
-    # step 3: name only what makes the data consistent
-    pred_before = base_fit.prediction
-    effect, added, closest = None, (), ()
-    if chosen is not None:
-        added = tuple(n for n in chosen.names if n not in have)
-        effect = "+".join(added) if added else None
-        refined, pred_after, gap_after = chosen.model, chosen.prediction, chosen.error
-    else:
-        refined, pred_after, gap_after = base_model, pred_before, gap_before
-    if not consistent_before and chosen is None:
-        # the best single candidate, and the best combination only when it is markedly
-        # closer (by min_improvement) than that single one: fewer effects first
+    def closest(self, fits, combo_fits, chosen, min_improvement):
+        """When nothing is consistent: the best single candidate, and the best combination
+        only when it is markedly closer (by min_improvement) than that single one (fewer
+        effects first); else ()."""
+        if self.consistent_before or chosen is not None:
+            return ()
         one = sorted(((c.name, c.minimax_error) for c in fits), key=lambda p: p[1])[:1]
         many = sorted(((c.name, c.minimax_error) for c in combo_fits), key=lambda p: p[1])[:1]
-        pool = [p for p in one if p[1] * min_improvement <= gap_before]
-        ref = pool[0][1] if pool else gap_before
+        pool = [p for p in one if p[1] * min_improvement <= self.gap_before]
+        ref = pool[0][1] if pool else self.gap_before
         pool += [p for p in many if p[1] * min_improvement <= ref]
-        closest = tuple(pool)
-    msg = _message(bound, gap_before, consistent_before, chosen, added, fits, combo_fits,
-                   closest, removed, min_improvement, old)
-    untried = [n for n in _effects.REGISTRY if n not in names]
-    if not added and not consistent_before and untried:
-        msg += (f" Not tried: {', '.join(untried)} (candidates='all' tries every "
-                "registered effect).")
-    keep = set(added) if added else (
-        {c.name for c in fits if c.consistent} if consistent_before else
-        {n for n, e in closest if removed(e) >= 0.5})
-    hints = tuple(text for tag, text in tagged if tag is None or tag in keep)
-    return DiagnosisReport(
-        effect=effect,
-        gap_before=gap_before,
-        gap_after=gap_after,
-        output_bound=bound,
-        consistent_before=consistent_before,
-        consistent_after=not np.any(outside(y, pred_after, bound, skip)),
-        fraction_outside_before=disagreement.fraction_outside,
-        fraction_outside_after=frac(pred_after),
-        refined_model=refined,
-        candidates=fits,
-        disagreement=replace(disagreement, hints=hints),
-        message=msg,
-        u=u,
-        y=y,
-        prediction_nominal=nominal,
-        prediction_before=pred_before,
-        prediction_after=pred_after,
-        skip=skip,
-        effects_added=added,
-        closest=tuple(n for n, _ in closest),
-        closest_gap_removed=tuple(removed(e) for _, e in closest),
-        closest_minimax_error=tuple(e for _, e in closest),
-        combinations=combo_fits,
-        search_seconds=time.perf_counter() - t0,
-        n_fits=cost[0],
-        n_combinations=cost[1],
-        data=data,
-    )
+        return tuple(pool)
+
+    def report(self, fits, combo_fits, chosen, closest, names, min_improvement, data,
+               seconds) -> DiagnosisReport:
+        """Step 3: name only what makes the data consistent."""
+        added = () if chosen is None else tuple(n for n in chosen.names if n not in self.have)
+        if chosen is not None:
+            refined, pred_after, gap_after = chosen.model, chosen.prediction, chosen.error
+        else:
+            refined, pred_after, gap_after = self.base_model, self.pred_before, self.gap_before
+        msg = self._message(fits, combo_fits, chosen, added, closest, names, min_improvement)
+        return DiagnosisReport(
+            effect="+".join(added) if added else None,
+            gap_before=self.gap_before, gap_after=gap_after, output_bound=self.bound,
+            consistent_before=self.consistent_before,
+            consistent_after=not np.any(outside(self.y, pred_after, self.bound, self.skip)),
+            fraction_outside_before=self.disagreement.fraction_outside,
+            fraction_outside_after=self.frac(pred_after),
+            refined_model=refined, candidates=fits,
+            disagreement=replace(self.disagreement,
+                                 hints=self._hints(fits, added, closest)),
+            message=msg, u=self.u, y=self.y, prediction_nominal=self.nominal,
+            prediction_before=self.pred_before, prediction_after=pred_after,
+            skip=self.skip, effects_added=added,
+            closest=tuple(n for n, _ in closest),
+            closest_gap_removed=tuple(self.removed(e) for _, e in closest),
+            closest_minimax_error=tuple(e for _, e in closest),
+            combinations=combo_fits, search_seconds=seconds,
+            n_fits=self.cost[0], n_combinations=self.cost[1], data=data,
+        )
+
+    def _message(self, fits, combo_fits, chosen, added, closest, names, min_improvement):
+        msg = _message(self.bound, self.gap_before, self.consistent_before, chosen, added,
+                       fits, combo_fits, closest, self.removed, min_improvement, self.old)
+        untried = [n for n in _effects.REGISTRY if n not in names]
+        if not added and not self.consistent_before and untried:
+            msg += (f" Not tried: {', '.join(untried)} (candidates='all' tries every "
+                    "registered effect).")
+        return msg
+
+    def _hints(self, fits, added, closest):
+        """Step 1's hints about the effects the report names (all untagged ones)."""
+        if added:
+            keep = set(added)
+        elif self.consistent_before:
+            keep = {c.name for c in fits if c.consistent}
+        else:
+            keep = {n for n, e in closest if self.removed(e) >= 0.5}
+        return tuple(text for tag, text in self.tagged if tag is None or tag in keep)
 
 
 def _candidate_fit(cf, gap_before, consistent, fraction, removed):

@@ -244,112 +244,130 @@ def build_relaxation(problem: RecordProblem, box, *, structure=None, decisions=N
     take those branches. Each solve stops after :data:`LP_TIME_LIMIT` s or at ``deadline``
     (:func:`time.time` stamp), keeping the bound its duals certify."""
     box = np.asarray(box, dtype=float)
-    p, na, N = problem.p, problem.na, problem.N
-    nbc = p - na
-    u, y = problem.u, problem.y
-    p_ = p
-    st = inner_structure(u, box[p_: p_ + 5], decisions) if structure is None else structure
-    K = st.n_ambiguous
-    nbeta = 5 + K
-    blo, bhi = _inner_ranges(problem, box, st)
-    # ---- columns -------------------------------------------------------------------------
-    lo, hi = [box[:, 0]], [box[:, 1]]  # theta, ml, cl, mr, cr, z0
-    ncol = p + 5
-    box_cols = np.arange(p + 5)
-    col_dl, col_dr = ncol, ncol + 1
-    lo.append(blo[[B_DL, B_DR]])
-    hi.append(bhi[[B_DL, B_DR]])
-    ncol += 2
-    col_v = np.arange(ncol, ncol + K)
-    lo.append(blo[5:])
-    hi.append(bhi[5:])
-    ncol += K
-    beta_cols = np.concatenate([[p, col_dl, p + 2, col_dr, p + 4], col_v]).astype(np.int64)
-    # the key of each inner variable: its position for the first five, 5 + t for the value
-    # of ambiguous sample t
-    bkey = np.concatenate([np.arange(5), 5 + np.array([a.t for a in st.ambiguous],
-                                                      dtype=np.int64)]).astype(np.int64)
-    col_keys = [key(K_BOX, np.arange(p + 7)), key(K_V, bkey[5:])]
-    # products b_j beta_k and a_i beta_k (RLT)
-    th_lo, th_hi = box[:p, 0], box[:p, 1]
-    jj, kk = np.meshgrid(np.arange(p), np.arange(nbeta), indexing="ij")
-    jj, kk = jj.ravel(), kk.ravel()
-    col_prod = np.arange(ncol, ncol + jj.size).reshape(p, nbeta)
-    pl, ph = _prod_range(th_lo[jj], th_hi[jj], blo[kk], bhi[kk])
-    lo.append(pl)
-    hi.append(ph)
-    ncol += jj.size
-    prod_keys = key(K_PROD, jj, bkey[kk])
-    col_keys.append(prod_keys)
-    # noise and the products a_i eta_t
-    col_eta = np.arange(ncol, ncol + N)
-    lo.append(-problem.deta)
-    hi.append(problem.deta)
-    ncol += N
-    col_keys.append(key(K_ETA, np.arange(N)))
-    n0 = problem.n0
-    t_eq = np.arange(n0, N)
-    qi, qt = [], []
-    for i in range(1, na + 1):
-        qi.append(np.full(t_eq.size, i - 1))
-        qt.append(t_eq - i)
-    qi = np.concatenate(qi) if qi else np.zeros(0, dtype=np.int64)
-    qt = np.concatenate(qt) if qt else np.zeros(0, dtype=np.int64)
-    col_q = np.arange(ncol, ncol + qi.size)
-    ql, qh = _prod_range(th_lo[qi], th_hi[qi], -problem.deta[qt], problem.deta[qt])
-    lo.append(ql)
-    hi.append(qh)
-    ncol += qi.size
-    q_keys = key(K_Q, qi, qt)
-    col_keys.append(q_keys)
+    p = problem.p
+    st = inner_structure(problem.u, box[p: p + 5], decisions) if structure is None \
+        else structure
+    cols = _Columns(problem, box, st)
     rows = _Rows()
-    # ---- equations -----------------------------------------------------------------------
+    _equation_rows(rows, problem, box, st, cols)
+    _gain_rows(rows, problem, box, cols)
+    _envelope_rows(rows, problem, box, cols)
+    _branch_rows(rows, problem, st, cols.beta)
+    _steady_rows(rows, problem, cols.beta)
+    A, rl, ru = rows.matrix(cols.n)
+    lp = HighsLP(A, rl, ru, np.concatenate(cols.lo), np.concatenate(cols.hi),
+                 options={**LP_OPTIONS, **(options or {})}, run_limit=LP_TIME_LIMIT,
+                 deadline=deadline)
+    return JointRelaxation(lp, np.arange(p + 5), cols.beta, st,
+                           {"prod": cols.prod, "eta": cols.eta, "q": cols.q},
+                           np.concatenate(cols.keys), rows.row_keys())
+
+
+class _Columns:
+    """The LP's columns over a box, in this order: the box variables ``[theta, m_l, c_l,
+    m_r, c_r, z0]``, ``d_l, d_r``, the values ``v`` of the ambiguous samples, the products
+    ``theta_j beta_k`` (:attr:`prod`, (p, 5 + K)), the noise ``eta`` (N) and the products
+    ``a_i eta_t`` (:attr:`q`), with their bounds and keys."""
+
+    def __init__(self, problem, box, st):
+        p = problem.p
+        self.blo, self.bhi = blo, bhi = _inner_ranges(problem, box, st)
+        self.lo, self.hi, self.keys, self.n = [], [], [], 0
+        self.add(box[:, 0], box[:, 1], key(K_BOX, np.arange(p + 5)))  # theta .. z0
+        col_dl, col_dr = self.add(blo[[B_DL, B_DR]], bhi[[B_DL, B_DR]],
+                                  key(K_BOX, np.arange(p + 5, p + 7)))
+        # the key of each inner variable: its position for the first five, 5 + t for the
+        # value of ambiguous sample t
+        self.bkey = np.concatenate([np.arange(5), 5 + np.array([a.t for a in st.ambiguous],
+                                                               dtype=np.int64)])
+        col_v = self.add(blo[5:], bhi[5:], key(K_V, self.bkey[5:]))
+        self.beta = np.concatenate([[p, col_dl, p + 2, col_dr, p + 4], col_v]).astype(np.int64)
+        self.dl_dr = (col_dl, col_dr)
+        self._products(problem, box)
+
+    def add(self, lo, hi, keys):
+        """Append columns with bounds ``lo``, ``hi`` and keys; their indices."""
+        lo = np.atleast_1d(np.asarray(lo, dtype=float))
+        self.lo.append(lo)
+        self.hi.append(np.broadcast_to(np.asarray(hi, dtype=float), lo.shape))
+        self.keys.append(np.broadcast_to(np.asarray(keys, dtype=np.int64), lo.shape))
+        idx = np.arange(self.n, self.n + lo.size)
+        self.n += lo.size
+        return idx
+
+    def _products(self, problem, box):
+        """The products ``b_j beta_k``, ``a_i beta_k`` (RLT), the noise and ``a_i eta_t``."""
+        p, na, N = problem.p, problem.na, problem.N
+        nbeta = self.beta.size
+        self.th_lo, self.th_hi = th_lo, th_hi = box[:p, 0], box[:p, 1]
+        jj, kk = np.meshgrid(np.arange(p), np.arange(nbeta), indexing="ij")
+        self.jj, self.kk = jj, kk = jj.ravel(), kk.ravel()
+        self.pl, self.ph = _prod_range(th_lo[jj], th_hi[jj], self.blo[kk], self.bhi[kk])
+        self.prod_keys = key(K_PROD, jj, self.bkey[kk])
+        self.prod = self.add(self.pl, self.ph, self.prod_keys).reshape(p, nbeta)
+        self.eta = self.add(-problem.deta, problem.deta, key(K_ETA, np.arange(N)))
+        self.t_eq = t_eq = np.arange(problem.n0, N)
+        self.qi = np.repeat(np.arange(na), t_eq.size)
+        self.qt = np.concatenate([t_eq - i for i in range(1, na + 1)]) if na \
+            else np.zeros(0, dtype=np.int64)
+        ql, qh = _prod_range(th_lo[self.qi], th_hi[self.qi], -problem.deta[self.qt],
+                             problem.deta[self.qt])
+        self.q_keys = key(K_Q, self.qi, self.qt)
+        self.q = self.add(ql, qh, self.q_keys)
+
+
+def _equation_rows(rows, problem, box, st, cols):
+    """The equations of :mod:`.problem`, linear in the columns, widened by the tolerance
+    policy."""
+    na, y, t_eq = problem.na, problem.y, cols.t_eq
     m = t_eq.size
-    er, ec, ev = [np.arange(m)], [col_eta[t_eq]], [-np.ones(m)]
+    er, ec, ev = [np.arange(m)], [cols.eta[t_eq]], [-np.ones(m)]
     for i in range(1, na + 1):
         er += [np.arange(m), np.arange(m)]
-        ec += [np.full(m, i - 1), col_q[(i - 1) * m: i * m]]
+        ec += [np.full(m, i - 1), cols.q[(i - 1) * m: i * m]]
         ev += [y[t_eq - i], -np.ones(m)]
     for jpos, lag in enumerate(problem.b_lags):
-        idx, val = _form_terms(st, u, t_eq - lag)
+        idx, val = _form_terms(st, problem.u, t_eq - lag)
         for c in range(2):
             er.append(np.arange(m))
-            ec.append(col_prod[na + jpos, idx[:, c]])
+            ec.append(cols.prod[na + jpos, idx[:, c]])
             ev.append(-val[:, c])
     tau = FEASIBILITY_RTOL * _scale(problem, box)
     rows.add(np.concatenate(er), np.concatenate(ec), np.concatenate(ev),
              round_down(-y[t_eq] - tau), round_up(-y[t_eq] + tau), key=key(K_EQ, t_eq))
-    # ---- gain (22.8) and its RLT rows ------------------------------------------------------
+
+
+def _gain_rows(rows, problem, box, cols):
+    """The gain equality (22.8) and its RLT rows (multiplied by every inner variable)."""
+    p, na = problem.p, problem.na
+    nbc, nbeta = p - na, cols.beta.size
+    blo, bhi = cols.blo, cols.bhi
     g = float(problem.gain)
-    gcols = np.arange(p)
     gvals = np.concatenate([-g * np.ones(na), np.ones(nbc)])
-    gtol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box[:p]), axis=1))) * max(1, abs(g)))
-    rows.add(np.zeros(p, dtype=np.int64), gcols, gvals, g - gtol, g + gtol, key=key(K_GAIN))
+    gtol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box[:p]), axis=1)))
+                               * max(1, abs(g)))
+    rows.add(np.zeros(p, dtype=np.int64), np.arange(p), gvals, g - gtol, g + gtol,
+             key=key(K_GAIN))
+    pmax = np.maximum(np.abs(cols.pl), np.abs(cols.ph)).reshape(p, nbeta)
     for k in range(nbeta):
-        cols = np.concatenate([col_prod[na:, k], col_prod[:na, k], [beta_cols[k]]])
+        c = np.concatenate([cols.prod[na:, k], cols.prod[:na, k], [cols.beta[k]]])
         vals = np.concatenate([np.ones(nbc), -g * np.ones(na), [-g]])
-        mag = float(np.sum(np.maximum(np.abs(pl), np.abs(ph)).reshape(p, nbeta)[:, k])
-                    + abs(g) * max(abs(blo[k]), abs(bhi[k])))
-        t = FEASIBILITY_RTOL * mag + gtol * max(abs(blo[k]), abs(bhi[k]))
-        rows.add(np.zeros(cols.size, dtype=np.int64), cols, vals, -t, t,
-                 key=key(K_RLT, bkey[k]))
-    # ---- McCormick envelopes -----------------------------------------------------------------
-    rows.mccormick(col_prod.ravel(), jj, beta_cols[kk], th_lo[jj], th_hi[jj], blo[kk], bhi[kk],
-                   prod_keys)
-    rows.mccormick(col_q, qi, col_eta[qt], th_lo[qi], th_hi[qi], -problem.deta[qt],
-                   problem.deta[qt], q_keys)
+        bmax = max(abs(blo[k]), abs(bhi[k]))
+        t = FEASIBILITY_RTOL * (float(np.sum(pmax[:, k])) + abs(g) * bmax) + gtol * bmax
+        rows.add(np.zeros(c.size, dtype=np.int64), c, vals, -t, t, key=key(K_RLT, cols.bkey[k]))
+
+
+def _envelope_rows(rows, problem, box, cols):
+    """McCormick envelopes of the products ``theta_j beta_k``, ``a_i eta_t`` and ``d = m c``."""
+    p, jj, kk, qi, qt = problem.p, cols.jj, cols.kk, cols.qi, cols.qt
+    th_lo, th_hi = cols.th_lo, cols.th_hi
+    rows.mccormick(cols.prod.ravel(), jj, cols.beta[kk], th_lo[jj], th_hi[jj], cols.blo[kk],
+                   cols.bhi[kk], cols.prod_keys)
+    rows.mccormick(cols.q, qi, cols.eta[qt], th_lo[qi], th_hi[qi], -problem.deta[qt],
+                   problem.deta[qt], cols.q_keys)
     ml, cl, mr, cr = (box[p + i] for i in range(4))
-    rows.mccormick([col_dl, col_dr], [p, p + 2], [p + 1, p + 3], [ml[0], mr[0]],
+    rows.mccormick(list(cols.dl_dr), [p, p + 2], [p + 1, p + 3], [ml[0], mr[0]],
                    [ml[1], mr[1]], [cl[0], cr[0]], [cl[1], cr[1]], key(K_MC_D, [0, 1]))
-    _branch_rows(rows, problem, st, beta_cols)
-    _steady_rows(rows, problem, beta_cols)
-    A, rl, ru = rows.matrix(ncol)
-    lb, ub = np.concatenate(lo), np.concatenate(hi)
-    lp = HighsLP(A, rl, ru, lb, ub, options={**LP_OPTIONS, **(options or {})},
-                 run_limit=LP_TIME_LIMIT, deadline=deadline)
-    return JointRelaxation(lp, box_cols, beta_cols, st,
-                           {"prod": col_prod, "eta": col_eta, "q": col_q},
-                           np.concatenate(col_keys), rows.row_keys())
 
 
 def _band(rows, u_t, coef_x, bc, x_terms, k):

@@ -318,13 +318,55 @@ def moment_bounds(
         The relaxation's estimated size exceeds ``max_work`` (the message gives the
         estimate and the alternatives ``method="lp"`` / ``"exact"``).
     """
-    from .size import (
-        MOMENT_WARN_WORK,
-        check_moment_budget,
-        check_work,
-        estimate_moment_relaxation,
-        solve_processes,
+    from .size import check_moment_budget, estimate_moment_relaxation, solve_processes
+
+    max_work, warn_work = _check_args(on_failure, basis, max_work, warn_work)
+    t_start = time.perf_counter()
+    if lp is not None and theta_box is None:
+        theta_box = lp.bounds
+    if lp is not None and fallback is None:
+        fallback = lp.bounds
+    backend = get_solver(solver)
+    opts = backend.check_options(solver_options)
+    _check_box(problem, theta_box)
+    if int(order) == order and order >= 1 and not max_work == np.inf:
+        # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
+        size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
+        check_moment_budget(size, max_work=max_work, warn_work=warn_work,
+                            processes=solve_processes(n_jobs, problem.p))
+    fallback, lp = _fallback(problem, fallback, lp, theta_box)
+    # tolerance policy: the relaxation (and its dual certificate) is built on the data with
+    # every equation relaxed outward by FEASIBILITY_RTOL x the magnitudes of its terms
+    from ..problem import outward_problem
+
+    scale_box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
+    relax = MomentRelaxation(outward_problem(problem, scale_box), order, theta_box,
+                             basis=basis)
+    t_build = time.perf_counter() - t_start
+    objs = relax.objectives()
+    results = _solve_all(relax, objs, backend, opts, solve_processes(n_jobs, problem.p))
+    bounds, infos = _ends(problem, relax.box, objs, results, fallback, backend.name,
+                          on_failure)
+    names = problem.param_names
+    return IntervalResult(
+        param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="moment",
+        time=time.perf_counter() - t_start,
+        status=tuple((infos[2 * k].status, infos[2 * k + 1].status) for k in range(len(names))),
+        lp=lp,
+        details=MomentDetails(
+            order=relax.order, basis=relax.basis, solver=backend.name,
+            n_moments=relax.n_moments, n_psd_blocks=relax.n_psd_blocks,
+            psd_sides=dict(relax.psd_sides), nnz=int(relax.data.A.nnz),
+            n_cliques=len(relax.pop.cliques), build_time=t_build,
+            eliminated=None if relax.pop.elim is None else names[relax.pop.elim],
+            n_rows=relax.data.m),
     )
+
+
+def _check_args(on_failure, basis, max_work, warn_work):
+    """Refuse bad options of :func:`moment_bounds`; the checked ``max_work`` and
+    ``warn_work``."""
+    from .size import MOMENT_WARN_WORK, check_work
 
     if max_work is not None:
         max_work = check_work("max_work", max_work)
@@ -335,13 +377,11 @@ def moment_bounds(
     if basis not in BASES:
         raise ParameterValidationError(
             f"basis must be one of {', '.join(map(repr, BASES))}; got {basis!r}.")
-    t_start = time.perf_counter()
-    if lp is not None and theta_box is None:
-        theta_box = lp.bounds
-    if lp is not None and fallback is None:
-        fallback = lp.bounds
-    backend = get_solver(solver)
-    opts = backend.check_options(solver_options)
+    return max_work, warn_work
+
+
+def _check_box(problem, theta_box):
+    """Refuse an a priori box that is not a finite ``(p, 2)`` array with lower <= upper."""
     if theta_box is not None:
         tb = np.asarray(theta_box, dtype=float)
         if tb.shape != (problem.p, 2) or not np.all(np.isfinite(tb)) or np.any(
@@ -350,11 +390,11 @@ def moment_bounds(
             raise ParameterValidationError(
                 f"theta_box must be a finite ({problem.p}, 2) array with lower <= upper."
             )
-    if int(order) == order and order >= 1 and not max_work == np.inf:
-        # (a bad order is reported by MomentRelaxation; max_work=inf: checked by the caller)
-        size = estimate_moment_relaxation(problem, order, theta_box, basis=basis)
-        check_moment_budget(size, max_work=max_work, warn_work=warn_work,
-                            processes=solve_processes(n_jobs, problem.p))
+
+
+def _fallback(problem, fallback, lp, theta_box):
+    """The certified outer bounds no moment end is reported wider than (see
+    :func:`moment_bounds`), and the LP result (computed here when needed)."""
     if fallback is None:
         # the polytopic LP bound is cheap and certified: a moment end is never reported
         # wider than it (nor from the a priori box where the LP bound is tighter)
@@ -371,19 +411,14 @@ def moment_bounds(
     if fallback.shape != (problem.p, 2):
         raise ParameterValidationError(
             f"fallback must be an array of shape ({problem.p}, 2); got {fallback.shape}.")
-    # tolerance policy: the relaxation (and its dual certificate) is built on the data with
-    # every equation relaxed outward by FEASIBILITY_RTOL x the magnitudes of its terms
-    from ..problem import outward_problem
+    return fallback, lp
 
-    scale_box = problem.theta_box if theta_box is None else np.asarray(theta_box, dtype=float)
-    relax = MomentRelaxation(outward_problem(problem, scale_box), order, theta_box,
-                             basis=basis)
-    t_build = time.perf_counter() - t_start
-    box = relax.box
-    objs = relax.objectives()
+
+def _solve_all(relax, objs, backend, opts, n_jobs):
+    """The ``2 p`` conic solves (in ``n_jobs`` worker processes), in the order of
+    ``objs``: ``(job, solution, verified bound, error)``."""
     jobs = [(i, q, q0) for i, (_, _, q, q0) in enumerate(objs)]
     data = relax.data.strip_picos()
-    n_jobs = solve_processes(n_jobs, problem.p)
     if n_jobs > 1 and backend.name == "clarabel" and "max_threads" not in opts:
         # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
         opts = {**opts, "max_threads": 1}
@@ -397,7 +432,13 @@ def moment_bounds(
             delayed(solve_group)(data, relax.xub, g, backend, opts) for g in groups
         )
         results = [r for part in parts for r in part]
-    results.sort(key=lambda r: r[0])
+    return sorted(results, key=lambda r: r[0])
+
+
+def _ends(problem, box, objs, results, fallback, solver, on_failure):
+    """The bounds (p, 2) and :class:`BoundInfo` of every end: its certificate when tighter
+    than ``fallback``, else the fallback end (or :class:`SolverError` with
+    ``on_failure="raise"`` when no certificate could be computed)."""
     names = problem.param_names
     bounds = box.copy()
     infos = []
@@ -406,28 +447,16 @@ def moment_bounds(
         if (vb is None or not np.isfinite(vb.bound)) and on_failure == "raise":
             status = FAILED if sol is None else sol.status
             raise SolverError(
-                f"{backend.name}: could not certify the {sense} of {names[k]} "
+                f"{solver}: could not certify the {sense} of {names[k]} "
                 f"(status {status}{': ' + err if err else ''}); try another solver, "
                 "tighter tolerances or on_failure='box'."
             )
-        info = end_info(names[k], sense, sol, vb, err, backend.name,
-                         (max(box[k, 0], fallback[k, 0]), min(box[k, 1], fallback[k, 1])),
-                         problem.theta_box[k])
+        info = end_info(names[k], sense, sol, vb, err, solver,
+                        (max(box[k, 0], fallback[k, 0]), min(box[k, 1], fallback[k, 1])),
+                        problem.theta_box[k])
         infos.append(info)
         bounds[k, 0 if sense == "min" else 1] = info.bound
-    return IntervalResult(
-        param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="moment",
-        time=time.perf_counter() - t_start,
-        status=tuple((infos[2 * k].status, infos[2 * k + 1].status) for k in range(len(names))),
-        lp=lp,
-        details=MomentDetails(
-            order=relax.order, basis=relax.basis, solver=backend.name,
-            n_moments=relax.n_moments, n_psd_blocks=relax.n_psd_blocks,
-            psd_sides=dict(relax.psd_sides), nnz=int(relax.data.A.nnz),
-            n_cliques=len(relax.pop.cliques), build_time=t_build,
-            eliminated=None if relax.pop.elim is None else names[relax.pop.elim],
-            n_rows=relax.data.m),
-    )
+    return bounds, infos
 
 
 def relaxation_size(n_vars_clique: int, order: int) -> int:

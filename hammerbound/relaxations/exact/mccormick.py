@@ -201,6 +201,23 @@ class McCormickBase:
         return x[p : p + n], x[p + n : p + n + self.problem.n_groups]
 
 
+class _Triplets:
+    """COO triplets of a sparse matrix under construction."""
+
+    def __init__(self):
+        self.rows, self.cols, self.vals = [], [], []
+
+    def add(self, rows, cols, vals):
+        self.rows.append(rows)
+        self.cols.append(cols)
+        self.vals.append(vals)
+
+    def matrix(self, shape):
+        return sp.csc_matrix((np.concatenate(self.vals),
+                              (np.concatenate(self.rows), np.concatenate(self.cols))),
+                             shape=shape)
+
+
 class McCormickRelaxation(McCormickBase):
     """Persistent McCormick LP relaxation of (22.34) (see module docstring).
 
@@ -216,96 +233,91 @@ class McCormickRelaxation(McCormickBase):
         pr = problem
         self.problem = pr
         p, n, k = pr.p, pr.N, pr.n_groups
-        na = pr.na
         phi, yt = pr.regressors()
-        m = phi.shape[0]
+        inv, npa = self._products(pr, phi.shape[0])
+        P = self.px.size
+        w0 = p + n + k
+        self.ncol = w0 + P
+        self.pw = w0 + np.arange(P)
+        self.e_lo = np.concatenate([-pr.deta, -pr.dx_group])
+        self.e_hi = np.concatenate([pr.deta, pr.dx_group])
+        t = _Triplets()
+        rl, ru = self._equations(t, phi, yt, inv, npa, box)
+        self.mc0 = nrow = len(rl)
+        self.mc_rows = self._envelope_rows(t)
+        nrow += 4 * P
+        rl, ru = np.concatenate([rl, np.full(4 * P, -np.inf)]), \
+            np.concatenate([ru, np.full(4 * P, np.inf)])
+        lb = np.concatenate([np.asarray(box, float)[:, 0], self.e_lo, np.zeros(P)])
+        ub = np.concatenate([np.asarray(box, float)[:, 1], self.e_hi, np.zeros(P)])
+        self.lp = HighsLP(t.matrix((nrow, self.ncol)), rl, ru, lb, ub,
+                          options=_node_options(pr))
+        self._by_x = None  # filled by set_box (McCormickBase._positions)
+        self.box = np.full((p, 2), np.nan)
+        self.set_box(box)
+
+    def _products(self, pr, m):
+        """The product columns' factors: ``px`` (theta index) and ``pe`` (error column)
+        of the ``a_i eta`` products, one per (equation, i), then of the ``b_j dx_var[g]``
+        products, one per distinct (j, g). Returns the b-product of each (equation, j),
+        (m, nbp), and the number of a-products."""
+        p, n, k, na = pr.p, pr.N, pr.n_groups, pr.na
         eta_idx = pr.eta_index()  # (m, na+1)
         dx_idx = pr.dx_index()  # (m, nbp)
-        nbp = dx_idx.shape[1]
-        # ---- products ---------------------------------------------------------------
-        # a-products: one per (equation, i)
         ax = np.repeat(np.arange(na), m)  # theta index
         ae = p + eta_idx[:, 1:].T.ravel()  # eta column
-        a_eq = np.tile(np.arange(m), na)  # equation using it
-        # b-products: one per distinct (j, g)
-        jj = np.tile(np.arange(nbp), (m, 1))
-        pair = jj * k + dx_idx  # (m, nbp)
+        pair = np.tile(np.arange(dx_idx.shape[1]), (m, 1)) * k + dx_idx  # (m, nbp)
         upairs, inv = np.unique(pair.ravel(), return_inverse=True)
-        inv = inv.reshape(m, nbp)
         bx = na + upairs // k
         be = p + n + upairs % k
         self.px = np.concatenate([ax, bx]).astype(np.int64)
         self.pe = np.concatenate([ae, be]).astype(np.int64)
-        npa, npb = ax.size, bx.size
-        P = npa + npb
-        w0 = p + n + k
-        self.ncol = w0 + P
-        self.pw = w0 + np.arange(P)
-        # ---- error boxes ------------------------------------------------------------
-        self.e_lo = np.concatenate([-pr.deta, -pr.dx_group])
-        self.e_hi = np.concatenate([pr.deta, pr.dx_group])
-        eL = self.e_lo[self.pe - p]
-        eU = self.e_hi[self.pe - p]
-        # ---- rows ---------------------------------------------------------------------
-        rows, cols, vals = [], [], []
+        return inv.reshape(m, -1), ax.size
+
+    def _equations(self, t, phi, yt, inv, npa, box):
+        """The equation rows (and the gain row) into the triplets ``t``; their bounds."""
+        pr = self.problem
+        p, na = pr.p, pr.na
+        m = phi.shape[0]
+        eta_idx = pr.eta_index()
+        w0 = p + pr.N + pr.n_groups  # the first product column
         eqr = np.arange(m)
         for q in range(p):  # theta part of the equations
-            rows.append(eqr)
-            cols.append(np.full(m, q))
-            vals.append(phi[:, q])
-        rows.append(eqr)
-        cols.append(p + eta_idx[:, 0])
-        vals.append(-np.ones(m))
-        rows.append(a_eq)
-        cols.append(w0 + np.arange(npa))
-        vals.append(-np.ones(npa))
-        for j in range(nbp):
-            rows.append(eqr)
-            cols.append(w0 + npa + inv[:, j])
-            vals.append(np.ones(m))
+            t.add(eqr, np.full(m, q), phi[:, q])
+        t.add(eqr, p + eta_idx[:, 0], -np.ones(m))
+        t.add(np.tile(eqr, na), w0 + np.arange(npa), -np.ones(npa))
+        for j in range(inv.shape[1]):
+            t.add(eqr, w0 + npa + inv[:, j], np.ones(m))
         # tolerance policy: every equation is relaxed outward by FEASIBILITY_RTOL times the
         # magnitudes of its terms over the initial (largest) box, so node certificates of
         # "empty" and of bounds hold beyond the tolerance, never for the data taken exactly
         thmax = np.max(np.abs(np.asarray(box, dtype=float)), axis=1)
         thmax = np.where(np.isfinite(thmax), thmax, np.max(np.abs(pr.theta_box), axis=1))
         tau = FEASIBILITY_RTOL * equation_scale(pr, thmax)
-        rl = [-yt - tau]
-        ru = [-yt + tau]
-        nrow = m
+        rl, ru = [-yt - tau], [-yt + tau]
         g = pr.gain_row()
         if g is not None:
             # the gain equality (22.8) is a model fact with exact coefficients: not relaxed
-            rows.append(np.full(p, nrow))
-            cols.append(np.arange(p))
-            vals.append(g[0])
+            t.add(np.full(p, m), np.arange(p), g[0])
             rl.append([g[1]])
             ru.append([g[1]])
-            nrow += 1
-        self.mc0 = nrow
-        qi = np.arange(P)
-        # row r = mc0 + 4 q + s, s = 0..3 ; entries: w (1), e (coef), x (coef)
-        self.mc_rows = self.mc0 + 4 * qi[:, None] + np.arange(4)[None, :]  # (P, 4)
+        return np.concatenate(rl), np.concatenate(ru)
+
+    def _envelope_rows(self, t):
+        """The 4 McCormick rows of every product (after the equations, from row
+        :attr:`mc0`): entries ``w`` (1), ``e`` and ``x`` (coefficients set by
+        :meth:`set_box`; the structural nonzeros are kept). Returns their rows (P, 4)."""
+        P = self.px.size
+        p = self.p
+        eL, eU = self.e_lo[self.pe - p], self.e_hi[self.pe - p]
+        # row r = mc0 + 4 q + s, s = 0..3
+        mc_rows = self.mc0 + 4 * np.arange(P)[:, None] + np.arange(4)[None, :]  # (P, 4)
         for s in range(4):
-            r = self.mc_rows[:, s]
-            rows += [r, r, r]
-            cols += [self.pw, self.pe, self.px]
-            e_coef = np.zeros(P)  # placeholder, set by set_box (structural nonzero kept)
+            r = mc_rows[:, s]
             x_coef = -(eL if s in (0, 2) else eU)
-            vals += [np.ones(P), e_coef + 1.0, x_coef]
-        nrow += 4 * P
-        rl.append(np.full(4 * P, -np.inf))
-        ru.append(np.full(4 * P, np.inf))
-        A = sp.csc_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(nrow, self.ncol),
-        )
-        lb = np.concatenate([np.asarray(box, float)[:, 0], self.e_lo, np.zeros(P)])
-        ub = np.concatenate([np.asarray(box, float)[:, 1], self.e_hi, np.zeros(P)])
-        self.lp = HighsLP(A, np.concatenate(rl), np.concatenate(ru), lb, ub,
-                          options=_node_options(pr))
-        self._by_x = None  # filled by set_box (McCormickBase._positions)
-        self.box = np.full((p, 2), np.nan)
-        self.set_box(box)
+            t.add(np.concatenate([r, r, r]), np.concatenate([self.pw, self.pe, self.px]),
+                  np.concatenate([np.ones(P), np.ones(P), x_coef]))
+        return mc_rows
 
     @property
     def p(self) -> int:

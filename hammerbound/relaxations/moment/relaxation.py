@@ -56,6 +56,39 @@ from .certify import end_info, solve_group
 EQ_BLOCK_ENTRIES = 2**30
 
 
+class _MomentIndex:
+    """Column of each moment ``y_alpha`` (a sorted tuple of variable indices), numbered
+    in the order met."""
+
+    def __init__(self):
+        self.index = {}
+
+    def __call__(self, mono) -> int:
+        j = self.index.get(mono)
+        if j is None:
+            j = self.index[mono] = len(self.index)
+        return j
+
+
+def _equality_rows(eqs, idx):
+    """The equalities ``eqs`` (polynomials == 0) as ``Aeq y == -ecst`` over the moments
+    ``y_alpha``, alpha != 0 (column ``idx - 1``): ``((vals, rows, cols), ecst)``, or
+    ``(None, None)`` without equalities."""
+    if not eqs:
+        return None, None
+    erows, ecols, evals, ecst = [], [], [], np.zeros(len(eqs))
+    for i, h in enumerate(eqs):
+        for mono, coef in h.items():
+            j = idx(mono)
+            if j == 0:
+                ecst[i] += coef
+            else:
+                erows.append(i)
+                ecols.append(j - 1)
+                evals.append(coef)
+    return (evals, erows, ecols), ecst
+
+
 class MomentRelaxation:
     """Sparse moment relaxation of order ``delta`` of the EIV set, formulated in PICOS.
 
@@ -101,8 +134,6 @@ class MomentRelaxation:
 
     def __init__(self, problem: EIVProblem, order: int = 2, theta_box=None,
                  basis: str = "sparse"):
-        import picos
-
         if int(order) != order or order < 1:
             raise ParameterValidationError(f"order must be an integer >= 1; got {order!r}.")
         if basis not in BASES:
@@ -119,64 +150,57 @@ class MomentRelaxation:
             )
         self.problem = problem
         self.box = box
-        pop = _ScaledPOP(problem, box)
-        self.pop = pop
-        # --- enumerate moments --------------------------------------------------------
-        index = {}
-
-        def idx(m):
-            j = index.get(m)
-            if j is None:
-                j = index[m] = len(index)
-            return j
-
+        self.pop = pop = _ScaledPOP(problem, box)
+        idx = _MomentIndex()
         idx(())  # y_0 = 1, eliminated below
         for j in range(pop.q):
             idx((j,))
-        blocks = []  # (rows, cols, vals, dim): vec (column-major) of a matrix over moments
-        eqs = []  # lists of polynomials (dict mono->coef) == 0
-        q_vars = list(range(pop.q))
+        blocks, eqs = self._constraints(pop, order, basis, idx)
+        # equality moments are registered too (a moment outside every matrix is a free
+        # variable, still bounded by |y| <= 1 for the certificate)
+        triplets, ecst = _equality_rows(eqs, idx)
+        self.index = idx.index
+        self.n_moments = m = len(idx.index) - 1  # y_alpha, alpha != 0 (column j-1)
+        Aeq = None if triplets is None else sp.csr_matrix(
+            (triplets[0], (triplets[1], triplets[2])), shape=(len(eqs), m))
+        self.picos_problem, self.y = self._picos(blocks, Aeq, ecst, m)
+        sides = sorted({dim for *_, dim in blocks})
+        self.psd_sides = {int(d): sum(1 for *_, dd in blocks if dd == d) for d in sides}
+        self.n_psd_blocks = sum(1 for *_, dim in blocks if dim > 1)
+        self.data = extract_conic_data(self.picos_problem)
+        self.xub = np.ones(m)  # |y_alpha| <= 1 for every point of [-1, 1]^n
+
+    def _constraints(self, pop, order, basis, idx):
+        """The moment and localizing matrices (``(rows, cols, vals, dim)``: vec, column-
+        major, over moment indices) and the equalities (polynomials, dict mono -> coef,
+        ``== 0``) of every clique."""
+        blocks, eqs = [], []
         seen = set()  # identical localizing matrices of overlapping cliques: once
         for cvars, hs in pop.cliques:
             for g, b in _clique_constraints(cvars, hs, pop, order, basis):
                 if g is None:  # equalities h x^alpha = 0
-                    for h in hs:
-                        for a in b:
-                            eqs.append({tuple(sorted(m + a)): c for m, c in h.items()})
+                    eqs += [{tuple(sorted(m + a)): c for m, c in h.items()}
+                            for h in hs for a in b]
                     continue
                 key = (tuple(sorted(g.items())), tuple(b))
-                if key in seen:
-                    continue
-                seen.add(key)
-                blocks.append(self._loc_matrix(g, b, idx))
+                if key not in seen:
+                    seen.add(key)
+                    blocks.append(self._loc_matrix(g, b, idx))
         if not pop.cliques:  # no equation: only theta-box constraints
-            basis_ = _monomials(q_vars, order)
-            blocks.append(self._loc_matrix({(): 1.0}, basis_, idx))
-        # equality moments are registered too (a moment outside every matrix is a free
-        # variable, still bounded by |y| <= 1 for the certificate)
-        erows, ecols, evals, ecst = [], [], [], np.zeros(len(eqs))
-        for i, h in enumerate(eqs):
-            for mono, coef in h.items():
-                j = idx(mono)
-                if j == 0:
-                    ecst[i] += coef
-                else:
-                    erows.append(i)
-                    ecols.append(j - 1)
-                    evals.append(coef)
-        m = len(index) - 1  # moment variables y_alpha, alpha != 0 (column j-1)
-        self.index = index
-        self.n_moments = m
+            blocks.append(self._loc_matrix({(): 1.0}, _monomials(list(range(pop.q)), order),
+                                           idx))
+        return blocks, eqs
+
+    def _picos(self, blocks, Aeq, ecst, m):
+        """The PICOS problem over the moments ``y`` (m,) with a placeholder objective."""
+        import picos
+
         y = picos.RealVariable("y", m)
         P = picos.Problem()
         for k, (rows, cols, vals, dim) in enumerate(blocks):
             expr = _affine(y, rows, cols, vals, dim, f"M{k}")
-            if dim == 1:
-                P.add_constraint(expr >= 0)
-            else:
-                P.add_constraint(expr >> 0)
-        if eqs:
-            Aeq = sp.csr_matrix((evals, (erows, ecols)), shape=(len(eqs), m))
+            P.add_constraint(expr >= 0 if dim == 1 else expr >> 0)
+        if Aeq is not None:
             # PICOS holds a constant matrix as a vector of rows x columns entries with 32-bit
             # indices (cvxopt): above 2^31 the build crashed (a SystemError at N = 2000,
             # order 2), so the equalities go in blocks of rows below that
@@ -184,15 +208,8 @@ class MomentRelaxation:
             for r0 in range(0, Aeq.shape[0], step):
                 P.add_constraint(picos.Constant(Aeq[r0:r0 + step].tocsc()) * y
                                  == picos.Constant(-ecst[r0:r0 + step]))
-        obj = self._objective(0)
-        P.set_objective("min", picos.Constant(obj[0].reshape(1, -1)) * y)
-        self.picos_problem = P
-        self.y = y
-        sides = sorted({dim for *_, dim in blocks})
-        self.psd_sides = {int(d): sum(1 for *_, dd in blocks if dd == d) for d in sides}
-        self.n_psd_blocks = sum(1 for *_, dim in blocks if dim > 1)
-        self.data = extract_conic_data(P)
-        self.xub = np.ones(m)  # |y_alpha| <= 1 for every point of [-1, 1]^n
+        P.set_objective("min", picos.Constant(self._objective(0)[0].reshape(1, -1)) * y)
+        return P, y
 
     @staticmethod
     def _loc_matrix(g, basis, idx):

@@ -29,7 +29,7 @@ from ..joint import (
     record_box,
     unidentified,
 )
-from ..relaxations.problem import b_lags_of
+from ..relaxations.problem import b_lags_of, given_rows, resolve_theta_box, theta_names
 
 __all__ = ["OneRecordFit", "fit_one_record"]
 
@@ -65,7 +65,7 @@ def _problem(lin, data, prior, steady, steady_bound, output_bound):
     nk = lin._nk()
     na, nb = int(lin.na), int(lin.nb)
     deta = np.broadcast_to(np.asarray(output_bound, dtype=float), data.y.shape)
-    theta_box = None if lin.theta_box is None else np.asarray(lin.theta_box, dtype=float)
+    theta_box = None if lin.theta_box is None else resolve_theta_box(lin.theta_box, na, nb, nk)
     box = record_box(na, b_lags_of(nb, nk).size, data.u, prior.box, theta_box)
     st = None
     if steady is not None:
@@ -74,15 +74,31 @@ def _problem(lin, data, prior, steady, steady_bound, output_bound):
     return RecordProblem(data.u, data.y, deta, na, nb, nk, box, st)
 
 
+def _box_words(theta_box, na, nb, nk) -> str:
+    """The a priori box of A in the assumptions: stable A (default rows), the user's."""
+    if theta_box is None:
+        return ", stable A (|a_i| <= binom(na, i))"
+    given = given_rows(theta_box, na, nb, nk)
+    box = resolve_theta_box(theta_box, na, nb, nk)
+    names = theta_names(na, nb, nk)
+    rows = [f"{names[k]} in [{box[k, 0]:g}, {box[k, 1]:g}]" for k in range(len(names))
+            if given[k]]
+    default_a = not given[:na].all()
+    return ("; a priori box " + ", ".join(rows) + " (theta_box)"
+            + (", stable A (|a_i| <= binom(na, i)) for the other a_i" if default_a else ""))
+
+
 def _assumptions(problem, prior, lin, steady) -> tuple:
     out = [f"output errors |eta_t| <= {float(np.max(problem.deta)):g} on every sample",
            "the input is known exactly",
-           "linear block of unit steady-state gain (22.8), stable A (|a_i| <= binom(na, i))",
+           "linear block of unit steady-state gain (22.8)"
+           + _box_words(lin.theta_box, problem.na, problem.nb, problem.nk),
            prior.describe(),
            f"the backlash lines do not cross over the record's inputs "
            f"[{float(np.min(problem.u)):.4g}, {float(np.max(problem.u)):.4g}] "
            "(m_l (u + c_l) >= m_r (u - c_r): a well-posed backlash)"]
-    if lin.theta_box is None:
+    given = given_rows(lin.theta_box, problem.na, problem.nb, problem.nk)
+    if not given[problem.na:].all():
         out.append("|b_j| <= 1e4 (default theta box; pass theta_box to change)")
     if steady is not None:
         out.append("steady-state points: u > 0 on the right line, u < 0 on the left (the "

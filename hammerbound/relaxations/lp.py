@@ -287,8 +287,8 @@ def _lp_bounds(problem: EIVProblem, n_jobs: int, check_box: bool) -> IntervalRes
         raise EmptyFeasibleSetError(
             f"no theta explains the data within the error bounds: the LP outer set of (22.34) "
             f"becomes empty at equation t = {t} (0-based sample index). Check the output error "
-            f"bound (output_bound), the input error bound (input_bound; from stage 1: the "
-            f"inner-signal bound) and the model orders near that sample.",
+            f"bound (output_bound), the input error bound (input_bound) and the model orders "
+            f"near that sample.",
             first_index=t)
     lo = np.min([r["lo"] for _, r in feas], axis=0)
     hi = np.max([r["hi"] for _, r in feas], axis=0)

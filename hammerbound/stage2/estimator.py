@@ -121,9 +121,12 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         naming the available ones.
     solver_options : dict or None
         Native options of the backend (e.g. ``{"max_iter": 200}`` for Clarabel).
-    theta_box : array of shape (p, 2) or None
+    theta_box : array of shape (p, 2), dict or None
         A priori box on ``theta``; default ``|a_i| <= binom(na, i)`` (every stable ``A``
-        lies in it) and ``|b_j| <= 1e4``.
+        lies in it) and ``|b_j| <= 1e4``. A dict ``{name: (lower, upper)}`` replaces only
+        the named rows of the default box, e.g. ``{"a1": (-3, 3)}`` for an unstable ``A``
+        (command line: ``--theta-box a1=-3:3``). An "empty" verdict says whether a wider
+        box would hold parameters (the default box may be what excludes the system).
     tol, max_nodes, time_limit : float, int, float
         Stopping rules of the exact method, per interval end (gap ``<= tol * max(1, |v|)``;
         for a ``b_j`` ``tol * max(G, |v|)``, ``G`` the power of two nearest the largest

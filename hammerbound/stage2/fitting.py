@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError, UnboundedSetError
+from ..relaxations.problem import given_rows, resolve_theta_box, theta_names
 from ..tables import bound_text
 
 
@@ -62,7 +63,8 @@ def _moment(est, problem):
 def with_hints(exc, est, problem, data):
     """``exc`` (empty or unbounded set) again, its message naming the assumptions, a badly
     scaled record and, for samples that are not an IOData, cross-validation cuts."""
-    hint = " ".join(h for h in (box_hint(est, problem), assumptions(est, problem)) if h)
+    wider = widened_box_hint(problem) if isinstance(exc, EmptyFeasibleSetError) else ""
+    hint = " ".join(h for h in (wider, box_hint(est, problem), assumptions(est, problem)) if h)
     kw = {"side": exc.side, "first_index": exc.first_index} \
         if isinstance(exc, EmptyFeasibleSetError) else {}
     if isinstance(exc, EmptyFeasibleSetError) and data is None:
@@ -70,6 +72,37 @@ def with_hints(exc, est, problem, data):
                  "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
                  "IOData, which refuses such cuts.")
     return type(exc)(f"{exc} {hint}", **kw)
+
+
+#: How much wider the a priori box is made (about its centre) to tell whether it, and not
+#: the data, excludes every parameter vector: the rows of A, of B.
+WIDER_A, WIDER_B = 10.0, 1e3
+
+
+def widened_box_hint(problem) -> str:
+    """Whether the LP outer set is still empty in an a priori box :data:`WIDER_A` times
+    wider in ``a`` and :data:`WIDER_B` times in ``b``: if not, the box (the default one
+    holds only stable A's) may be what excludes the system. A hint, not a certificate:
+    the LP set is an outer set."""
+    from ..exceptions import SolverError
+    from ..relaxations.lp import lp_bounds
+
+    box = problem.theta_box
+    mid, half = box.mean(axis=1), 0.5 * (box[:, 1] - box[:, 0])
+    half = half * np.where(np.arange(problem.p) < problem.na, WIDER_A, WIDER_B)
+    try:
+        lp_bounds(problem.with_theta_box(np.column_stack([mid - half, mid + half])),
+                  check_box=False)
+    except EmptyFeasibleSetError:
+        return (f"The LP outer set is empty also in an a priori box {WIDER_A:g}x wider in "
+                f"a and {WIDER_B:g}x wider in b: the box is not what empties it.")
+    except SolverError:
+        return ""
+    return (f"Inside an a priori box {WIDER_A:g}x wider in a and {WIDER_B:g}x wider in b "
+            "the LP outer set is not empty: the a priori box may be what excludes the "
+            "system (the default box holds only stable A's; b_j beyond 1e4 in the data's "
+            "units). Pass a wider theta_box if your knowledge allows it, e.g. "
+            "theta_box={'a1': (-3, 3)} for the rows to change.")
 
 
 def check_not_crossed(est, problem, bounds):
@@ -96,8 +129,7 @@ def assumption_list(est, problem) -> list[str]:
     g = est.steady_state_gain
     gain = ("no steady-state gain constraint" if g is None else
             f"steady-state gain constraint B(1)/A(1) = {g:g} (22.8)")
-    box = ("default a priori box |a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
-           if est.theta_box is None else "user theta_box")
+    box = box_text(est.theta_box, problem.na, problem.nb, problem.nk)
     dx = bound_text(problem.input_bound)
     shared = ("" if problem.n_groups == problem.N else
               f", shared by {problem.n_groups} sample groups")
@@ -116,9 +148,33 @@ def assumptions(est, problem) -> str:
     return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
             f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
 
+def box_text(theta_box, na, nb, nk) -> str:
+    """The a priori box as an assumption: the default one, the user's, or the user's rows
+    (a dict, :func:`~hammerbound.relaxations.problem.resolve_theta_box`) and the default
+    for the others."""
+    default = "|a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
+    if theta_box is None:
+        return f"default a priori box {default}"
+    if not isinstance(theta_box, dict):
+        return "user theta_box"
+    box = resolve_theta_box(theta_box, na, nb, nk)
+    names = theta_names(na, nb, nk)
+    rows = ", ".join(f"{n} in [{box[k, 0]:g}, {box[k, 1]:g}]" for k, n in enumerate(names)
+                     if n in theta_box)
+    rest = [n for n in names if n not in theta_box]
+    if not rest:
+        return f"a priori box {rows} (theta_box)"
+    parts = [text for text, pre in (("|a_i| <= binom(na, i) (stable A)", "a"),
+                                    ("|b_j| <= 1e4", "b"))
+             if any(n.startswith(pre) for n in rest)]
+    return (f"a priori box {rows} (theta_box); default box for {', '.join(rest)} "
+            f"({', '.join(parts)})")
+
+
 def box_hint(est, problem) -> str:
     """A hint for badly scaled data, whose true b_j may lie outside the default box."""
-    if est.theta_box is not None:
+    given = given_rows(est.theta_box, problem.na, problem.nb, problem.nk)
+    if given[problem.na:].all():
         return ""
     sx = float(np.max(np.abs(problem.x))) or 1.0
     sy = float(np.max(np.abs(problem.y))) or 1.0
@@ -142,8 +198,9 @@ def check_box(est, problem, res):
     from ..relaxations.lp import box_limited_ends
 
     ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
-    if est.theta_box is None:
-        bad = [lab for k, lab in ends if k >= problem.na]
+    given = given_rows(est.theta_box, problem.na, problem.nb, problem.nk)
+    if not given[problem.na:].all():
+        bad = [lab for k, lab in ends if k >= problem.na and not given[k]]
         if bad:
             raise UnboundedSetError(
                 "the data do not bound " + ", ".join(bad) + ": the bound reached the "

@@ -41,7 +41,7 @@ def add_parser(sub):
     p.add_argument("--quiet", "-q", action="store_true",
                    help="no progress lines on stderr")
     add_force_option(p, "report files")
-    add_stage2_options(p, method="exact", inner_signal=True)
+    add_stage2_options(p, method="exact", inner_signal=True, theta_box=False)
     p.set_defaults(func=run, n_jobs=2)
     return p
 

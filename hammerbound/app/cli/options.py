@@ -4,7 +4,7 @@
   record of ``identify``), ``--input-bound``;
 * CSV records: ``--u-col``, ``--y-col``, ``--t-col``, ``--dt``, ``--delimiter``;
 * model: ``--na``, ``--nb``, ``--nk``; stage 2: ``--method``, ``--order``, ``--solver``,
-  ``--n-jobs``, ``--time-limit``, ``--total-time-limit``, ``--max-nodes``.
+  ``--n-jobs``, ``--time-limit``, ``--total-time-limit``, ``--max-nodes``, ``--theta-box``.
 
 Old spellings (``--noise-bound``, ``--output-noise``, ``--input-noise``,
 ``--prbs-noise``, ``--steady-noise``, ``--u-column``, ``--y-column``, ``--gain``,
@@ -113,8 +113,23 @@ def add_model_options(p, *, required=False):
                    help="input delay: 0 adds b0, 1 = chapter (default), >1 more delay")
 
 
-def add_stage2_options(p, method="exact", *, inner_signal=False):
-    """Method, relaxation, solver, parallel jobs and the exact method's stopping rules."""
+def theta_box_row(text):
+    """``NAME=LOWER:UPPER`` of ``--theta-box`` as ``(name, (lower, upper))``."""
+    name, sep, rng = str(text).partition("=")
+    lo, sep2, hi = rng.partition(":")
+    try:
+        if not (sep and sep2 and name.strip()):
+            raise ValueError
+        row = (float(lo), float(hi))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected NAME=LOWER:UPPER, e.g. a1=-3:3 or b1=-1e6:1e6; got {text!r}") from None
+    return name.strip(), row
+
+
+def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True):
+    """Method, relaxation, solver, parallel jobs and the exact method's stopping rules
+    (and, with ``theta_box``, the a priori box of the linear block)."""
     p.add_argument("--method", default=method, choices=["lp", "moment", "exact"],
                    help=f"stage-2 method (default {method}; exact gives the tight intervals)")
     p.add_argument("--order", type=int, default=1, help="moment relaxation order (default 1)")
@@ -134,10 +149,21 @@ def add_stage2_options(p, method="exact", *, inner_signal=False):
     p.add_argument("--progress", action="store_true",
                    help="progress on stderr (exact method): bars on a terminal, plain lines "
                         "otherwise")
+    if theta_box:
+        p.add_argument("--theta-box", type=theta_box_row, action="append", default=None,
+                       metavar="NAME=LO:HI",
+                       help="a priori bounds of one parameter of the linear block (repeat "
+                            "for others), e.g. --theta-box a1=-3:3 for an unstable A; the "
+                            "others keep the default box (|a_i| <= binom(na, i): stable A; "
+                            "|b_j| <= 1e4)")
 
 
 def stage2_kwargs(args) -> dict:
     """Keyword arguments of LinearEIVSetEstimator from the stage-2 options."""
+    rows = getattr(args, "theta_box", None)
+    if rows and len({n for n, _ in rows}) < len(rows):
+        raise UsageError("--theta-box names a parameter twice: give each one once")
     return {"method": args.method, "relaxation_order": args.order, "solver": args.solver,
             "n_jobs": args.n_jobs, "progress": args.progress, "time_limit": args.time_limit,
-            "total_time_limit": args.total_time_limit, "max_nodes": args.max_nodes}
+            "total_time_limit": args.total_time_limit, "max_nodes": args.max_nodes,
+            "theta_box": dict(rows) if rows else None}

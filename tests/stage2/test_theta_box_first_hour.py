@@ -1,0 +1,132 @@
+"""The a priori box of the linear block in a new user's first hour (new-user trial):
+an "empty" verdict that only the default box causes says so; some rows of the box can be
+given by name (Python ``theta_box={"a1": (-3, 3)}``, CLI ``--theta-box a1=-3:3``)."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+import hammerbound as hb
+from hammerbound.app.cli import main
+from hammerbound.exceptions import (
+    EmptyFeasibleSetError,
+    ParameterValidationError,
+    UnboundedSetError,
+)
+
+A1, B1 = -1.05, 0.5  # unstable: a1 outside the default box |a1| <= 1
+
+
+def _unstable(N=40, seed=10, deta=0.05, dx=0.02):
+    """Own simulation of y = 0.5 q^-1 / (1 - 1.05 q^-1) x with input and output errors
+    exactly at their bounds (random signs)."""
+    rng = np.random.default_rng(seed)
+    x0 = rng.uniform(-1, 1, N)
+    w = lfilter([0.0, B1], [1.0, A1], x0)
+    u = x0 + dx * rng.choice([-1.0, 1.0], N)
+    y = w + deta * rng.choice([-1.0, 1.0], N)
+    return u, y
+
+
+def test_empty_only_by_the_default_box_says_so():
+    u, y = _unstable()
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, method="lp")
+    with pytest.raises(EmptyFeasibleSetError) as exc:
+        est.fit(u, y, input_bound=0.02)
+    msg = str(exc.value)
+    assert "the a priori box may be what excludes the system" in msg
+    assert "theta_box={'a1': (-3, 3)}" in msg
+
+
+def test_empty_by_the_data_says_the_box_is_not_the_cause():
+    u, y = _unstable()
+    # the errors are at +-0.05: a bound of 0.01 leaves nothing, whatever the box
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.01, method="lp",
+                                   theta_box={"a1": (-3, 3)})
+    with pytest.raises(EmptyFeasibleSetError, match="the box is not what empties it"):
+        est.fit(u, y, input_bound=0.02)
+
+
+@pytest.mark.parametrize("method", ["lp", "exact"])
+def test_named_rows_replace_the_default_box(method):
+    u, y = _unstable()
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, method=method,
+                                   theta_box={"a1": (-3, 3)}).fit(u, y, input_bound=0.02)
+    assert est.contains(np.array([A1, B1]))
+    assert np.allclose(est.problem_.theta_box, [[-3, 3], [-1e4, 1e4]])
+    text = est.summary()
+    assert "a priori box a1 in [-3, 3] (theta_box); default box for b1 (|b_j| <= 1e4)" \
+        in text
+    assert "stable A" not in text
+
+
+def test_default_b_rows_still_refuse_an_unbounded_b():
+    """Rows given for a only: a b bound at the (arbitrary) default box is an error; with
+    the b row given it is the user's prior (status 'box')."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1, 1, 30)  # measured within 1 of the input: it may have been 0
+    y = lfilter([0.0, 0.5], [1.0, -0.5], x) + 0.3 * rng.uniform(-1, 1, 30)
+    with pytest.raises(UnboundedSetError, match="default box"):
+        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.3, method="lp",
+                                 theta_box={"a1": (-0.99, 0.99)}).fit(x, y, input_bound=1.0)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.3, method="lp",
+                                   theta_box={"a1": (-0.99, 0.99), "b1": (-5, 5)})
+    est.fit(x, y, input_bound=1.0)
+    assert est.contains(np.array([-0.5, 0.5]))
+    assert "box" in est.result_.status[1]
+
+
+@pytest.mark.parametrize("box, match", [
+    ({"a3": (-3, 3)}, r"unknown parameter\(s\) \['a3'\]; the parameters are a1, b1"),
+    ({"a1": 3}, r"got a1: 3 \(give a pair"),
+    ({"a1": (3, -3)}, "lower <= upper"),
+    ({"b1": (-np.inf, 1)}, "finite"),
+])
+def test_bad_named_rows(box, match):
+    u, y = _unstable()
+    with pytest.raises(ParameterValidationError, match=match):
+        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, theta_box=box).fit(
+            u, y, input_bound=0.02)
+
+
+def _csv(tmp_path):
+    u, y = _unstable()
+    path = tmp_path / "unstable.csv"
+    path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(u, y, strict=True)))
+    return path
+
+
+def test_cli_theta_box(tmp_path, capsys):
+    path = _csv(tmp_path)
+    args = ["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.05",
+            "--input-bound", "0.02", "--method", "lp"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "Pass a wider --theta-box" in err and "--theta-box a1=-3:3" in err
+    assert "theta_box" not in err
+    assert main([*args, "--theta-box", "a1=-3:3", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    lo, hi = out["lower"], out["upper"]
+    assert lo[0] <= A1 <= hi[0] and lo[1] <= B1 <= hi[1]
+
+
+@pytest.mark.parametrize("extra, match", [
+    (["--theta-box", "a1=3"], "expected NAME=LOWER:UPPER"),
+    (["--theta-box", "a1=-3:3", "--theta-box", "a1=-2:2"], "names a parameter twice"),
+    (["--theta-box", "a7=-3:3"], r"unknown parameter\(s\) \['a7'\]"),
+])
+def test_cli_bad_theta_box(tmp_path, capsys, extra, match):
+    path = _csv(tmp_path)
+    try:
+        rc = main(["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.05",
+                   "--method", "lp", *extra])
+    except SystemExit as stop:  # argparse's own errors
+        rc = stop.code
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == ""
+    assert re.search(match, cap.err)

@@ -26,7 +26,22 @@ PUBLIC_METHODS = ("fit", "predict", "score", "contains", "transform", "inner_sig
                   "inner_signal_bounds", "admissible_prbs_range", "check_prbs_level",
                   "suggest_prbs_level", "to_transfer_function", "one_step_envelope",
                   "output_envelope", "simulate", "plot", "linear_range", "boundary_mc",
-                  "summary", "to_dict", "to_frame", "save", "write")
+                  "summary", "to_dict", "to_frame", "save", "write", "to_transfer_functions",
+                  "frequency_response_bounds", "uncertainty_weight", "sample",
+                  "denominators_stable", "theta_of", "method_label", "from_csv", "to_csv")
+
+
+def _own_method(cls, name):
+    """The method ``name`` of ``cls`` defined in hammerbound (on the class or a base class
+    of the package, not scikit-learn's), or None."""
+    for base in cls.__mro__:
+        meth = base.__dict__.get(name)
+        if meth is not None:
+            if isinstance(meth, (classmethod, staticmethod)):
+                meth = getattr(cls, name)
+            ok = callable(meth) and base.__module__.startswith("hammerbound")
+            return meth if ok else None
+    return None
 
 
 def _sig(obj) -> str:
@@ -63,8 +78,8 @@ def render() -> str:
                         _doc(obj), ""]
                 if inspect.isclass(obj):
                     for m in PUBLIC_METHODS:
-                        meth = obj.__dict__.get(m)
-                        if meth is not None and callable(meth):
+                        meth = _own_method(obj, m)
+                        if meth is not None:
                             out += [f"#### `{name}.{m}{_sig(meth)}`", "", _doc(meth), ""]
             else:
                 out += [f"### `{name}`", "", f"`{obj!r}`"[:200], ""]

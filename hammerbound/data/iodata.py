@@ -296,6 +296,15 @@ class IOData:
                 f"output={sig(self.output_name, self.output_unit)})")
 
 
+def _same_output(data, y) -> bool:
+    """Whether ``y`` is the IOData's own output (same length and values)."""
+    try:
+        yy = np.asarray(y, dtype=float).ravel()
+    except (TypeError, ValueError):
+        return False
+    return yy.shape == data.y.shape and bool(np.array_equal(yy, data.y, equal_nan=True))
+
+
 def unpack(X, y, *, what="X"):
     """``(u, y, data)`` from ``fit(X, y)`` or ``fit(IOData)``; ``data`` is the IOData or None.
 
@@ -303,10 +312,12 @@ def unpack(X, y, *, what="X"):
     fold): a difference equation needs consecutive samples.
     """
     if isinstance(X, IOData):
-        if y is not None:
+        # y may repeat the IOData's own output: scikit-learn's scorers (scoring="r2", ...)
+        # need y, e.g. cross_val_score(est, data, data.y, scoring="r2")
+        if y is not None and not _same_output(X, y):
             raise DataValidationError(
                 f"{what} is an IOData, which already holds the output: call fit(data) "
-                "without y.")
+                f"without y (or with y = {what}.y, as scikit-learn's scorers need).")
         if not X.is_contiguous():
             gaps = np.flatnonzero(np.diff(X.sample_index) != 1)
             k = int(gaps[0])

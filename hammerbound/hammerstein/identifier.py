@@ -341,7 +341,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         the state is on a line after the first sample, whatever it was); the linear block
         starts from the measured outputs of the first ``n0 = max(na, last input lag)``
         samples and runs on the input alone from there; R^2 is taken over ``t >= n0``. A
-        multi-step (simulation) score, meaningful for a ``TimeSeriesSplit`` test fold.
+        multi-step (simulation) score, meaningful for a ``TimeSeriesSplit`` test fold:
+        ``score(data) == r2_score(data.y[n0:], predict(data)[n0:])``. scikit-learn's
+        scorers (``scoring="r2"``, ...) need ``y``: pass the IOData and ``data.y``.
         """
         check_is_fitted(self, "bounds_")
         from ..data.iodata import unpack

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..exceptions import DataValidationError, ParameterValidationError
+from ..exceptions import DataValidationError, DataWarning, ParameterValidationError
 from ..results import Result, jsonable
 from .zonotope import Zonotopes, value_sets
 
@@ -72,6 +72,15 @@ def check_omega(omega, dt):
         )
     if np.any(np.diff(w) <= 0):
         raise DataValidationError("omega must be strictly increasing; sort it (np.unique).")
+    nyq = np.pi / float(dt)
+    if w[-1] > nyq * (1 + 1e-12):
+        import warnings
+
+        warnings.warn(
+            f"omega reaches {w[-1]:g} rad/s, above the Nyquist frequency pi/dt = {nyq:g} "
+            f"rad/s (dt = {float(dt):g} s): a sampled system's response repeats there (it "
+            "is G(e^{j w dt}) of an alias frequency), so those bounds hold but tell nothing "
+            "new; keep omega <= pi/dt.", DataWarning, stacklevel=3)
     return w
 
 

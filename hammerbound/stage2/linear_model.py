@@ -200,7 +200,12 @@ class LinearModelMixin:
         max(na, last input lag)`` samples and runs on the input alone from there; R^2 is
         taken over the simulated samples ``t >= n0``. This is a multi-step (simulation)
         score, not a one-step-ahead one, and is meaningful for a ``TimeSeriesSplit`` test
-        fold that starts mid-record. ``X`` may be an IOData (then ``y`` is None).
+        fold that starts mid-record. ``X`` may be an IOData (then ``y`` is None or
+        ``X.y``): ``score(data) == r2_score(data.y[n0:], predict(data)[n0:])``.
+        scikit-learn's scorers (``scoring="r2"``, ...) call :meth:`predict` and need
+        ``y``: ``cross_val_score(est, data, data.y, scoring="r2", cv=TimeSeriesSplit())``.
+        ``predict`` on a plain array simulates from rest, so ``r2_score(y, predict(u))``
+        differs from ``score(u, y)`` by the initial transient.
         """
         check_is_fitted(self, "bounds_")
         from ..data.iodata import unpack

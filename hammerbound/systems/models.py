@@ -147,15 +147,40 @@ def play_lines(R, L, x0: float) -> np.ndarray:
     return np.array(out, dtype=float)
 
 
+def _tf_of_state_space(control, G):
+    """The transfer function of a discrete SISO state-space model (see
+    :func:`as_polynomials`)."""
+    if G.dt is None or G.dt == 0:
+        raise ParameterValidationError(
+            "the linear block must be discrete-time (dt=True or > 0); discretise the "
+            "state-space model first with control.sample_system(G, Ts).")
+    if G.ninputs != 1 or G.noutputs != 1:
+        raise ParameterValidationError(
+            f"the linear block must be SISO; the state-space model has {G.ninputs} "
+            f"input(s) and {G.noutputs} output(s).")
+    T = control.ss2tf(G)
+    num = np.atleast_1d(np.squeeze(T.num[0][0])).astype(float)
+    den = np.atleast_1d(np.squeeze(T.den[0][0])).astype(float)
+    scale = max(np.max(np.abs(num), initial=0.0), np.max(np.abs(den), initial=0.0))
+    num[np.abs(num) <= 1e-12 * scale] = 0.0
+    den[np.abs(den) <= 1e-12 * scale] = 0.0
+    return control.tf(num, den, G.dt)
+
+
 def as_polynomials(G) -> tuple[np.ndarray, np.ndarray]:
     """Return ``(A, B)`` coefficient arrays in powers of ``q^-1`` (A monic), see (22.3).
 
-    ``G`` is a discrete SISO ``control.TransferFunction`` or a pair ``(A, B)``.
+    ``G`` is a discrete SISO ``control.TransferFunction``, a discrete SISO
+    ``control.StateSpace`` (converted by ``control.ss2tf``; coefficients below ``1e-12``
+    of the largest, left by the conversion's rounding, are taken as zero) or a pair
+    ``(A, B)``.
     """
     try:
         import control
     except ImportError:  # pragma: no cover
         control = None
+    if control is not None and isinstance(G, control.StateSpace):
+        G = _tf_of_state_space(control, G)
     if control is not None and isinstance(G, control.TransferFunction):
         if G.dt is None or G.dt == 0:
             raise ParameterValidationError(
@@ -177,7 +202,7 @@ def as_polynomials(G) -> tuple[np.ndarray, np.ndarray]:
             A, B = G
         except (TypeError, ValueError) as exc:
             raise ParameterValidationError(
-                "linear block must be a discrete control.TransferFunction or a pair (A, B) of "
+                "linear block must be a discrete control.TransferFunction (or StateSpace) or a pair (A, B) of "
                 "coefficient arrays in powers of q^-1."
             ) from exc
         try:

@@ -1,0 +1,57 @@
+"""python-control objects in a new user's first hour (new-user trial): a state-space model
+is accepted where a transfer function is, and frequencies above Nyquist are flagged."""
+
+from __future__ import annotations
+
+import control
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+import hammerbound as hb
+from hammerbound.exceptions import DataWarning, ParameterValidationError
+
+A, B = [1.0, -1.2, 0.5], [0.0, 0.3, 0.2]
+
+
+@pytest.fixture(scope="module")
+def est():
+    """Own simulation of B/A with input errors at +-0.02 and output errors at +-0.05."""
+    rng = np.random.default_rng(3)
+    x0 = np.repeat(rng.uniform(-1, 1, 25), 6)
+    w = lfilter(B, A, x0)
+    data = hb.IOData(x0 + 0.02 * rng.choice([-1.0, 1.0], x0.size),
+                     w + 0.05 * rng.choice([-1.0, 1.0], x0.size), dt=0.05)
+    return hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05, method="lp").fit(
+        data, input_bound=0.02)
+
+
+def test_state_space_is_a_model_too(est):
+    G = control.tf(B, A, 0.05)
+    assert est.contains(G)
+    assert est.contains(control.tf2ss(G))
+    assert np.allclose(est.theta_of(control.tf2ss(G)), [-1.2, 0.5, 0.3, 0.2], atol=1e-12)
+    # a model outside the set stays outside in either form
+    far = control.tf([0.0, 0.9, 0.2], A, 0.05)
+    assert not est.contains(far) and not est.contains(control.tf2ss(far))
+
+
+@pytest.mark.parametrize("G, match", [
+    (control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]]), "discretise it"),
+    (control.ss([[0.5]], [[1.0, 1.0]], [[1.0]], [[0.0, 0.0]], 0.05), "SISO"),
+])
+def test_bad_state_space(est, G, match):
+    with pytest.raises(ParameterValidationError, match=match):
+        est.contains(G)
+
+
+def test_above_nyquist_warns(est):
+    nyq = np.pi / 0.05
+    with pytest.warns(DataWarning, match="above the Nyquist frequency"):
+        est.frequency_response_bounds(np.array([1.0, 2 * nyq]))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        est.frequency_response_bounds()  # the default grid ends at Nyquist
+        est.frequency_response_bounds(np.array([1.0, nyq]))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 
 import numpy as np
@@ -62,8 +63,7 @@ def read_columns(path, columns, *, delimiter=",", argument_names=None
         )
     columns = cols
     path = Path(path)
-    if not path.is_file():
-        raise DataValidationError(f"{path}: no such file; check the path.")
+    _check_file(path)
     names = _names(argument_names, u="columns=[...]", y="columns=[...]")
     try:
         return _read_columns(path, columns, _delimiter(delimiter, names), names)
@@ -74,7 +74,52 @@ def read_columns(path, columns, *, delimiter=",", argument_names=None
         ) from None
 
 
+#: spellings of a tab that a shell passes as text
+_TAB = ("\\t", "tab", "TAB", "\\\\t")
+
+
+def _check_file(path: Path) -> None:
+    if path.is_dir():
+        raise DataValidationError(f"{path} is a directory, not a CSV file; give the file.")
+    if not path.is_file():
+        raise DataValidationError(f"{path}: no such file; check the path.")
+
+
+def _separator_hint(header, delimiter, names) -> str:
+    """A hint when the header is one field: the separator it seems to use."""
+    if len(header) > 1:
+        return ""
+    seen = [c for c in (";", "\t", "|", ",") if c != delimiter and c in header[0]]
+    if not seen:
+        return (f" (one column only: if the fields are separated by another character, "
+                f"pass {names['delimiter']})")
+    spelled = "tab" if seen[0] == "\t" and names["delimiter"].startswith("--") else \
+        repr(seen[0])
+    flag = names["delimiter"].replace("';'", spelled)
+    return f" (one column only: the header seems separated by {spelled}; pass {flag})"
+
+
+def _header_hint(header) -> str:
+    """A hint when the first row is numbers: the file has no header row."""
+    try:
+        [float(h) for h in header]
+    except ValueError:
+        return ""
+    return (" (the first row is numbers: the file seems to have no header row; add one "
+            "naming the columns, e.g. 'u,y' or 't,u,y')")
+
+
+def _not_a_number(path, lineno, column, text) -> str:
+    msg = f"{path}, line {lineno}, column {column!r}: {text!r} is not a number."
+    if re.fullmatch(r"\s*[-+]?\d*,\d+([eE][-+]?\d+)?\s*", text):
+        msg += (" Decimal commas are not read: save the file with decimal points (e.g. "
+                "from a spreadsheet with an English number format).")
+    return msg
+
+
 def _delimiter(delimiter, names) -> str:
+    if isinstance(delimiter, str) and delimiter in _TAB:
+        return "\t"
     if not isinstance(delimiter, str) or len(delimiter) != 1:
         raise DataValidationError(
             f"the delimiter must be one character (a comma, a semicolon, a tab...), e.g. "
@@ -85,11 +130,10 @@ def _delimiter(delimiter, names) -> str:
 def csv_header(path, *, delimiter=",") -> list[str]:
     """The header row (column names) of a CSV file."""
     path = Path(path)
-    if not path.is_file():
-        raise DataValidationError(f"{path}: no such file; check the path.")
+    _check_file(path)
     delimiter = _delimiter(delimiter, PYTHON_NAMES)
     try:
-        with path.open(newline="") as fh:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
             row = next(csv.reader(fh, delimiter=delimiter), None)
     except UnicodeDecodeError as exc:
         raise DataValidationError(
@@ -110,7 +154,7 @@ def __getattr__(name):
 
 
 def _read_columns(path, columns, delimiter, names):
-    with path.open(newline="") as fh:
+    with path.open(newline="", encoding="utf-8-sig") as fh:
         reader = csv.reader(fh, delimiter=delimiter)
         try:
             header = [h.strip() for h in next(reader)]
@@ -120,9 +164,7 @@ def _read_columns(path, columns, delimiter, names):
         missing = [c for c in columns if c not in header]
         if missing:
             how = sorted({names["u"], names["y"]})
-            other = "" if len(header) > 1 or delimiter != "," else (
-                f" (one column only: if the fields are separated by another character, "
-                f"pass {names['delimiter']})")
+            other = _separator_hint(header, delimiter, names) or _header_hint(header)
             raise DataValidationError(
                 f"{path}: missing column(s) {missing}; the header has {header}{other}. "
                 f"Rename the columns or pass the right names ({', '.join(how)})."
@@ -141,9 +183,8 @@ def _read_columns(path, columns, delimiter, names):
                 try:
                     v = float(row[i])
                 except ValueError:
-                    raise DataValidationError(
-                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not a number."
-                    ) from None
+                    raise DataValidationError(_not_a_number(path, lineno, c, row[i])) \
+                        from None
                 if not np.isfinite(v):
                     raise DataValidationError(
                         f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not finite."
@@ -222,7 +263,7 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
                    y="y_column='<name or index>'")
     delimiter = _delimiter(delimiter, names)
     try:
-        with open(path, newline="") as fh:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
             rows = [(i + 1, r) for i, r in enumerate(csv.reader(fh, delimiter=delimiter))]
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise DataValidationError(f"cannot read {path}: {exc}") from exc

@@ -98,7 +98,8 @@ def add_csv_options(p, *, time=True):
         p.add_argument("--dt", type=float, default=None, metavar="SECONDS",
                        help="sampling time (default: from the time column, else not given)")
     p.add_argument("--delimiter", default=",",
-                   help="field separator of the CSV files (default ','; e.g. ';' or a tab)")
+                   help="field separator of the CSV files (default ','; e.g. ';', or tab "
+                        "(also written \\t))")
 
 
 def add_model_options(p, *, required=False):

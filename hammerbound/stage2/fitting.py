@@ -83,10 +83,19 @@ def widened_box_hint(problem) -> str:
     """Whether the LP outer set is still empty in an a priori box :data:`WIDER_A` times
     wider in ``a`` and :data:`WIDER_B` times in ``b``: if not, the box (the default one
     holds only stable A's) may be what excludes the system. A hint, not a certificate:
-    the LP set is an outer set."""
+    the LP set is an outer set. Nothing when the LP set is not empty in the box itself
+    (a tighter relaxation found the set empty)."""
     from ..exceptions import SolverError
     from ..relaxations.lp import lp_bounds
 
+    try:
+        lp_bounds(problem, check_box=False)
+    except EmptyFeasibleSetError:
+        pass
+    except SolverError:
+        return ""
+    else:  # a tighter relaxation than the LP found it empty: the LP cannot tell more
+        return ""
     box = problem.theta_box
     mid, half = box.mean(axis=1), 0.5 * (box[:, 1] - box[:, 0])
     half = half * np.where(np.arange(problem.p) < problem.na, WIDER_A, WIDER_B)

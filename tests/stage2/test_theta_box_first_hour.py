@@ -130,3 +130,27 @@ def test_cli_bad_theta_box(tmp_path, capsys, extra, match):
     cap = capsys.readouterr()
     assert rc == 2 and cap.out == ""
     assert re.search(match, cap.err)
+
+
+def test_no_box_hint_when_the_lp_set_itself_is_not_empty():
+    """An empty verdict of a tighter relaxation (exact method) while the LP set is not
+    empty: the LP cannot tell whether the box is the cause, so no hint."""
+    from hammerbound.relaxations.problem import EIVProblem
+    from hammerbound.stage2.fitting import widened_box_hint
+
+    u, y = _unstable()
+    pr = EIVProblem(y=y, x=u, input_bound=0.02, output_bound=0.05, na=1, nb=1,
+                    theta_box=[[-3, 3], [-10, 10]])
+    assert widened_box_hint(pr) == ""
+
+
+@pytest.mark.parametrize("extra, said", [
+    (["--na", "-1", "--nb", "1"], "--na must be an integer >= 0"),
+    (["--na", "1", "--nb", "1", "--total-time-limit", "-5"],
+     "--total-time-limit must be a number of seconds >= 0"),
+])
+def test_cli_names_its_flags(tmp_path, capsys, extra, said):
+    path = _csv(tmp_path)
+    rc = main(["eiv", str(path), "--output-bound", "0.05", *extra])
+    err = capsys.readouterr().err
+    assert rc == 2 and said in err

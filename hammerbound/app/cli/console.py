@@ -27,6 +27,8 @@ _TERMS = [
     (r"theta_box=\{'(\w+)': \(([-\d.e]+), ([-\d.e]+)\)\}", r"--theta-box \1=\2:\3"),
     (r"(?<![-\w])theta_box\b", "--theta-box"),
     (r"(?<![-\w])time_limit\b", "--time-limit"),
+    (r"(?<![-\w])(na|nb|nk) must\b", r"--\1 must"),
+    (r"must be None or a number", "must be a number"),
     (r"\bmax_nodes\b", "--max-nodes"),
     (r"\bn_jobs\b", "--n-jobs"),
     (r"pass steady_state_gain=None for a plain EIV problem",

@@ -266,7 +266,8 @@ class EndSearch:
             if x is not None and self._try_incumbent(x, box, lb):
                 continue
             self._branch(lb, box, x, rc)
-        if self.bar is not None:
+        if self.bar is not None:  # the last line shows the gap the end reports
+            self.bar.update(min(self.ub, self.top) - self._bound(), self.tol_eff, self.nodes)
             self.bar.close()
 
     def _closes(self, lb) -> bool:
@@ -453,18 +454,22 @@ class EndSearch:
     # ---- the result -----------------------------------------------------------------
     def result(self, t0, by_budget) -> EndResult:
         """The certified bound (never below the OBBT box end), the incumbent, a message."""
-        open_lb = min((h[0] for h in self.heap), default=np.inf)
         ub = self.ub
-        bound = min(self.closed_lb, open_lb, ub)
-        # monotone knowledge: the OBBT box end is a certified bound as well (a leaf LP
-        # that failed, or the root of a search stopped at once, may carry -inf); +inf
-        # (every leaf certified infeasible, no verified point) is kept: exact_bounds
-        # reports the empty set
-        bound = max(bound, min(self.end0, ub))
+        bound = self._bound()
         elapsed = time.perf_counter() - t0
         status, msg = self._message(max(ub - bound, 0.0), elapsed, by_budget)
         return EndResult(bound, ub, self.inc, self.nodes, elapsed, status, msg, self.iters,
                          self.root_value)
+
+    def _bound(self) -> float:
+        """The certified bound of the end so far (of the closed and open nodes)."""
+        open_lb = min((h[0] for h in self.heap), default=np.inf)
+        bound = min(self.closed_lb, open_lb, self.ub)
+        # monotone knowledge: the OBBT box end is a certified bound as well (a leaf LP
+        # that failed, or the root of a search stopped at once, may carry -inf); +inf
+        # (every leaf certified infeasible, no verified point) is kept: exact_bounds
+        # reports the empty set
+        return max(bound, min(self.end0, self.ub))
 
     def _message(self, gap, elapsed, by_budget):
         status, nodes = self.status, self.nodes

@@ -150,7 +150,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
     n_jobs : int, default 1
         The ``2 p`` bound problems run in parallel (joblib).
     progress : bool, default False
-        Progress bars during long exact searches.
+        Progress on stderr (never stdout): the exact method's interval ends (bars on a
+        terminal, lines otherwise), the moment relaxation's size and each solved bound.
     noise_bound, b0 : deprecated
         Old names of ``output_bound`` and of ``nk=0`` (removed in 0.3.0).
 

@@ -57,7 +57,7 @@ def _moment(est, problem):
     return moment_bounds(problem, order=est.relaxation_order, solver=est.solver,
                          solver_options=est.solver_options, n_jobs=est.n_jobs,
                          on_failure=est.on_failure, max_work=float("inf"),
-                         basis=est.relaxation_basis, lp=lp)
+                         basis=est.relaxation_basis, lp=lp, progress=est.progress)
 
 
 def with_hints(exc, est, problem, data):

@@ -148,8 +148,8 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
     p.add_argument("--max-nodes", type=int, default=20000,
                    help="exact method: nodes per interval end (default 20000)")
     p.add_argument("--progress", action="store_true",
-                   help="progress on stderr (exact method): bars on a terminal, plain lines "
-                        "otherwise")
+                   help="progress on stderr (exact method: bars on a terminal, plain lines "
+                        "otherwise; moment method: a line per solved bound)")
     if theta_box:
         p.add_argument("--theta-box", type=theta_box_row, action="append", default=None,
                        metavar="NAME=LO:HI",

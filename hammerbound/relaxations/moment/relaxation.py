@@ -32,12 +32,11 @@ from math import comb
 import numpy as np
 import scipy.sparse as sp
 
-from ...exceptions import ParameterValidationError, SolverError
+from ...exceptions import ParameterValidationError
 from ...solvers import get_solver
 from ...solvers.conic import (
     extract_conic_data,
 )
-from ...status import FAILED
 from ..problem import EIVProblem
 from ..result import IntervalResult, MomentDetails
 from .basis import (  # noqa: F401 - re-exported for compatibility
@@ -49,7 +48,7 @@ from .basis import (  # noqa: F401 - re-exported for compatibility
     _ScaledPOP,
     _sparse_basis,
 )
-from .certify import end_info, solve_group
+from .certify import Lines, ends, solve_all
 
 #: Largest number of entries (rows x moment variables) of one block of equality rows
 #: handed to PICOS (whose constants index their entries with 32 bits).
@@ -257,6 +256,7 @@ def moment_bounds(
     warn_work: float | None = None,
     basis: str = "sparse",
     lp: IntervalResult | None = None,
+    progress: bool = False,
 ) -> IntervalResult:
     """Guaranteed parameter uncertainty intervals (22.35) from the sparse moment relaxation.
 
@@ -311,6 +311,9 @@ def moment_bounds(
         The polytopic LP result of ``problem`` (:func:`~hammerbound.relaxations.lp_bounds`)
         when already computed: its bounds are then the a priori box and the fallback
         (unless ``theta_box``/``fallback`` are given), and it is kept as ``result.lp``.
+    progress : bool, default False
+        Lines on stderr (never stdout): the relaxation's size once built, then each bound
+        as its conic solve ends (with ``n_jobs > 1``: each worker's bounds as it ends).
 
     Returns
     -------
@@ -361,8 +364,13 @@ def moment_bounds(
                              basis=basis)
     t_build = time.perf_counter() - t_start
     objs = relax.objectives()
-    results = _solve_all(relax, objs, backend, opts, solve_processes(n_jobs, problem.p))
-    bounds, infos = _ends(problem, relax.box, objs, results, fallback, backend.name,
+    say = Lines(progress, t_start, objs, problem.param_names)
+    say(f"order-{relax.order} {relax.basis} relaxation built in {t_build:.1f} s "
+        f"({relax.n_moments} moments, {relax.n_psd_blocks} PSD blocks); solving "
+        f"{len(objs)} bounds with {backend.name}")
+    results = solve_all(relax, objs, backend, opts, solve_processes(n_jobs, problem.p),
+                         say.done)
+    bounds, infos = ends(problem, relax.box, objs, results, fallback, backend.name,
                           on_failure)
     names = problem.param_names
     return IntervalResult(
@@ -429,51 +437,6 @@ def _fallback(problem, fallback, lp, theta_box):
         raise ParameterValidationError(
             f"fallback must be an array of shape ({problem.p}, 2); got {fallback.shape}.")
     return fallback, lp
-
-
-def _solve_all(relax, objs, backend, opts, n_jobs):
-    """The ``2 p`` conic solves (in ``n_jobs`` worker processes), in the order of
-    ``objs``: ``(job, solution, verified bound, error)``."""
-    jobs = [(i, q, q0) for i, (_, _, q, q0) in enumerate(objs)]
-    data = relax.data.strip_picos()
-    if n_jobs > 1 and backend.name == "clarabel" and "max_threads" not in opts:
-        # one thread per worker process: measured faster than 2 x 2 threads on 2 cores
-        opts = {**opts, "max_threads": 1}
-    if n_jobs == 1:
-        results = solve_group(data, relax.xub, jobs, backend, opts)
-    else:
-        from joblib import Parallel, delayed
-
-        groups = [jobs[i::n_jobs] for i in range(n_jobs)]
-        parts = Parallel(n_jobs=n_jobs)(
-            delayed(solve_group)(data, relax.xub, g, backend, opts) for g in groups
-        )
-        results = [r for part in parts for r in part]
-    return sorted(results, key=lambda r: r[0])
-
-
-def _ends(problem, box, objs, results, fallback, solver, on_failure):
-    """The bounds (p, 2) and :class:`BoundInfo` of every end: its certificate when tighter
-    than ``fallback``, else the fallback end (or :class:`SolverError` with
-    ``on_failure="raise"`` when no certificate could be computed)."""
-    names = problem.param_names
-    bounds = box.copy()
-    infos = []
-    for (jid, sol, vb, err), (k, sense, _q, _q0) in zip(results, objs, strict=True):
-        assert jid == len(infos)
-        if (vb is None or not np.isfinite(vb.bound)) and on_failure == "raise":
-            status = FAILED if sol is None else sol.status
-            raise SolverError(
-                f"{solver}: could not certify the {sense} of {names[k]} "
-                f"(status {status}{': ' + err if err else ''}); try another solver, "
-                "tighter tolerances or on_failure='box'."
-            )
-        info = end_info(names[k], sense, sol, vb, err, solver,
-                        (max(box[k, 0], fallback[k, 0]), min(box[k, 1], fallback[k, 1])),
-                        problem.theta_box[k])
-        infos.append(info)
-        bounds[k, 0 if sense == "min" else 1] = info.bound
-    return bounds, infos
 
 
 def relaxation_size(n_vars_clique: int, order: int) -> int:

@@ -157,4 +157,4 @@ def test_cli_json_assumptions_are_in_command_line_terms(tmp_path, capsys):
     assert rc == 0
     text = " ".join(out["assumptions"])
     assert "--gamma-box" in text and "pass gamma_box" not in text
-    assert "theta_box of the Python API" in text
+    assert "--theta-box changes it" in text and "pass theta_box" not in text

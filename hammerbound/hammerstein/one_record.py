@@ -99,7 +99,10 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
            "(m_l (u + c_l) >= m_r (u - c_r): a well-posed backlash)"]
     given = given_rows(lin.theta_box, problem.na, problem.nb, problem.nk)
     if not given[problem.na:].all():
-        out.append("|b_j| <= 1e4 (default theta box; pass theta_box to change)")
+        names = theta_names(problem.na, problem.nb, problem.nk)
+        rest = [n for n, g in zip(names, given, strict=True) if n[0] == "b" and not g]
+        which = "" if given[problem.na:].sum() == 0 else f" for {', '.join(rest)}"
+        out.append(f"|b_j| <= 1e4{which} (default theta box; pass theta_box to change)")
     if steady is not None:
         out.append("steady-state points: u > 0 on the right line, u < 0 on the left (the "
                    "last move before each hold went the same way)")

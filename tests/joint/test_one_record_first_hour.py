@@ -158,3 +158,28 @@ def test_cli_json_assumptions_are_in_command_line_terms(tmp_path, capsys):
     text = " ".join(out["assumptions"])
     assert "--gamma-box" in text and "pass gamma_box" not in text
     assert "--theta-box changes it" in text and "pass theta_box" not in text
+
+
+def test_cli_theta_box_rows_on_the_one_record_path(tmp_path, capsys):
+    """--theta-box rows reach the one-record fit: the box holds them and the assumptions
+    name the given rows and the default ones."""
+    import json
+
+    from hammerbound.app.cli.main import main
+
+    u = np.repeat([0.5, -1.5, 1.0, -1.0, 1.5, -0.5], 5)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.25, 0.06, 0.26, 0.05))
+    y = y + 0.01 * np.sign(np.sin(np.arange(u.size)))
+    hb.IOData(u, y, dt=1.0).to_csv(tmp_path / "r.csv")
+    base = ["identify", "--record", str(tmp_path / "r.csv"), "--output-bound", "0.01",
+            "--na", "1", "--nb", "1", "--nk", "1", "--method", "lp", "--json"]
+    assert main([*base, "--theta-box", "a1=-0.9:0.9"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    text = " ".join(out["assumptions"])
+    assert "a priori box a1 in [-0.9, 0.9] (--theta-box)" in text
+    assert "|b_j| <= 1e4 (default theta box" in text
+    a1 = out["parameters"].index("a1")
+    assert -0.9 <= out["lower"][a1] <= -0.5 <= out["upper"][a1] <= 0.9
+    assert main([*base, "--theta-box", "a1=-0.9:0.9", "--theta-box", "b1=0:2"]) == 0
+    text = " ".join(json.loads(capsys.readouterr().out)["assumptions"])
+    assert "|b_j| <= 1e4" not in text and "b1 in [0, 2]" in text

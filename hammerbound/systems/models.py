@@ -202,8 +202,8 @@ def as_polynomials(G) -> tuple[np.ndarray, np.ndarray]:
             A, B = G
         except (TypeError, ValueError) as exc:
             raise ParameterValidationError(
-                "linear block must be a discrete control.TransferFunction (or StateSpace) or a pair (A, B) of "
-                "coefficient arrays in powers of q^-1."
+                "linear block must be a discrete control.TransferFunction (or StateSpace) "
+                "or a pair (A, B) of coefficient arrays in powers of q^-1."
             ) from exc
         try:
             A = np.atleast_1d(np.asarray(A, dtype=float))

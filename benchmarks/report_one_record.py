@@ -6,26 +6,13 @@ from __future__ import annotations
 import numpy as np
 
 try:
-    from benchmarks import _common as C
     from benchmarks.report_format import _json, _with_rows
     from benchmarks.report_format import table as _table
 except ImportError:  # run as a script
-    import _common as C
     from report_format import _json, _with_rows
     from report_format import table as _table
 
 PARAMS = ("ml", "cl", "mr", "cr", "a1", "a2", "b1", "b2")
-
-
-def _json(name):
-    p = C.RESULTS / name
-    return C.read_json(p) if p.exists() else None
-
-
-def _table(header, rows):
-    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
-    return "\n".join(out)
 
 
 def _env(j):

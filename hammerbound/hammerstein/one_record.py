@@ -76,9 +76,9 @@ def _problem(lin, data, prior, steady, steady_bound, output_bound):
 
 def _box_words(theta_box, na, nb, nk) -> str:
     """The a priori box of A in the assumptions: stable A (default rows), the user's."""
-    if theta_box is None:
-        return ", stable A (|a_i| <= binom(na, i))"
     given = given_rows(theta_box, na, nb, nk)
+    if not given.any():
+        return ", stable A (|a_i| <= binom(na, i))"
     box = resolve_theta_box(theta_box, na, nb, nk)
     names = theta_names(na, nb, nk)
     rows = [f"{names[k]} in [{box[k, 0]:g}, {box[k, 1]:g}]" for k in range(len(names))

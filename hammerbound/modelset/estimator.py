@@ -122,7 +122,7 @@ class ModelSetMixin:
         from .frequency import frequency_envelope
 
         dt, unit = self._frequency_axis(dt)
-        w = check_omega(omega, dt)
+        w = check_omega(omega, dt, unit)
         if on_gain_plane and self.steady_state_gain is None:
             raise ParameterValidationError(
                 "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
@@ -164,7 +164,7 @@ class ModelSetMixin:
             raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
         dt, unit = self._frequency_axis(dt)
         tf_dt = True if unit == "rad/sample" else dt
-        w = None if omega is None else check_omega(omega, dt)
+        w = None if omega is None else check_omega(omega, dt, unit)
         return fit_weight(self.bounds_, self.na, self._b_lags(),
                           self.to_transfer_function(tf_dt), dt=dt, kind=kind, order=order,
                           omega=w, margin=margin, n_grid=n_grid, tf_dt=tf_dt,

@@ -55,8 +55,9 @@ def default_omega(dt: float, n: int = 512) -> np.ndarray:
     return np.logspace(np.log10(1e-3 * nyq), np.log10(nyq), n)
 
 
-def check_omega(omega, dt):
-    """Validated, sorted, finite, non-negative frequencies (rad/s)."""
+def check_omega(omega, dt, unit="rad/s"):
+    """Validated, sorted, finite, non-negative frequencies (in ``unit``: rad/s, or
+    rad/sample with ``dt = 1`` when the data have no sampling time)."""
     if not (isinstance(dt, (int, float, np.floating, np.integer)) and np.isfinite(dt) and dt > 0):
         raise ParameterValidationError(f"dt must be a finite sampling time > 0; got {dt!r}.")
     if omega is None:
@@ -76,11 +77,13 @@ def check_omega(omega, dt):
     if w[-1] > nyq * (1 + 1e-12):
         import warnings
 
+        where = ("pi rad/sample (no sampling time)" if unit == "rad/sample" else
+                 f"pi/dt = {nyq:g} {unit} (dt = {float(dt):g} {unit.split('/')[-1]})")
         warnings.warn(
-            f"omega reaches {w[-1]:g} rad/s, above the Nyquist frequency pi/dt = {nyq:g} "
-            f"rad/s (dt = {float(dt):g} s): a sampled system's response repeats there (it "
-            "is G(e^{j w dt}) of an alias frequency), so those bounds hold but tell nothing "
-            "new; keep omega <= pi/dt.", DataWarning, stacklevel=3)
+            f"omega reaches {w[-1]:g} {unit}, above the Nyquist frequency {where}: a "
+            "sampled system's response repeats there (it is that of an alias frequency), "
+            "so those bounds hold but tell nothing new; keep omega at or below Nyquist.",
+            DataWarning, stacklevel=3)
     return w
 
 

@@ -58,10 +58,16 @@ def resolve_theta_box(theta_box, na: int, nb: int, nk: int) -> np.ndarray:
                 f"{', '.join(names)}.")
         for k, row in theta_box.items():
             try:
+                if isinstance(row, (str, bytes)):
+                    raise TypeError
                 lo, hi = (float(v) for v in row)
             except (TypeError, ValueError):
                 raise ParameterValidationError(
                     f"{shape_msg}; got {k}: {row!r} (give a pair (lower, upper)).") from None
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                raise ParameterValidationError(
+                    f"theta_box row {k}: ({lo:g}, {hi:g}) needs finite ends with lower <= "
+                    "upper.")
             box[names.index(k)] = lo, hi
     elif theta_box is not None:
         try:

@@ -80,13 +80,14 @@ WIDER_A, WIDER_B = 10.0, 1e3
 
 
 def widened_box_hint(problem) -> str:
-    """Whether the LP outer set is still empty in an a priori box :data:`WIDER_A` times
-    wider in ``a`` and :data:`WIDER_B` times in ``b``: if not, the box (the default one
-    holds only stable A's) may be what excludes the system. A hint, not a certificate:
-    the LP set is an outer set. Nothing when the LP set is not empty in the box itself
-    (a tighter relaxation found the set empty)."""
+    """Whether the LP outer set is still empty in a box that holds the a priori box and the
+    default one, each :data:`WIDER_A` times wider in ``a`` and :data:`WIDER_B` times in
+    ``b`` (about its centre): if not, the box may be what excludes the system. A hint, not
+    a certificate: the LP set is an outer set. Nothing when the LP set is not empty in the
+    box itself (a tighter relaxation found the set empty)."""
     from ..exceptions import SolverError
     from ..relaxations.lp import lp_bounds
+    from ..relaxations.theta_box import default_theta_box
 
     try:
         lp_bounds(problem, check_box=False)
@@ -96,22 +97,25 @@ def widened_box_hint(problem) -> str:
         return ""
     else:  # a tighter relaxation than the LP found it empty: the LP cannot tell more
         return ""
-    box = problem.theta_box
-    mid, half = box.mean(axis=1), 0.5 * (box[:, 1] - box[:, 0])
-    half = half * np.where(np.arange(problem.p) < problem.na, WIDER_A, WIDER_B)
+    factor = np.where(np.arange(problem.p) < problem.na, WIDER_A, WIDER_B)
+    boxes = [problem.theta_box, default_theta_box(problem.na, problem.nb, problem.nk == 0,
+                                                  nk=problem.nk)]
+    wide = [np.column_stack([b.mean(axis=1) - h, b.mean(axis=1) + h])
+            for b in boxes for h in [0.5 * (b[:, 1] - b[:, 0]) * factor]]
+    wider = np.column_stack([np.minimum(*(w[:, 0] for w in wide)),
+                             np.maximum(*(w[:, 1] for w in wide))])
+    what = (f"a box that holds the a priori box and the default one, {WIDER_A:g}x wider in "
+            f"a and {WIDER_B:g}x wider in b")
     try:
-        lp_bounds(problem.with_theta_box(np.column_stack([mid - half, mid + half])),
-                  check_box=False)
+        lp_bounds(problem.with_theta_box(wider), check_box=False)
     except EmptyFeasibleSetError:
-        return (f"The LP outer set is empty also in an a priori box {WIDER_A:g}x wider in "
-                f"a and {WIDER_B:g}x wider in b: the box is not what empties it.")
+        return f"The LP outer set is empty also in {what}: the box is not what empties it."
     except SolverError:
         return ""
-    return (f"Inside an a priori box {WIDER_A:g}x wider in a and {WIDER_B:g}x wider in b "
-            "the LP outer set is not empty: the a priori box may be what excludes the "
-            "system (the default box holds only stable A's; b_j beyond 1e4 in the data's "
-            "units). Pass a wider theta_box if your knowledge allows it, e.g. "
-            "theta_box={'a1': (-3, 3)} for the rows to change.")
+    return (f"In {what}, the LP outer set is not empty: the a priori box may be what "
+            "excludes the system (the default box holds only stable A's and |b_j| <= 1e4; "
+            "a box you gave may miss the system). Pass a wider theta_box if your "
+            "knowledge allows it, e.g. theta_box={'a1': (-3, 3)} for the rows to change.")
 
 
 def check_not_crossed(est, problem, bounds):
@@ -157,12 +161,13 @@ def assumptions(est, problem) -> str:
     return (f"Active assumptions: orders na={problem.na}, nb={problem.nb}, "
             f"nk={problem.nk} (A = 1{a_terms}, B = {b_terms}); " + "; ".join(items) + ".")
 
+
 def box_text(theta_box, na, nb, nk) -> str:
     """The a priori box as an assumption: the default one, the user's, or the user's rows
     (a dict, :func:`~hammerbound.relaxations.problem.resolve_theta_box`) and the default
     for the others."""
     default = "|a_i| <= binom(na, i) (stable A), |b_j| <= 1e4"
-    if theta_box is None:
+    if theta_box is None or (isinstance(theta_box, dict) and not theta_box):
         return f"default a priori box {default}"
     if not isinstance(theta_box, dict):
         return "user theta_box"
@@ -193,6 +198,7 @@ def box_hint(est, problem) -> str:
             "b_j may lie outside the default box |b_j| <= 1e4 or be lost to the solver "
             "tolerances. Rescale x and y to similar magnitudes (and steady_state_gain "
             "accordingly) or pass a theta_box.")
+
 
 def check_box(est, problem, res):
     """Decide what a bound that coincides with the a priori box means.

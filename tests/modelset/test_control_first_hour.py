@@ -55,3 +55,14 @@ def test_above_nyquist_warns(est):
         warnings.simplefilter("error")
         est.frequency_response_bounds()  # the default grid ends at Nyquist
         est.frequency_response_bounds(np.array([1.0, nyq]))
+
+
+def test_nyquist_warning_in_rad_per_sample_without_dt():
+    rng = np.random.default_rng(3)
+    x0 = np.repeat(rng.uniform(-1, 1, 25), 6)
+    y = lfilter(B, A, x0) + 0.05 * rng.choice([-1.0, 1.0], x0.size)
+    est = hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=0.05, method="lp").fit(
+        x0, y)
+    with pytest.warns(DataWarning, match=r"4 rad/sample, above the Nyquist frequency pi "
+                                         r"rad/sample \(no sampling time\)"):
+        est.frequency_response_bounds(np.array([1.0, 4.0]))

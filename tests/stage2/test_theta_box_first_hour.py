@@ -154,3 +154,50 @@ def test_cli_names_its_flags(tmp_path, capsys, extra, said):
     rc = main(["eiv", str(path), "--output-bound", "0.05", *extra])
     err = capsys.readouterr().err
     assert rc == 2 and said in err
+
+
+def test_a_narrow_user_box_far_from_the_system_is_suspected():
+    """A box the user gave that misses the system: the hint widens the default box as
+    well, so it does not say the box is innocent (review finding)."""
+    rng = np.random.default_rng(0)
+    x = np.repeat(rng.uniform(-1, 1, 20), 4)
+    y = lfilter([0.0, 0.5], [1.0, -0.6], x) + rng.uniform(-0.02, 0.02, 80)
+    for box in ({"a1": (0.5, 0.6)}, [[0.5, 0.6], [-1e4, 1e4]]):
+        with pytest.raises(EmptyFeasibleSetError,
+                           match="the a priori box may be what excludes the system"):
+            hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp",
+                                     theta_box=box).fit(x, y)
+
+
+@pytest.mark.parametrize("box, match", [({"a1": "12"}, "give a pair"),
+                                        ({"a1": (np.nan, 1)}, "needs finite ends")])
+def test_bad_row_values(box, match):
+    u, y = _unstable()
+    with pytest.raises(ParameterValidationError, match=match):
+        hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, theta_box=box).fit(
+            u, y, input_bound=0.02)
+
+
+def test_an_empty_dict_is_the_default_box():
+    from hammerbound.stage2.fitting import box_text
+
+    assert box_text({}, 1, 1, 1) == box_text(None, 1, 1, 1)
+
+
+def test_cli_records_the_box(tmp_path, capsys):
+    path = _csv(tmp_path)
+    args = ["eiv", str(path), "--na", "1", "--nb", "1", "--output-bound", "0.05",
+            "--input-bound", "0.02", "--method", "lp", "--theta-box", "a1=-3:3"]
+    assert main([*args, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["model"]["theta_box"] == {"a1": [-3.0, 3.0]}
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "given:" in text and "a priori box a1 in [-3, 3] (--theta-box)" in text
+    assert "(theta_box)" not in text
+    try:
+        rc = main([*args[:-1], "a1=3:-3"])
+    except SystemExit as stop:
+        rc = stop.code
+    assert rc == 2 and "LOWER and UPPER must be finite with LOWER <= UPPER" in \
+        capsys.readouterr().err

@@ -3,6 +3,7 @@ errors are bounded (errors in variables)."""
 
 from __future__ import annotations
 
+from .console import cli_terms
 from .options import (
     CLI_NAMES,
     add_bound_options,
@@ -12,6 +13,7 @@ from .options import (
     deprecated,
     require,
     stage2_kwargs,
+    theta_box_given,
 )
 from .printing import assumption_lines, json_text, record_line, transfer_function
 
@@ -56,7 +58,8 @@ def run(args) -> int:
                            "the bound on the output errors that the intervals rest on, "
                            "e.g. --output-bound 0.05")
     input_bound, given, assumed = input_bound_assumption(args.input_bound)
-    given = [f"output error bound {output_bound:g} (--output-bound)"] + given
+    box_lines, box_json = theta_box_given(args)
+    given = [f"output error bound {output_bound:g} (--output-bound)"] + given + box_lines
     data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
                            dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
     est = LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
@@ -71,7 +74,7 @@ def run(args) -> int:
             "intervals": est.intervals_.records(),
             "model": {"na": args.na, "nb": args.nb, "nk": est.problem_.nk,
                       "steady_state_gain": args.steady_state_gain, "method": args.method,
-                      "method_label": est.method_label()},
+                      "method_label": est.method_label(), "theta_box": box_json},
             "data": {"file": str(args.data), "N": data.N, "dt": data.dt,
                      "input": data.input_name, "output": data.output_name,
                      "input_bound": input_bound, "output_bound": output_bound},
@@ -82,6 +85,6 @@ def run(args) -> int:
         return 0
     print(record_line(args.data, data))
     print("\n".join(assumption_lines(given, assumed)))
-    print(est.summary())
+    print(cli_terms(est.summary()))
     print(tf_text)
     return 0

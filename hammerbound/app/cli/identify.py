@@ -6,6 +6,7 @@ from __future__ import annotations
 import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir
+from .console import cli_terms
 from .options import (
     CLI_NAMES,
     UsageError,
@@ -15,6 +16,7 @@ from .options import (
     add_stage2_options,
     require,
     stage2_kwargs,
+    theta_box_given,
 )
 from .printing import assumption_lines, json_text, record_line, transfer_function
 
@@ -103,6 +105,8 @@ def _two_records(args) -> int:
     from ..report import REPORT_FILES
 
     output_bound, steady_bound, given, assumed = _bounds(args)
+    box_lines, box_json = theta_box_given(args)
+    given = given + box_lines
     report_dir = (check_output_dir(args.report, REPORT_FILES, force=args.force,
                                    option="--report") if args.report else None)
     ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
@@ -118,12 +122,14 @@ def _two_records(args) -> int:
     ident.fit(data, steady_state=steady)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:
-        print(json_text(_record(args, ident, data, output_bound, steady_bound, assumed, tf)))
+        out = _record(args, ident, data, output_bound, steady_bound, assumed, tf)
+        out["model"]["theta_box"] = box_json
+        print(json_text(out))
     else:
         print(f"steady-state record {args.steady}: {ss[args.u_col].size} points")
         print("PRBS record " + record_line(args.prbs, data))
         print("\n".join(assumption_lines(given, assumed)))
-        print(ident.summary())
+        print(cli_terms(ident.summary()))
         print(tf_text)
     if report_dir is not None:
         from ..report import write_report

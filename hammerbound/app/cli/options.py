@@ -17,6 +17,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+import numpy as np
+
 from ..._compat import REMOVAL
 
 __all__ = ["CLI_NAMES", "DeprecatedFlag", "UsageError", "add_bound_options",
@@ -122,6 +124,9 @@ def theta_box_row(text):
         if not (sep and sep2 and name.strip()):
             raise ValueError
         row = (float(lo), float(hi))
+        if not (np.isfinite(row).all() and row[0] <= row[1]):
+            raise argparse.ArgumentTypeError(
+                f"{text!r}: LOWER and UPPER must be finite with LOWER <= UPPER")
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected NAME=LOWER:UPPER, e.g. a1=-3:3 or b1=-1e6:1e6; got {text!r}") from None
@@ -157,6 +162,16 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
                             "for others), e.g. --theta-box a1=-3:3 for an unstable A; the "
                             "others keep the default box (|a_i| <= binom(na, i): stable A; "
                             "|b_j| <= 1e4)")
+
+
+def theta_box_given(args) -> tuple[list[str], dict | None]:
+    """The ``--theta-box`` rows as a "given" line (empty without rows) and as a JSON
+    record ``{name: [lower, upper]}`` (None without rows)."""
+    rows = getattr(args, "theta_box", None)
+    if not rows:
+        return [], None
+    text = ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in rows)
+    return [f"a priori box {text} (--theta-box)"], {n: [lo, hi] for n, (lo, hi) in rows}
 
 
 def stage2_kwargs(args) -> dict:

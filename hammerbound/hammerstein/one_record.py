@@ -29,7 +29,13 @@ from ..joint import (
     record_box,
     unidentified,
 )
-from ..relaxations.problem import b_lags_of, given_rows, resolve_theta_box, theta_names
+from ..relaxations.problem import (
+    b_lags_of,
+    given_rows,
+    given_rows_text,
+    resolve_theta_box,
+    theta_names,
+)
 
 __all__ = ["OneRecordFit", "fit_one_record"]
 
@@ -79,12 +85,8 @@ def _box_words(theta_box, na, nb, nk) -> str:
     given = given_rows(theta_box, na, nb, nk)
     if not given.any():
         return ", stable A (|a_i| <= binom(na, i))"
-    box = resolve_theta_box(theta_box, na, nb, nk)
-    names = theta_names(na, nb, nk)
-    rows = [f"{names[k]} in [{box[k, 0]:g}, {box[k, 1]:g}]" for k in range(len(names))
-            if given[k]]
     default_a = not given[:na].all()
-    return ("; a priori box " + ", ".join(rows) + " (theta_box)"
+    return (f"; a priori box {given_rows_text(theta_box, na, nb, nk)} (theta_box)"
             + (", stable A (|a_i| <= binom(na, i)) for the other a_i" if default_a else ""))
 
 

@@ -45,6 +45,7 @@ from .theta_box import (  # noqa: F401 - re-exported
     b_lags_of,
     default_theta_box,
     given_rows,
+    given_rows_text,
     resolve_theta_box,
     theta_names,
 )

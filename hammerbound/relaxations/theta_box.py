@@ -88,3 +88,13 @@ def given_rows(theta_box, na: int, nb: int, nk: int) -> np.ndarray:
     if isinstance(theta_box, dict):
         return np.array([n in theta_box for n in names], dtype=bool)
     return np.ones(len(names), dtype=bool)
+
+
+def given_rows_text(theta_box, na: int, nb: int, nk: int) -> str:
+    """The rows the user gave, as ``"a1 in [-3, 3], b2 in [-5, 5]"`` ('' for none)."""
+    given = given_rows(theta_box, na, nb, nk)
+    if not given.any():
+        return ""
+    box = resolve_theta_box(theta_box, na, nb, nk)
+    return ", ".join(f"{n} in [{box[k, 0]:g}, {box[k, 1]:g}]"
+                     for k, n in enumerate(theta_names(na, nb, nk)) if given[k])

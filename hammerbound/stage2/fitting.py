@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError, UnboundedSetError
-from ..relaxations.problem import given_rows, resolve_theta_box, theta_names
+from ..relaxations.problem import given_rows, given_rows_text, theta_names
 from ..tables import bound_text
 
 
@@ -79,6 +79,12 @@ def with_hints(exc, est, problem, data):
 WIDER_A, WIDER_B = 10.0, 1e3
 
 
+def _widened(box, factor):
+    """``box`` (p, 2) made ``factor`` (p,) times wider about its centre."""
+    mid, half = box.mean(axis=1), 0.5 * (box[:, 1] - box[:, 0]) * factor
+    return np.column_stack([mid - half, mid + half])
+
+
 def widened_box_hint(problem) -> str:
     """Whether the LP outer set is still empty in a box that holds the a priori box and the
     default one, each :data:`WIDER_A` times wider in ``a`` and :data:`WIDER_B` times in
@@ -98,12 +104,11 @@ def widened_box_hint(problem) -> str:
     else:  # a tighter relaxation than the LP found it empty: the LP cannot tell more
         return ""
     factor = np.where(np.arange(problem.p) < problem.na, WIDER_A, WIDER_B)
-    boxes = [problem.theta_box, default_theta_box(problem.na, problem.nb, problem.nk == 0,
-                                                  nk=problem.nk)]
-    wide = [np.column_stack([b.mean(axis=1) - h, b.mean(axis=1) + h])
-            for b in boxes for h in [0.5 * (b[:, 1] - b[:, 0]) * factor]]
-    wider = np.column_stack([np.minimum(*(w[:, 0] for w in wide)),
-                             np.maximum(*(w[:, 1] for w in wide))])
+    mine = _widened(problem.theta_box, factor)
+    default = _widened(default_theta_box(problem.na, problem.nb, problem.nk == 0,
+                                         nk=problem.nk), factor)
+    wider = np.column_stack([np.minimum(mine[:, 0], default[:, 0]),
+                             np.maximum(mine[:, 1], default[:, 1])])
     what = (f"a box that holds the a priori box and the default one, {WIDER_A:g}x wider in "
             f"a and {WIDER_B:g}x wider in b")
     try:
@@ -171,11 +176,8 @@ def box_text(theta_box, na, nb, nk) -> str:
         return f"default a priori box {default}"
     if not isinstance(theta_box, dict):
         return "user theta_box"
-    box = resolve_theta_box(theta_box, na, nb, nk)
-    names = theta_names(na, nb, nk)
-    rows = ", ".join(f"{n} in [{box[k, 0]:g}, {box[k, 1]:g}]" for k, n in enumerate(names)
-                     if n in theta_box)
-    rest = [n for n in names if n not in theta_box]
+    rows = given_rows_text(theta_box, na, nb, nk)
+    rest = [n for n in theta_names(na, nb, nk) if n not in theta_box]
     if not rest:
         return f"a priori box {rows} (theta_box)"
     parts = [text for text, pre in (("|a_i| <= binom(na, i) (stable A)", "a"),

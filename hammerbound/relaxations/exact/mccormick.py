@@ -234,7 +234,8 @@ class McCormickRelaxation(McCormickBase):
         self.problem = pr
         p, n, k = pr.p, pr.N, pr.n_groups
         phi, yt = pr.regressors()
-        inv, npa = self._products(pr, phi.shape[0])
+        eta_idx = pr.eta_index()  # (m, na+1)
+        inv, npa = self._products(pr, eta_idx)
         P = self.px.size
         w0 = p + n + k
         self.ncol = w0 + P
@@ -242,7 +243,7 @@ class McCormickRelaxation(McCormickBase):
         self.e_lo = np.concatenate([-pr.deta, -pr.dx_group])
         self.e_hi = np.concatenate([pr.deta, pr.dx_group])
         t = _Triplets()
-        rl, ru = self._equations(t, phi, yt, inv, npa, box)
+        rl, ru = self._equations(t, phi, yt, eta_idx, inv, npa, box)
         self.mc0 = nrow = len(rl)
         self.mc_rows = self._envelope_rows(t)
         nrow += 4 * P
@@ -256,13 +257,13 @@ class McCormickRelaxation(McCormickBase):
         self.box = np.full((p, 2), np.nan)
         self.set_box(box)
 
-    def _products(self, pr, m):
+    def _products(self, pr, eta_idx):
         """The product columns' factors: ``px`` (theta index) and ``pe`` (error column)
         of the ``a_i eta`` products, one per (equation, i), then of the ``b_j dx_var[g]``
         products, one per distinct (j, g). Returns the b-product of each (equation, j),
         (m, nbp), and the number of a-products."""
         p, n, k, na = pr.p, pr.N, pr.n_groups, pr.na
-        eta_idx = pr.eta_index()  # (m, na+1)
+        m = eta_idx.shape[0]
         dx_idx = pr.dx_index()  # (m, nbp)
         ax = np.repeat(np.arange(na), m)  # theta index
         ae = p + eta_idx[:, 1:].T.ravel()  # eta column
@@ -274,12 +275,11 @@ class McCormickRelaxation(McCormickBase):
         self.pe = np.concatenate([ae, be]).astype(np.int64)
         return inv.reshape(m, -1), ax.size
 
-    def _equations(self, t, phi, yt, inv, npa, box):
+    def _equations(self, t, phi, yt, eta_idx, inv, npa, box):
         """The equation rows (and the gain row) into the triplets ``t``; their bounds."""
         pr = self.problem
         p, na = pr.p, pr.na
         m = phi.shape[0]
-        eta_idx = pr.eta_index()
         w0 = p + pr.N + pr.n_groups  # the first product column
         eqr = np.arange(m)
         for q in range(p):  # theta part of the equations

@@ -112,15 +112,34 @@ def widened_box_hint(problem) -> str:
     what = (f"a box that holds the a priori box and the default one, {WIDER_A:g}x wider in "
             f"a and {WIDER_B:g}x wider in b")
     try:
-        lp_bounds(problem.with_theta_box(wider), check_box=False)
+        wide = lp_bounds(problem.with_theta_box(wider), check_box=False).bounds
     except EmptyFeasibleSetError:
         return f"The LP outer set is empty also in {what}: the box is not what empties it."
     except SolverError:
         return ""
     return (f"In {what}, the LP outer set is not empty: the a priori box may be what "
             "excludes the system (the default box holds only stable A's and |b_j| <= 1e4; "
-            "a box you gave may miss the system). Pass a wider theta_box if your "
-            "knowledge allows it, e.g. theta_box={'a1': (-3, 3)} for the rows to change.")
+            f"a box you gave may miss the system). {_rows_hint(problem, wide)}")
+
+
+def _rows_hint(problem, wide) -> str:
+    """Which rows of the a priori box the LP set in the wider box leaves (``wide``: its
+    intervals), and an example ``theta_box`` of those rows (symmetric, a power of ten)."""
+    box, names = problem.theta_box, problem.param_names
+    outside = (wide[:, 0] < box[:, 0]) | (wide[:, 1] > box[:, 1])
+    disjoint = (wide[:, 1] < box[:, 0]) | (wide[:, 0] > box[:, 1])
+    rows = np.flatnonzero(disjoint if disjoint.any() else outside)
+    if rows.size == 0:  # pragma: no cover - a set inside the box would not be empty there
+        return "Pass a wider theta_box if your knowledge allows it."
+    where = ", ".join(f"{names[k]} in [{wide[k, 0]:.4g}, {wide[k, 1]:.4g}]" for k in rows)
+    ends = [10.0 ** np.ceil(np.log10(max(np.abs(wide[k]).max(), 1e-300)) + 1e-12)
+            for k in rows]
+    example = ", ".join(f"'{names[k]}': ({-e:g}, {e:g})" for k, e in zip(rows, ends,
+                                                                      strict=True))
+    return (f"There the LP set has {where}, beyond the a priori box ("
+            + ", ".join(f"{names[k]} in [{box[k, 0]:.3g}, {box[k, 1]:.3g}]" for k in rows)
+            + "). Pass a theta_box with the values your knowledge allows for these rows, "
+            f"e.g. theta_box={{{example}}}.")
 
 
 def check_not_crossed(est, problem, bounds):

@@ -40,7 +40,52 @@ def test_empty_only_by_the_default_box_says_so():
         est.fit(u, y, input_bound=0.02)
     msg = str(exc.value)
     assert "the a priori box may be what excludes the system" in msg
-    assert "theta_box={'a1': (-3, 3)}" in msg
+    # the row the wider LP set leaves the box by, where it lies, and an example box
+    m = re.search(r"There the LP set has a1 in \[([-\d.e]+), ([-\d.e]+)\], beyond the a "
+                  r"priori box \(a1 in \[-1, 1\]\)", msg)
+    assert m and float(m[1]) <= A1 <= float(m[2])
+    assert "theta_box={'a1': (-10, 10)}" in msg and "'b1'" not in msg
+
+
+def _milli_kilo():
+    """Own simulation, x in thousandths and y in thousands: b_j of about 1e6."""
+    rng = np.random.default_rng(3)
+    x = rng.choice([-1.0, 1.0], 120)
+    w = lfilter([0.0, 2.0, -1.0], [1.0, -0.7, 0.3], x)
+    return 1e-3 * x, 1e3 * (w + rng.uniform(-0.05, 0.05, x.size))
+
+
+TRUTH_MILLI_KILO = np.array([-0.7, 0.3, 2e6, -1e6])
+
+
+def test_empty_by_a_b_box_too_small_for_the_units_names_the_b_rows():
+    """The b_j of about 1e6 lie beyond the default |b_j| <= 1e4: the hint names b1, b2."""
+    x, y = _milli_kilo()
+    est = hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=50.0, method="lp")
+    with pytest.raises(EmptyFeasibleSetError) as exc:
+        est.fit(x, y)
+    msg = str(exc.value)
+    assert "There the LP set has b1 in [" in msg and "b2 in [" in msg
+    assert "theta_box={'b1': (-1e+07, 1e+07), 'b2': (-1e+07, 1e+07)}" in msg
+    assert "'a1'" not in msg  # a is not what the box excludes
+    fit = hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=50.0, method="lp", theta_box={
+        "b1": (-1e7, 1e7), "b2": (-1e7, 1e7)}).fit(x, y)  # the example box works
+    assert fit.contains(TRUTH_MILLI_KILO)
+
+
+def test_cli_names_every_row_of_the_example_box(tmp_path, capsys):
+    x, y = _milli_kilo()
+    path = tmp_path / "milli_kilo.csv"
+    path.write_text("u,y\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(x, y, strict=True)))
+    args = ["eiv", str(path), "--na", "2", "--nb", "2", "--output-bound", "50", "--method",
+            "lp"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    flags = "--theta-box b1=-1e+07:1e+07 --theta-box b2=-1e+07:1e+07"
+    assert f"e.g. {flags}." in err
+    assert main([*args, *flags.split(), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["model"]["theta_box"]["b1"] == [-1e7, 1e7]
 
 
 def test_empty_by_the_data_says_the_box_is_not_the_cause():
@@ -107,7 +152,7 @@ def test_cli_theta_box(tmp_path, capsys):
             "--input-bound", "0.02", "--method", "lp"]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert "Pass a wider --theta-box" in err and "--theta-box a1=-3:3" in err
+    assert "Pass a --theta-box" in err and "e.g. --theta-box a1=-10:10." in err
     assert "theta_box" not in err
     assert main([*args, "--theta-box", "a1=-3:3", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)

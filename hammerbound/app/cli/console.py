@@ -24,7 +24,7 @@ _TERMS = [
     (r"\btotal_time_limit\b", "--total-time-limit"),
     (r"(?<![-\w])gamma_box\b", "--gamma-box"),
     (r"pass theta_box to change", "--theta-box changes it"),
-    (r"theta_box=\{'(\w+)': \(([-\d.e]+), ([-\d.e]+)\)\}", r"--theta-box \1=\2:\3"),
+    (r"theta_box=\{('\w+': \([-+\d.e]+, [-+\d.e]+\)(, )?)+\}", lambda m: _box_flags(m[0])),
     (r"(?<![-\w])theta_box\b", "--theta-box"),
     (r"(?<![-\w])time_limit\b", "--time-limit"),
     (r"(?<![-\w])(na|nb|nk) must\b", r"--\1 must"),
@@ -59,6 +59,13 @@ def cli_terms(text: str) -> str:
     for pattern, repl in _TERMS:
         text = re.sub(pattern, repl, text)
     return text
+
+
+def _box_flags(text: str) -> str:
+    """``theta_box={'a1': (-3, 3), 'b1': (-10, 10)}`` as ``--theta-box a1=-3:3 --theta-box
+    b1=-10:10``."""
+    rows = re.findall(r"'(\w+)': \(([-+\d.e]+), ([-+\d.e]+)\)", text)
+    return " ".join(f"--theta-box {name}={lo}:{hi}" for name, lo, hi in rows)
 
 
 def one_line(text) -> str:

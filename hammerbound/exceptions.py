@@ -60,12 +60,18 @@ class EmptyFeasibleSetError(HammerboundError, ValueError):
         ``"left"``/``"right"`` for stage 1, ``None`` for stage 2.
     first_index : int or None
         Index (in the caller's data) of the first measurement that empties the set.
+    relaxation : str or None
+        ``"lp"`` when the LP outer set (:func:`hammerbound.relaxations.lp_bounds`) is
+        certified empty, another method's name when only a tighter relaxation is, None when
+        not said.
     """
 
-    def __init__(self, message: str, *, side: str | None = None, first_index: int | None = None):
+    def __init__(self, message: str, *, side: str | None = None, first_index: int | None = None,
+                 relaxation: str | None = None):
         super().__init__(message)
         self.side = side
         self.first_index = first_index
+        self.relaxation = relaxation
 
 
 class IllPosedBacklashError(HammerboundError, ValueError):

@@ -282,14 +282,14 @@ def _lp_bounds(problem: EIVProblem, n_jobs: int, check_box: bool) -> IntervalRes
         if k == 0:
             raise EmptyFeasibleSetError(
                 "theta_box and the gain equality (22.8) have no common point; "
-                "enlarge theta_box or check the gain.", first_index=None)
+                "enlarge theta_box or check the gain.", first_index=None, relaxation="lp")
         t = int(problem.equation_times[k - 1])
         raise EmptyFeasibleSetError(
             f"no theta explains the data within the error bounds: the LP outer set of (22.34) "
             f"becomes empty at equation t = {t} (0-based sample index). Check the output error "
             f"bound (output_bound), the input error bound (input_bound) and the model orders "
             f"near that sample.",
-            first_index=t)
+            first_index=t, relaxation="lp")
     lo = np.min([r["lo"] for _, r in feas], axis=0)
     hi = np.max([r["hi"] for _, r in feas], axis=0)
     if not np.all(np.isfinite(lo)) or not np.all(np.isfinite(hi)):  # pragma: no cover

@@ -63,9 +63,10 @@ def _moment(est, problem):
 def with_hints(exc, est, problem, data):
     """``exc`` (empty or unbounded set) again, its message naming the assumptions, a badly
     scaled record and, for samples that are not an IOData, cross-validation cuts."""
-    wider = widened_box_hint(problem) if isinstance(exc, EmptyFeasibleSetError) else ""
+    wider = widened_box_hint(problem, exc.relaxation) \
+        if isinstance(exc, EmptyFeasibleSetError) else ""
     hint = " ".join(h for h in (wider, box_hint(est, problem), assumptions(est, problem)) if h)
-    kw = {"side": exc.side, "first_index": exc.first_index} \
+    kw = {"side": exc.side, "first_index": exc.first_index, "relaxation": exc.relaxation} \
         if isinstance(exc, EmptyFeasibleSetError) else {}
     if isinstance(exc, EmptyFeasibleSetError) and data is None:
         hint += (" If these samples were cut by a cross-validation splitter (e.g. "
@@ -85,24 +86,27 @@ def _widened(box, factor):
     return np.column_stack([mid - half, mid + half])
 
 
-def widened_box_hint(problem) -> str:
+def widened_box_hint(problem, relaxation: str | None = None) -> str:
     """Whether the LP outer set is still empty in a box that holds the a priori box and the
     default one, each :data:`WIDER_A` times wider in ``a`` and :data:`WIDER_B` times in
     ``b`` (about its centre): if not, the box may be what excludes the system. A hint, not
     a certificate: the LP set is an outer set. Nothing when the LP set is not empty in the
-    box itself (a tighter relaxation found the set empty)."""
+    box itself (a tighter relaxation found the set empty). ``relaxation``: the
+    :attr:`~hammerbound.exceptions.EmptyFeasibleSetError.relaxation` of the verdict (None:
+    the LP is solved to learn whether its set is empty)."""
     from ..exceptions import SolverError
     from ..relaxations.lp import lp_bounds
     from ..relaxations.theta_box import default_theta_box
 
-    try:
-        lp_bounds(problem, check_box=False)
-    except EmptyFeasibleSetError:
-        pass
-    except SolverError:
-        return ""
-    else:  # a tighter relaxation than the LP found it empty: the LP cannot tell more
-        return ""
+    if relaxation is None:
+        try:
+            lp_bounds(problem, check_box=False)
+        except EmptyFeasibleSetError:
+            relaxation = "lp"
+        except SolverError:
+            return ""
+    if relaxation != "lp":  # a tighter relaxation than the LP found it empty: the LP
+        return ""  # cannot tell more
     factor = np.where(np.arange(problem.p) < problem.na, WIDER_A, WIDER_B)
     mine = _widened(problem.theta_box, factor)
     default = _widened(default_theta_box(problem.na, problem.nb, problem.nk == 0,

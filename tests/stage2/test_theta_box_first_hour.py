@@ -246,3 +246,30 @@ def test_cli_records_the_box(tmp_path, capsys):
         rc = stop.code
     assert rc == 2 and "LOWER and UPPER must be finite with LOWER <= UPPER" in \
         capsys.readouterr().err
+
+
+def test_the_verdict_says_which_relaxation_found_the_set_empty(monkeypatch):
+    """The LP's own "empty" says relaxation="lp", the exact method's "exact": the hint then
+    solves only the LP in the wider box (or nothing), not the LP in the box again."""
+    from hammerbound.relaxations import lp as lp_module
+    from hammerbound.stage2.fitting import widened_box_hint
+
+    u, y = _unstable()
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, method="lp")
+    with pytest.raises(EmptyFeasibleSetError) as exc:
+        est.fit(u, y, input_bound=0.02)
+    assert exc.value.relaxation == "lp"
+    problem = est._build_problem(u, y, 0.02, None)
+    boxes = []
+    real = lp_module.lp_bounds
+
+    def counted(pr, *args, **kwargs):
+        boxes.append(pr.theta_box.copy())
+        return real(pr, *args, **kwargs)
+
+    monkeypatch.setattr(lp_module, "lp_bounds", counted)
+    for relaxation, n_lps in ((None, 2), ("lp", 1), ("exact", 0)):
+        boxes.clear()
+        hint = widened_box_hint(problem, relaxation)
+        assert len(boxes) == n_lps
+        assert ("may be what excludes the system" in hint) == (relaxation != "exact")

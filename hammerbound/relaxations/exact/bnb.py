@@ -241,7 +241,8 @@ def exact_bounds(
         raise EmptyFeasibleSetError(
             "the branch-and-bound certified every node of the McCormick relaxation of "
             "(22.34) infeasible: no theta explains the data within the error bounds (the "
-            "polytopic LP set is a strict outer approximation).", first_index=None)
+            "polytopic LP set is a strict outer approximation).", first_index=None,
+            relaxation="exact")
     bounds, inner, infos = _end_infos(problem, jobs, outs, polished, lp.bounds, units)
     names = problem.param_names
     if check_box:

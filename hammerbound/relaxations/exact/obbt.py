@@ -148,7 +148,7 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
                     "the McCormick relaxation of (22.34) is certified infeasible inside "
                     "the LP outer box: no theta explains the data within the error "
                     "bounds (the polytopic LP set is a strict outer approximation).",
-                    first_index=None)
+                    first_index=None, relaxation="exact")
             bases[(k, s)] = basis
             roots[(k, s)] = (bnd, x, basis)
             if x is not None:

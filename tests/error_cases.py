@@ -243,7 +243,7 @@ CASES: list[ErrorCase] = [
     C("s2-nan-input", "stage 2", "NaN in the central inner signal",
       "LinearEIVSetEstimator(...).fit(x with x[5] = nan, y)",
       lambda: lin().fit(with_value(x_inner(), 5, np.nan), y_prbs()),
-      DataValidationError, "remove or repair"),
+      DataValidationError, "dropping one joins two parts"),
     C("s2-inf-output", "stage 2", "infinite output sample",
       "LinearEIVSetEstimator(...).fit(x, y with y[7] = -inf)",
       lambda: lin().fit(x_inner(), with_value(y_prbs(), 7, -np.inf)),

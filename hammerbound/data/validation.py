@@ -87,7 +87,10 @@ def as_signal(name: str, v, *, error: type = DataValidationError) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         bad = int(np.flatnonzero(~np.isfinite(arr))[0])
         raise error(
-            f"{name} contains NaN or infinity (first at sample {bad}); remove or repair it."
+            f"{name} contains NaN or infinity (first at sample {bad}). The samples are "
+            "consecutive in time, so dropping one joins two parts of the record that are not: "
+            "repair the value, or fit a stretch of consecutive finite samples (a slice such "
+            "as u[:k], y[:k])."
         )
     return arr
 

@@ -130,22 +130,24 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
     warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
-                  + _advice(stopped_by_time, lps_stopped),
+                  + _advice(stopped_by_time, lps_stopped, prior.user_given),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
     return gb, tuple(found)
 
 
-def _advice(stopped_by_time, lps_stopped) -> str:
+def _advice(stopped_by_time, lps_stopped, box_given=False) -> str:
     """What to do about backlash ends the record did not bound, for the cause
     :func:`~hammerbound.joint.unidentified` names: more time when the time limit stopped
-    the search; another record when no limit did (the input is then a cause it names)."""
+    the search; another record when no limit did (the input is then a cause it names);
+    a (narrower) gamma_box."""
     fixes = []
     if stopped_by_time:  # (LPs stopped at their own cap: the cause says what helps)
         fixes.append("give more time (total_time_limit)")
     elif not lps_stopped:
         fixes.append("use a record whose input reverses by more than the dead band")
-    fixes.append("give a gamma_box")
+    fixes.append("narrow the gamma_box if what you know of the actuator allows it"
+                 if box_given else "give a gamma_box")
     text = ", or ".join(fixes) + "."
     return text[0].upper() + text[1:]
 

@@ -183,3 +183,20 @@ def test_cli_theta_box_rows_on_the_one_record_path(tmp_path, capsys):
     assert main([*base, "--theta-box", "a1=-0.9:0.9", "--theta-box", "b1=0:2"]) == 0
     text = " ".join(json.loads(capsys.readouterr().out)["assumptions"])
     assert "|b_j| <= 1e4" not in text and "b1 in [0, 2]" in text
+
+
+def test_the_advice_with_a_given_gamma_box_does_not_ask_for_one():
+    """Found by a new-user trial: "limited only by the gamma_box you gave ... or give a
+    gamma_box"."""
+    u = np.linspace(-2.0, 2.0, 20)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.25, 0.06, 0.26, 0.05))
+    est = hb.HammersteinBacklashIdentifier(
+        gamma_box=[[0.1, 1.0], [0.0, 0.5], [0.1, 1.0], [0.0, 0.5]],
+        linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.01, method="lp"))
+    with pytest.warns(NotIdentifiedWarning) as caught:
+        est.fit(u, y + 0.01 * np.sign(np.cos(np.arange(20))))
+    msg = str(caught[0].message)
+    assert "limited only by the gamma_box you gave" in msg
+    assert "give a gamma_box" not in msg.lower()
+    assert "narrow the gamma_box if what you know of the actuator allows it." in msg.lower()
+    assert est.contains((0.25, 0.06, 0.26, 0.05), [-0.5, 0.5])

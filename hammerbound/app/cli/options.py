@@ -147,9 +147,10 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
     p.add_argument("--time-limit", type=float, default=600.0,
                    help="exact method: seconds per interval end (default 600)")
     p.add_argument("--total-time-limit", type=float, default=None,
-                   help="exact method: seconds for the whole stage-2 fit, shared by every "
-                        "interval end and job; ends it stops report their certified LP/OBBT "
-                        "bound with status 'limit' (default: none)")
+                   help="seconds for the whole fit of the linear block (the exact method's "
+                        "stage 2, or a one-record fit with any method), shared by every "
+                        "interval end and job; ends it stops report their certified bound "
+                        "with status 'limit' (default: none)")
     p.add_argument("--max-nodes", type=int, default=20000,
                    help="exact method: nodes per interval end (default 20000)")
     p.add_argument("--progress", action="store_true",

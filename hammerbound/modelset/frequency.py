@@ -155,10 +155,12 @@ class FrequencyEnvelope(Result):
     def contains(self, response, *, rtol: float = 0.0) -> np.ndarray:
         """Whether complex responses (shape (..., n)) lie in the envelope, per frequency.
 
-        The phase is compared relative to the central model (``angle(G / G0)``), so no
-        unwrapping ambiguity enters the test.
+        ``response`` may also be a discrete SISO python-control model (``TransferFunction``
+        or ``StateSpace``): its response at ``z = e^{j omega dt}`` is tested. The phase is
+        compared relative to the central model (``angle(G / G0)``), so no unwrapping
+        ambiguity enters the test.
         """
-        r = np.asarray(response, dtype=complex)
+        r = np.asarray(self._response_of(response), dtype=complex)
         mag = np.abs(r)
         ok = (mag >= self.mag_lower * (1 - rtol)) & (mag <= self.mag_upper * (1 + rtol))
         rel = np.angle(r / self.central)
@@ -168,6 +170,29 @@ class FrequencyEnvelope(Result):
         pad = rtol * np.maximum(hi - lo, 1e-300)
         ph_ok = np.where(self.phase_bounded, (rel >= lo - pad) & (rel <= hi + pad), True)
         return ok & ph_ok
+
+    def _response_of(self, model):
+        """``model``'s response at the envelope's frequencies when it is a python-control
+        LTI model (checked: discrete, SISO, the envelope's sampling time), else ``model``."""
+        import control
+
+        if not isinstance(model, control.LTI):
+            return model
+        if not model.isdtime():
+            raise ParameterValidationError(
+                "the envelope is of a discrete-time model: give a discrete-time "
+                "model (e.g. control.c2d(sys, dt)) or its complex response.")
+        if model.ninputs != 1 or model.noutputs != 1:
+            raise ParameterValidationError(
+                f"the envelope is of a SISO model; got {model.noutputs} outputs and "
+                f"{model.ninputs} inputs.")
+        per_sample = self.frequency_unit == "rad/sample"
+        if model.dt is not True and not per_sample and not np.isclose(model.dt, self.dt):
+            raise ParameterValidationError(
+                f"the model's sampling time dt = {model.dt:g} differs from the envelope's "
+                f"({self.dt:g}): their frequencies do not correspond.")
+        z = np.exp(1j * self.omega * self.dt)
+        return np.asarray(model(z), dtype=complex).reshape(self.omega.shape)
 
     def refine(self, rtol: float = 0.01, max_points: int = 20000) -> FrequencyEnvelope:
         """Bisect the intervals whose between-grid magnitude bounds exceed the grid bounds

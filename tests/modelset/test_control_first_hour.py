@@ -66,3 +66,25 @@ def test_nyquist_warning_in_rad_per_sample_without_dt():
     with pytest.warns(DataWarning, match=r"4 rad/sample, above the Nyquist frequency pi "
                                          r"rad/sample \(no sampling time\)"):
         est.frequency_response_bounds(np.array([1.0, 4.0]))
+
+
+def test_the_frequency_envelope_takes_python_control_models(est):
+    """Found by a new-user trial: ``frequency_response_bounds().contains(G)`` raised a bare
+    TypeError for a TransferFunction."""
+    env = est.frequency_response_bounds()
+    G = control.tf(B, A, 0.05)
+    z = np.exp(1j * env.omega * 0.05)
+    own = np.polyval(B[::-1], 1 / z) / np.polyval(A[::-1], 1 / z)  # own evaluation of B/A
+    assert np.array_equal(env.contains(G), env.contains(own)) and env.contains(own).all()
+    assert env.contains(control.tf2ss(G)).all()
+    far = control.tf([0.0, 0.9, 0.2], A, 0.05)
+    assert not env.contains(far).all()
+
+
+@pytest.mark.parametrize("G, match", [
+    (control.tf(B, A, 0.1), "sampling time dt = 0.1 differs"),
+    (control.tf([1.0], [1.0, 1.0]), "discrete-time"),
+])
+def test_the_frequency_envelope_refuses_models_it_cannot_compare(est, G, match):
+    with pytest.raises(ParameterValidationError, match=match):
+        est.frequency_response_bounds().contains(G)

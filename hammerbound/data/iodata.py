@@ -305,7 +305,7 @@ def _same_output(data, y) -> bool:
     return yy.shape == data.y.shape and bool(np.array_equal(yy, data.y, equal_nan=True))
 
 
-def unpack(X, y, *, what="X"):
+def unpack(X, y, *, what="X", func="fit"):
     """``(u, y, data)`` from ``fit(X, y)`` or ``fit(IOData)``; ``data`` is the IOData or None.
 
     Raises DataValidationError for a non-contiguous IOData subset (e.g. a KFold training
@@ -316,7 +316,7 @@ def unpack(X, y, *, what="X"):
         # need y, e.g. cross_val_score(est, data, data.y, scoring="r2")
         if y is not None and not _same_output(X, y):
             raise DataValidationError(
-                f"{what} is an IOData, which already holds the output: call fit(data) "
+                f"{what} is an IOData, which already holds the output: call {func}(data) "
                 f"without y (or with y = {what}.y, as scikit-learn's scorers need).")
         if not X.is_contiguous():
             gaps = np.flatnonzero(np.diff(X.sample_index) != 1)
@@ -330,6 +330,6 @@ def unpack(X, y, *, what="X"):
         return X.u, X.y, X
     if y is None:
         raise DataValidationError(
-            "fit requires y to be passed, but the target y is None: pass the measured "
+            f"{func} requires y to be passed, but the target y is None: pass the measured "
             f"output y, or an IOData (input, output, dt) as {what}.")
     return X, y, None

@@ -350,7 +350,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         from ..timeseries import segment_r2, simulate_from_measured
 
         self._check_central()
-        X, y, _ = unpack(X, y)
+        X, y, _ = unpack(X, y, func="score")
         u, yy = as_signal("X", X), as_signal("y", y)
         if u.shape != yy.shape:
             raise DataValidationError("X and y must have the same length.")
@@ -371,16 +371,20 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 "(see the NotIdentifiedWarning of fit); identify from a record that reverses "
                 "by more than the dead band.")
 
-    def output_envelope(self, X, y, output_bound=None):
+    def output_envelope(self, X, y=None, output_bound=None):
         """Guaranteed one-step-ahead band of the noise-free output.
 
         Uses the inner-signal bounds for ``X`` (two-stage: of stage 1 for a PRBS; one
         record: the play operator's envelope over the backlash intervals from an unknown
         initial state) and the linear block's intervals (see
-        :meth:`LinearEIVSetEstimator.one_step_envelope`). ``output_bound``: per-sample
+        :meth:`LinearEIVSetEstimator.one_step_envelope`). ``X`` may be an
+        :class:`~hammerbound.IOData` (then ``y`` is omitted). ``output_bound``: per-sample
         output error bound of ``(X, y)``; default that of the fit.
         """
+        from ..data.iodata import unpack
+
         check_is_fitted(self, "bounds_")
+        X, y, _ = unpack(X, y, func="output_envelope")
         u = as_signal("X", X)
         if self.procedure_ == "one-record":
             from ..joint.modes import inner_envelope

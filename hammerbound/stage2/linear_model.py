@@ -211,7 +211,7 @@ class LinearModelMixin:
         from ..data.iodata import unpack
         from ..timeseries import segment_r2, simulate_from_measured
 
-        X, y, _ = unpack(X, y)
+        X, y, _ = unpack(X, y, func="score")
         x, yy = as_signal("X", X), as_signal("y", y)
         if x.shape != yy.shape:
             raise DataValidationError("X and y must have the same length.")
@@ -222,7 +222,7 @@ class LinearModelMixin:
         A, B = self._polys()
         return segment_r2(yy, simulate_from_measured(A, B, x, yy, n0), n0, sample_weight)
 
-    def one_step_envelope(self, X, y, input_bound=0.0, output_bound=None):
+    def one_step_envelope(self, X, y=None, input_bound=0.0, output_bound=None):
         """Guaranteed one-step-ahead band of the noise-free output ``w_t``.
 
         For every ``t >= max(na, last input lag)`` and every ``theta`` in :attr:`bounds_`, every past
@@ -230,13 +230,18 @@ class LinearModelMixin:
         ``w_t = -sum a_i w_{t-i} + sum b_j x_{t-j}`` lies in ``[lower_t, upper_t]``
         (interval arithmetic, hence an outer bound). Earlier samples are NaN.
 
+        ``X`` may be an :class:`~hammerbound.IOData` (then ``y`` is omitted).
+
         Returns
         -------
         OutputEnvelope
             ``lower``, ``upper`` of shape (N,) with the measured ``y`` and its bound; it
             unpacks as before: ``lower, upper = est.one_step_envelope(X, y)``.
         """
+        from ..data.iodata import unpack
+
         check_is_fitted(self, "bounds_")
+        X, y, _ = unpack(X, y, func="one_step_envelope")
         x = as_signal("X", X)
         yy = as_signal("y", y)
         if x.shape != yy.shape:

@@ -155,3 +155,25 @@ def test_bad_inner_signal_and_components():
     with pytest.raises(ParameterValidationError, match="BacklashSetEstimator"):
         HammersteinBacklashIdentifier(backlash=LinearEIVSetEstimator()).fit(
             ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+
+
+def test_output_envelope_takes_iodata():
+    """Found by a new-user trial: output_envelope(IOData) raised an error about scikit-learn
+    transformers; fit, predict and score take an IOData."""
+    import hammerbound as hb
+
+    ex = hb.chapter_example(0.05, N=120, random_state=1)
+    ident = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(0.05),
+        hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"))
+    ident.fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    data = hb.IOData(ex.prbs.u, ex.prbs.y)
+    a = ident.output_envelope(ex.prbs.u, ex.prbs.y)
+    b = ident.output_envelope(data)
+    assert np.array_equal(a.lower, b.lower, equal_nan=True)
+    assert np.array_equal(a.upper, b.upper, equal_nan=True)
+    c = ident.linear_.one_step_envelope(hb.IOData(ident.linear_.problem_.x,
+                                                  ident.linear_.problem_.y))
+    assert np.isfinite(c.lower).any()
+    with pytest.raises(DataValidationError, match="output_envelope requires y"):
+        ident.output_envelope(ex.prbs.u)

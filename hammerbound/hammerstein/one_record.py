@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.validation import warn_bound_covers_output
-from ..exceptions import NotIdentifiedWarning, ParameterValidationError
+from ..exceptions import DataValidationError, NotIdentifiedWarning, ParameterValidationError
 from ..joint import (
     GAMMA_NAMES,
     GammaPrior,
@@ -111,6 +111,24 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     return tuple(out)
 
 
+def _check_length(lin, n_samples):
+    """Refuse, before any work, orders the methods cannot take and a record with fewer
+    equations than unknowns (the linear block's p and the backlash's 4)."""
+    from ..stage2.orders import MAX_PARAMETERS, check_orders
+
+    nk = lin._nk()
+    lags = b_lags_of(lin.nb, nk)
+    p, n0 = lin.na + lags.size, max(lin.na, int(lags[-1]))
+    if p <= MAX_PARAMETERS and n_samples - n0 < p + 4:
+        raise DataValidationError(
+            f"a one-record fit with na={lin.na}, nb={lin.nb}, nk={nk} has {p + 4} unknowns "
+            f"({p} of the linear block, 4 of the backlash), which need at least {p + 4} "
+            f"equations, but N = {n_samples} samples give {max(n_samples - n0, 0)} (one per "
+            f"sample from t = {n0}). Use a longer record (N >= {n0 + p + 4}) or lower "
+            "orders.")
+    check_orders(lin.na, lin.nb, nk, n_samples)
+
+
 def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
                          method="exact"):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
@@ -178,6 +196,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
             f"the one-record identification supports method='exact' (tight intervals) or "
             f"'lp' (the relaxation's bounds); got method={lin.method!r} on the stage-2 "
             "estimator.")
+    _check_length(lin, data.N)
     ob = lin._output_bound(data.N, output_bound)
     prior = _gamma_prior(gamma_box, data.u, data.y, ob)
     warn_bound_covers_output("HammersteinBacklashIdentifier.fit", data.output_name or "y",

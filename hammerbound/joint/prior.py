@@ -148,4 +148,5 @@ class GammaPrior:
         who = "given" if self.user_given else "assumed (default; pass gamma_box to change)"
         return (f"backlash box {who}: m_l in [{g[0, 0]:.4g}, {g[0, 1]:.4g}], c_l in "
                 f"[{g[1, 0]:.4g}, {g[1, 1]:.4g}], m_r in [{g[2, 0]:.4g}, {g[2, 1]:.4g}], "
-                f"c_r in [{g[3, 0]:.4g}, {g[3, 1]:.4g}]")
+                f"c_r in [{g[3, 0]:.4g}, {g[3, 1]:.4g}] (c_l, c_r >= 0: the dead band "
+                "[-c_l, c_r] holds u = 0)")

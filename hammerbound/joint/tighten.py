@@ -42,7 +42,10 @@ EMPTY_HINT = ("Check the output bound (every error within it?), the orders na, n
               "The model also needs a backlash whose lines do not cross inside the "
               "record's input range (m_l (u + c_l) >= m_r (u - c_r) at every input; unequal "
               "slopes cross at u = (m_l c_l + m_r c_r) / (m_r - m_l)): a record that drives "
-              "an actuator past that point is explained by no backlash of this model.")
+              "an actuator past that point is explained by no backlash of this model. "
+              "And its dead band [-c_l, c_r] holds u = 0 (c_l, c_r >= 0): an actuator "
+              "whose dead band lies elsewhere (an offset, e.g. a valve's input in percent) "
+              "needs u shifted first, e.g. by the input at which the output rests.")
 
 #: The first LP of a row's relaxation starts from the previous row's basis (carried over by
 #: keys where the relaxation changed, :mod:`.warm`), by the primal simplex; False: cold.

@@ -290,12 +290,12 @@ class IntervalSet(Result):
     # ------------------------------------------------------------------ tables
     def status_text(self) -> list:
         """Per parameter, the ``status`` column of the tables: ``"optimal"`` when both ends
-        are, ``"not identified"`` when an end is infinite, else which end is set by the a
-        priori box, recovered from the dual, stopped at a limit... (guaranteed in every
-        case)."""
+        are, ``"not identified"`` when both are infinite, else each end that is not
+        optimal with its status: not identified, set by the a priori box, recovered from
+        the dual, stopped at a limit... (guaranteed in every case)."""
         out = []
         for pair in self.status:
-            if NOT_IDENTIFIED in pair:
+            if all(s == NOT_IDENTIFIED for s in pair):
                 out.append(describe(NOT_IDENTIFIED))
                 continue
             parts = [f"{end} {describe(s)}" for end, s in zip(_ENDS, pair, strict=True)

@@ -59,7 +59,9 @@ def test_contains_tolerance_rule_absolute_below_one_relative_above():
 def test_infinite_end_is_not_identified_and_contains_everything_there():
     iv = IntervalSet(("m", "c"), [[0.0, np.inf], [0.1, 0.2]])
     assert iv.status == ((st.OPTIMAL, st.NOT_IDENTIFIED), (st.OPTIMAL, st.OPTIMAL))
-    assert iv.status_text() == ["not identified", "optimal"]
+    assert iv.status_text() == ["upper not identified", "optimal"]
+    both = IntervalSet(("m",), [[-np.inf, np.inf]])
+    assert both.status_text() == ["not identified"]
     assert iv.contains([1e300, 0.15]) and iv.contains([1e300, 0.15], tol=1e-6)
     assert iv.ends_with(st.NOT_IDENTIFIED) == ("m upper",)
 

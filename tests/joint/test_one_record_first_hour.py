@@ -200,3 +200,14 @@ def test_the_advice_with_a_given_gamma_box_does_not_ask_for_one():
     assert "give a gamma_box" not in msg.lower()
     assert "narrow the gamma_box if what you know of the actuator allows it." in msg.lower()
     assert est.contains((0.25, 0.06, 0.26, 0.05), [-0.5, 0.5])
+
+
+@pytest.mark.parametrize("n", [3, 4, 9])
+def test_a_record_shorter_than_its_unknowns_is_refused_at_once(n):
+    """Found by a new-user trial: N = 3 with na = nb = 2 ran 7-20 s and blamed the input's
+    reversals; 8 unknowns need 8 equations (N >= 10 here)."""
+    u = np.sin(np.arange(n))
+    with pytest.raises(DataValidationError, match=r"8 unknowns \(4 of the linear block, 4 of "
+                                                  r"the backlash\).*N >= 10"):
+        hb.HammersteinBacklashIdentifier(linear=hb.LinearEIVSetEstimator(
+            na=2, nb=2, output_bound=0.02, method="lp"), procedure="one-record").fit(u, 0.5 * u)

@@ -173,26 +173,22 @@ class FrequencyEnvelope(Result):
 
     def _response_of(self, model):
         """``model``'s response at the envelope's frequencies when it is a python-control
-        LTI model (checked: discrete, SISO, the envelope's sampling time), else ``model``."""
+        LTI model (discrete SISO, as :func:`~hammerbound.systems.models.as_polynomials`
+        checks, and of the envelope's sampling time), else ``model``."""
         import control
+
+        from ..systems.models import as_polynomials
 
         if not isinstance(model, control.LTI):
             return model
-        if not model.isdtime():
-            raise ParameterValidationError(
-                "the envelope is of a discrete-time model: give a discrete-time "
-                "model (e.g. control.c2d(sys, dt)) or its complex response.")
-        if model.ninputs != 1 or model.noutputs != 1:
-            raise ParameterValidationError(
-                f"the envelope is of a SISO model; got {model.noutputs} outputs and "
-                f"{model.ninputs} inputs.")
+        A, B = as_polynomials(model)
         per_sample = self.frequency_unit == "rad/sample"
         if model.dt is not True and not per_sample and not np.isclose(model.dt, self.dt):
             raise ParameterValidationError(
                 f"the model's sampling time dt = {model.dt:g} differs from the envelope's "
                 f"({self.dt:g}): their frequencies do not correspond.")
-        z = np.exp(1j * self.omega * self.dt)
-        return np.asarray(model(z), dtype=complex).reshape(self.omega.shape)
+        zi = np.exp(-1j * self.omega * self.dt)  # q^-1 on the unit circle
+        return np.polyval(B[::-1], zi) / np.polyval(A[::-1], zi)
 
     def refine(self, rtol: float = 0.01, max_points: int = 20000) -> FrequencyEnvelope:
         """Bisect the intervals whose between-grid magnitude bounds exceed the grid bounds

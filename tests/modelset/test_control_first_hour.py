@@ -84,6 +84,7 @@ def test_the_frequency_envelope_takes_python_control_models(est):
 @pytest.mark.parametrize("G, match", [
     (control.tf(B, A, 0.1), "sampling time dt = 0.1 differs"),
     (control.tf([1.0], [1.0, 1.0]), "discrete-time"),
+    (control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]]), "discretise"),
 ])
 def test_the_frequency_envelope_refuses_models_it_cannot_compare(est, G, match):
     with pytest.raises(ParameterValidationError, match=match):

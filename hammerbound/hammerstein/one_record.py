@@ -111,22 +111,25 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     return tuple(out)
 
 
-def _check_length(lin, n_samples):
-    """Refuse, before any work, orders the methods cannot take and a record with fewer
-    equations than unknowns (the linear block's p and the backlash's 4)."""
-    from ..stage2.orders import MAX_PARAMETERS, check_orders
-
+def _check_length(lin, n_samples, prior, steady):
+    """Refuse, before any work, a record with fewer equations (one per sample from ``n0``,
+    one per steady-state point) than unknowns (the linear block's ``p``, and the backlash
+    parameters the a priori box leaves free: 4 unless a gamma_box fixes some)."""
     nk = lin._nk()
     lags = b_lags_of(lin.nb, nk)
     p, n0 = lin.na + lags.size, max(lin.na, int(lags[-1]))
-    if p <= MAX_PARAMETERS and n_samples - n0 < p + 4:
+    n_steady = 0 if steady is None else np.size(steady[0])
+    free = int(np.sum(prior.box[:, 1] > prior.box[:, 0]))
+    n_eq = max(n_samples - n0, 0) + n_steady
+    if n_eq < p + free:
+        fixed = "" if free == 4 else f", {4 - free} fixed by the gamma_box"
+        points = f" and {n_steady} steady-state points" if n_steady else ""
         raise DataValidationError(
-            f"a one-record fit with na={lin.na}, nb={lin.nb}, nk={nk} has {p + 4} unknowns "
-            f"({p} of the linear block, 4 of the backlash), which need at least {p + 4} "
-            f"equations, but N = {n_samples} samples give {max(n_samples - n0, 0)} (one per "
-            f"sample from t = {n0}). Use a longer record (N >= {n0 + p + 4}) or lower "
-            "orders.")
-    check_orders(lin.na, lin.nb, nk, n_samples)
+            f"a one-record fit with na={lin.na}, nb={lin.nb}, nk={nk} has {p + free} "
+            f"unknowns ({p} of the linear block, {free} of the backlash{fixed}), which need "
+            f"at least {p + free} equations, but N = {n_samples} samples{points} give "
+            f"{n_eq} (one per sample from t = {n0}{', one per point' if n_steady else ''}). "
+            f"Use a longer record (N >= {n0 + p + free - n_steady}) or lower orders.")
 
 
 def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
@@ -196,9 +199,9 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
             f"the one-record identification supports method='exact' (tight intervals) or "
             f"'lp' (the relaxation's bounds); got method={lin.method!r} on the stage-2 "
             "estimator.")
-    _check_length(lin, data.N)
     ob = lin._output_bound(data.N, output_bound)
     prior = _gamma_prior(gamma_box, data.u, data.y, ob)
+    _check_length(lin, data.N, prior, steady)
     warn_bound_covers_output("HammersteinBacklashIdentifier.fit", data.output_name or "y",
                              data.y, ob, stacklevel=5)
     problem = _problem(lin, data, prior, steady, steady_bound, ob)

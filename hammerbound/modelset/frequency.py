@@ -181,9 +181,14 @@ class FrequencyEnvelope(Result):
 
         if not isinstance(model, control.LTI):
             return model
+        if not isinstance(model, (control.TransferFunction, control.StateSpace)):
+            raise ParameterValidationError(
+                f"give a discrete SISO TransferFunction or StateSpace, or the complex "
+                f"response at the envelope's frequencies; got a {type(model).__name__}.")
         A, B = as_polynomials(model)
         per_sample = self.frequency_unit == "rad/sample"
-        if model.dt is not True and not per_sample and not np.isclose(model.dt, self.dt):
+        if model.dt is not True and not per_sample and \
+                not np.isclose(model.dt, self.dt, rtol=1e-9, atol=0.0):
             raise ParameterValidationError(
                 f"the model's sampling time dt = {model.dt:g} differs from the envelope's "
                 f"({self.dt:g}): their frequencies do not correspond.")

@@ -142,8 +142,8 @@ def _rows_hint(problem, wide) -> str:
                                                                       strict=True))
     return (f"There the LP set has {where}, beyond the a priori box ("
             + ", ".join(f"{names[k]} in [{box[k, 0]:.3g}, {box[k, 1]:.3g}]" for k in rows)
-            + "). Pass a theta_box with the values your knowledge allows for these rows, "
-            f"e.g. theta_box={{{example}}}.")
+            + "). Pass a theta_box with the values your knowledge allows for these rows "
+            f"(keeping any rows you gave for the others), e.g. theta_box={{{example}}}.")
 
 
 def check_not_crossed(est, problem, bounds):

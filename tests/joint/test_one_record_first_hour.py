@@ -211,3 +211,27 @@ def test_a_record_shorter_than_its_unknowns_is_refused_at_once(n):
                                                   r"the backlash\).*N >= 10"):
         hb.HammersteinBacklashIdentifier(linear=hb.LinearEIVSetEstimator(
             na=2, nb=2, output_bound=0.02, method="lp"), procedure="one-record").fit(u, 0.5 * u)
+
+
+def test_steady_points_and_a_fixed_backlash_count_in_the_length_check():
+    """Review finding: steady-state points add equations and a gamma_box row with equal
+    ends removes an unknown; such short records were identified before the length check
+    and still are (na = nb = 1, N = 6: 5 equations for 6 unknowns without them)."""
+    u = np.array([0.0, 1.0, 2.0, 1.0, 0.0, -1.0])
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.5, 0.1, 0.5, 0.1))
+    us = np.array([1.0, 2.0, -1.0, -2.0])
+    ys = np.where(us > 0, 0.5 * (us - 0.1), 0.5 * (us + 0.1))
+
+    def ident(**kw):
+        return hb.HammersteinBacklashIdentifier(
+            hb.BacklashSetEstimator(0.01), procedure="one-record",
+            linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.01, method="lp"), **kw)
+
+    with pytest.raises(DataValidationError, match=r"6 unknowns .*N >= 7"):
+        ident().fit(u, y)
+    fixed = [[0.5, 0.5], [0.1, 0.1], [0.5, 0.5], [0.1, 0.1]]
+    for est, kw in ((ident(), {"steady_state": (us, ys)}), (ident(gamma_box=fixed), {})):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            est.fit(u, y, **kw)
+        assert est.contains((0.5, 0.1, 0.5, 0.1), [-0.5, 0.5])

@@ -85,6 +85,8 @@ def test_the_frequency_envelope_takes_python_control_models(est):
     (control.tf(B, A, 0.1), "sampling time dt = 0.1 differs"),
     (control.tf([1.0], [1.0, 1.0]), "discrete-time"),
     (control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]]), "discretise"),
+    (control.tf(B, A, 0.05 * (1 + 1e-7)), "differs"),  # review: np.isclose's default atol
+    (control.frd([1.0, 1.0], [1.0, 2.0]), "got a FrequencyResponseData"),
 ])
 def test_the_frequency_envelope_refuses_models_it_cannot_compare(est, G, match):
     with pytest.raises(ParameterValidationError, match=match):

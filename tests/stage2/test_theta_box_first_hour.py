@@ -66,7 +66,8 @@ def test_empty_by_a_b_box_too_small_for_the_units_names_the_b_rows():
         est.fit(x, y)
     msg = str(exc.value)
     assert "There the LP set has b1 in [" in msg and "b2 in [" in msg
-    assert "theta_box={'b1': (-1e+07, 1e+07), 'b2': (-1e+07, 1e+07)}" in msg
+    assert "(keeping any rows you gave for the others), e.g. theta_box={'b1': (-1e+07, " \
+        "1e+07), 'b2': (-1e+07, 1e+07)}" in msg
     assert "'a1'" not in msg  # a is not what the box excludes
     fit = hb.LinearEIVSetEstimator(na=2, nb=2, output_bound=50.0, method="lp", theta_box={
         "b1": (-1e7, 1e7), "b2": (-1e7, 1e7)}).fit(x, y)  # the example box works

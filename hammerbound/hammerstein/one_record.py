@@ -18,7 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.validation import warn_bound_covers_output
-from ..exceptions import DataValidationError, NotIdentifiedWarning, ParameterValidationError
+from ..exceptions import (
+    DataValidationError,
+    NotIdentifiedWarning,
+    ParameterValidationError,
+    SearchLimitWarning,
+)
 from ..joint import (
     GAMMA_NAMES,
     GammaPrior,
@@ -132,6 +137,21 @@ def _check_length(lin, n_samples, prior, steady):
             f"Use a longer record (N >= {n0 + p + free - n_steady}) or lower orders.")
 
 
+def _warn_stopped(infos, named):
+    """Warn, naming them, about the interval ends a limit stopped (status "limit") that the
+    not-identified warning does not already name (``named``: backlash parameters)."""
+    ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in infos
+            if i.status == "limit" and i.param not in named]
+    if ends:
+        warnings.warn(
+            f"the search stopped early for {len(ends)} of {len(infos)} interval ends "
+            f"({', '.join(ends)}): their bounds are guaranteed outer bounds but may be "
+            "looser than the record allows; raise total_time_limit (or time_limit / "
+            "max_nodes) for tighter ones (bound_info_ gives each end's status).",
+            # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
+            SearchLimitWarning, stacklevel=5)
+
+
 def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
                          method="exact"):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
@@ -214,6 +234,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
                                      0 if d is None else d.lps_stopped, lin.method)
+    _warn_stopped(res.infos, {name for name, _ in found})
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,

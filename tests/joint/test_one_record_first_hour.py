@@ -235,3 +235,27 @@ def test_steady_points_and_a_fixed_backlash_count_in_the_length_check():
             warnings.simplefilter("ignore")
             est.fit(u, y, **kw)
         assert est.contains((0.5, 0.1, 0.5, 0.1), [-0.5, 0.5])
+
+
+def test_a_stopped_lp_fit_names_the_linear_ends_it_left_at_a_limit():
+    """Found by a new-user trial: a one-record fit stopped by total_time_limit warned only
+    about the backlash ends; its linear-block ends said "limit" without a warning."""
+    from hammerbound.exceptions import SearchLimitWarning
+
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-2, 2, 20), 5)
+    y = lfilter([0.0, 0.18, 0.12], [1.0, -1.2, 0.5], _play(u, 1.5, 0.15, 1.4, 0.2))
+    y = y + rng.uniform(-0.02, 0.02, u.size)
+    est = hb.HammersteinBacklashIdentifier(linear=hb.LinearEIVSetEstimator(
+        na=2, nb=2, output_bound=0.02, method="lp", total_time_limit=0.5),
+        procedure="one-record")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        est.fit(u, y)
+    stopped = [w for w in caught if issubclass(w.category, SearchLimitWarning)]
+    limited = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}"
+               for i in est.bound_info_ if i.status == "limit" and i.param[0] in "ab"]
+    assert limited and len(stopped) == 1
+    assert all(end in str(stopped[0].message) for end in limited)
+    assert stopped[0].filename == __file__
+    assert est.contains((1.5, 0.15, 1.4, 0.2), [-1.2, 0.5, 0.18, 0.12])

@@ -269,7 +269,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
 
         lin = self.linear_
         pr = lin.problem_
-        dt = "not given" if self.dt_ is None else f"{self.dt_:g}"
+        unit = getattr(lin, "time_unit_", "")
+        dt = "not given" if self.dt_ is None else f"{self.dt_:g} {unit}".strip()
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
                     f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")

@@ -75,7 +75,7 @@ def run(args) -> int:
             "model": {"na": args.na, "nb": args.nb, "nk": est.problem_.nk,
                       "steady_state_gain": args.steady_state_gain, "method": args.method,
                       "method_label": est.method_label(), "theta_box": box_json},
-            "data": {"file": str(args.data), "N": data.N, "dt": data.dt,
+            "data": {"file": str(args.data), "N": data.N, "dt": data.dt, "time_unit": data.time_unit,
                      "input": data.input_name, "output": data.output_name,
                      "input_bound": input_bound, "output_bound": output_bound},
             "assumed": assumed,

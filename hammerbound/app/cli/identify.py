@@ -149,7 +149,8 @@ def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
                       "method_label": ident.linear_.method_label(),
                       "inner_signal": args.inner_signal},
             "data": {"steady": str(args.steady), "prbs": str(args.prbs), "N": data.N,
-                     "dt": data.dt, "input": data.input_name, "output": data.output_name,
+                     "dt": data.dt, "time_unit": data.time_unit, "input": data.input_name,
+                     "output": data.output_name,
                      "output_bound": output_bound, "steady_output_bound": steady_bound},
             "assumed": assumed,
             "transfer_function": tf}

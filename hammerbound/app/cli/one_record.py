@@ -78,7 +78,7 @@ def _record(args, ident, data, output_bound, tf) -> dict:
             "lower": _finite(ident.bounds_[:, 0]), "upper": _finite(ident.bounds_[:, 1]),
             "intervals": ident.intervals_.records(),
             "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method},
-            "data": {"record": str(args.record), "N": data.N, "dt": data.dt,
+            "data": {"record": str(args.record), "N": data.N, "dt": data.dt, "time_unit": data.time_unit,
                      "input": data.input_name, "output": data.output_name,
                      "output_bound": output_bound,
                      "steady": None if args.steady is None else str(args.steady)},

@@ -30,8 +30,9 @@ def poly_z(coefs) -> str:
     return " ".join(terms)
 
 
-def dt_text(dt) -> str:
-    return "not given" if dt is None else f"{dt:g}"
+def dt_text(dt, unit: str = "") -> str:
+    """``0.1 ms``, ``0.1`` (no unit known) or ``not given``."""
+    return "not given" if dt is None else f"{dt:g} {unit}".strip()
 
 
 def transfer_function(linear, dt):
@@ -39,13 +40,16 @@ def transfer_function(linear, dt):
     tf = linear.to_transfer_function()
     num = np.ravel(tf.num[0][0]).tolist()
     den = np.ravel(tf.den[0][0]).tolist()
-    text = f"central model: G(z) = ({poly_z(num)}) / ({poly_z(den)}), dt = {dt_text(dt)}"
-    return text, {"num": num, "den": den, "dt": dt, "variable": "z"}
+    unit = getattr(linear, "time_unit_", "")
+    text = (f"central model: G(z) = ({poly_z(num)}) / ({poly_z(den)}), "
+            f"dt = {dt_text(dt, unit)}")
+    return text, {"num": num, "den": den, "dt": dt, "time_unit": unit, "variable": "z"}
 
 
 def record_line(path, data) -> str:
     """``data.csv: N = 60, dt = 0.1, input 'u', output 'y'``."""
-    return (f"{path}: N = {data.N}, dt = {dt_text(data.dt)}, input {data.input_name!r}, "
+    return (f"{path}: N = {data.N}, dt = {dt_text(data.dt, data.time_unit)}, "
+            f"input {data.input_name!r}, "
             f"output {data.output_name!r}")
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bound_text", "interval_frame", "interval_records", "interval_text"]
+__all__ = ["bound_text", "dt_text", "interval_frame", "interval_records", "interval_text"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
@@ -19,6 +19,12 @@ def bound_text(bound) -> str:
     v = np.asarray(bound, dtype=float)
     lo, hi = float(np.min(v)), float(np.max(v))
     return f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g} (per sample)"
+
+
+def dt_text(dt, unit: str = "") -> str:
+    """A sampling time as the summaries print it: ``0.1 ms``, ``0.1`` (no unit known) or
+    ``not given``."""
+    return "not given" if dt is None else f"{dt:g} {unit}".strip()
 
 
 def interval_records(names, bounds, status=None) -> list[dict]:

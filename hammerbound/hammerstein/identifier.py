@@ -265,12 +265,11 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         """Text summary: the procedure and its settings, the interval table (and, for one
         record, the assumptions the bounds rest on)."""
         check_is_fitted(self, "bounds_")
-        from ..tables import bound_text
+        from ..tables import bound_text, dt_text
 
         lin = self.linear_
         pr = lin.problem_
-        unit = getattr(lin, "time_unit_", "")
-        dt = "not given" if self.dt_ is None else f"{self.dt_:g} {unit}".strip()
+        dt = dt_text(self.dt_, getattr(lin, "time_unit_", ""))
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
                     f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")

@@ -120,9 +120,10 @@ def _check_length(lin, n_samples, prior, steady):
     """Refuse, before any work, a record with fewer equations (one per sample from ``n0``,
     one per steady-state point) than unknowns (the linear block's ``p``, and the backlash
     parameters the a priori box leaves free: 4 unless a gamma_box fixes some)."""
+    from ..stage2.orders import model_size
+
     nk = lin._nk()
-    lags = b_lags_of(lin.nb, nk)
-    p, n0 = lin.na + lags.size, max(lin.na, int(lags[-1]))
+    p, n0 = model_size(lin.na, lin.nb, nk)
     n_steady = 0 if steady is None else np.size(steady[0])
     free = int(np.sum(prior.box[:, 1] > prior.box[:, 0]))
     n_eq = max(n_samples - n0, 0) + n_steady
@@ -140,7 +141,7 @@ def _check_length(lin, n_samples, prior, steady):
 def _warn_stopped(infos, named):
     """Warn, naming them, about the interval ends a limit stopped (status "limit") that the
     not-identified warning does not already name (``named``: backlash parameters)."""
-    ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in infos
+    ends = [f"{i.param} {i.end}" for i in infos
             if i.status == "limit" and i.param not in named]
     if ends:
         warnings.warn(

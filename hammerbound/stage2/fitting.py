@@ -254,8 +254,7 @@ def warn_limits(res, stacklevel=4):
 
     from ..exceptions import SearchLimitWarning
 
-    ends = [f"{i.param} {'lower' if i.sense == 'min' else 'upper'}" for i in res.infos
-            if i.status == "limit"]
+    ends = [f"{i.param} {i.end}" for i in res.infos if i.status == "limit"]
     if ends:
         warnings.warn(
             f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "

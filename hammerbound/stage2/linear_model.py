@@ -19,6 +19,7 @@ from ..data.iodata import signal_label
 from ..data.validation import as_bound, as_signal, as_theta
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..results import OutputEnvelope
+from ..tables import dt_text
 from .fitting import assumption_list
 
 __all__ = ["LinearModelMixin", "is_vector_like"]
@@ -57,9 +58,7 @@ class LinearModelMixin:
         check_is_fitted(self, "bounds_")
         pr = self.problem_
         g = self.steady_state_gain
-        dt = getattr(self, "dt_", None)
-        dt = "not given" if dt is None else f"{dt:g}" + (
-            f" {self.time_unit_}" if getattr(self, "time_unit_", "") else "")
+        dt = dt_text(getattr(self, "dt_", None), getattr(self, "time_unit_", ""))
         head = (f"LinearEIVSetEstimator: method {self.method_label()}, na={pr.na} nb={pr.nb} "
                 f"nk={pr.nk}, N = {pr.N}, dt = {dt}, "
                 + ("no gain constraint" if g is None else f"gain B(1)/A(1) = {g:g}"))

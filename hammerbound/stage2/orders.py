@@ -15,7 +15,8 @@ from __future__ import annotations
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..relaxations.problem import b_lags_of
 
-__all__ = ["EQUATIONS_PER_PARAMETER", "MAX_PARAMETERS", "check_orders", "largest_order"]
+__all__ = ["EQUATIONS_PER_PARAMETER", "MAX_PARAMETERS", "check_orders", "largest_order",
+           "model_size"]
 
 #: Most parameters ``p = na + len(B)`` a fit accepts (``2^12 = 4096`` LP orthants).
 MAX_PARAMETERS = 12
@@ -23,14 +24,14 @@ MAX_PARAMETERS = 12
 EQUATIONS_PER_PARAMETER = 1
 
 
-def _size(na: int, nb: int, nk: int) -> tuple[int, int]:
+def model_size(na: int, nb: int, nk: int) -> tuple[int, int]:
     """``(p, n0)``: number of parameters and first equation time."""
     lags = b_lags_of(nb, nk)
     return na + lags.size, max(na, int(lags[-1]))
 
 
 def _supported(na: int, nb: int, nk: int, n_samples: int) -> bool:
-    p, n0 = _size(na, nb, nk)
+    p, n0 = model_size(na, nb, nk)
     return p <= MAX_PARAMETERS and n_samples - n0 >= EQUATIONS_PER_PARAMETER * p
 
 
@@ -61,7 +62,7 @@ def check_orders(na: int, nb: int, nk: int, n_samples: int, *,
     DataValidationError
         Fewer equations than parameters.
     """
-    p, n0 = _size(na, nb, nk)
+    p, n0 = model_size(na, nb, nk)
     orders = f"{owner}(na={na}, nb={nb}, nk={nk})"
     if p > MAX_PARAMETERS:
         raise ParameterValidationError(

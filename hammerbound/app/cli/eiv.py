@@ -15,7 +15,7 @@ from .options import (
     stage2_kwargs,
     theta_box_given,
 )
-from .printing import assumption_lines, json_text, record_line, transfer_function
+from .printing import assumption_lines, data_fields, json_text, record_line, transfer_function
 
 __all__ = ["add_parser", "input_bound_assumption", "run"]
 
@@ -75,8 +75,7 @@ def run(args) -> int:
             "model": {"na": args.na, "nb": args.nb, "nk": est.problem_.nk,
                       "steady_state_gain": args.steady_state_gain, "method": args.method,
                       "method_label": est.method_label(), "theta_box": box_json},
-            "data": {"file": str(args.data), "N": data.N, "dt": data.dt, "time_unit": data.time_unit,
-                     "input": data.input_name, "output": data.output_name,
+            "data": {"file": str(args.data), **data_fields(data),
                      "input_bound": input_bound, "output_bound": output_bound},
             "assumed": assumed,
             "transfer_function": tf,

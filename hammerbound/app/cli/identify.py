@@ -18,7 +18,7 @@ from .options import (
     stage2_kwargs,
     theta_box_given,
 )
-from .printing import assumption_lines, json_text, record_line, transfer_function
+from .printing import assumption_lines, data_fields, json_text, record_line, transfer_function
 
 __all__ = ["add_parser", "run"]
 
@@ -148,9 +148,7 @@ def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
             "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method,
                       "method_label": ident.linear_.method_label(),
                       "inner_signal": args.inner_signal},
-            "data": {"steady": str(args.steady), "prbs": str(args.prbs), "N": data.N,
-                     "dt": data.dt, "time_unit": data.time_unit, "input": data.input_name,
-                     "output": data.output_name,
+            "data": {"steady": str(args.steady), "prbs": str(args.prbs), **data_fields(data),
                      "output_bound": output_bound, "steady_output_bound": steady_bound},
             "assumed": assumed,
             "transfer_function": tf}

@@ -6,7 +6,7 @@ import numpy as np
 
 from .console import cli_terms
 from .options import CLI_NAMES, UsageError, require, stage2_kwargs
-from .printing import assumption_lines, json_text, record_line, transfer_function
+from .printing import assumption_lines, data_fields, json_text, record_line, transfer_function
 
 __all__ = ["run_one_record"]
 
@@ -78,8 +78,7 @@ def _record(args, ident, data, output_bound, tf) -> dict:
             "lower": _finite(ident.bounds_[:, 0]), "upper": _finite(ident.bounds_[:, 1]),
             "intervals": ident.intervals_.records(),
             "model": {"na": pr.na, "nb": pr.nb, "nk": pr.nk, "method": args.method},
-            "data": {"record": str(args.record), "N": data.N, "dt": data.dt, "time_unit": data.time_unit,
-                     "input": data.input_name, "output": data.output_name,
+            "data": {"record": str(args.record), **data_fields(data),
                      "output_bound": output_bound,
                      "steady": None if args.steady is None else str(args.steady)},
             "assumptions": [cli_terms(a) for a in ident.assumptions_],

@@ -7,7 +7,10 @@ import json
 
 import numpy as np
 
-__all__ = ["assumption_lines", "dt_text", "poly_z", "record_line", "transfer_function"]
+from ...tables import dt_text
+
+__all__ = ["assumption_lines", "data_fields", "dt_text", "poly_z", "record_line",
+           "transfer_function"]
 
 
 def poly_z(coefs) -> str:
@@ -30,11 +33,6 @@ def poly_z(coefs) -> str:
     return " ".join(terms)
 
 
-def dt_text(dt, unit: str = "") -> str:
-    """``0.1 ms``, ``0.1`` (no unit known) or ``not given``."""
-    return "not given" if dt is None else f"{dt:g} {unit}".strip()
-
-
 def transfer_function(linear, dt):
     """``(text line, JSON record)`` of the central model of a fitted stage-2 estimator."""
     tf = linear.to_transfer_function()
@@ -44,6 +42,13 @@ def transfer_function(linear, dt):
     text = (f"central model: G(z) = ({poly_z(num)}) / ({poly_z(den)}), "
             f"dt = {dt_text(dt, unit)}")
     return text, {"num": num, "den": den, "dt": dt, "time_unit": unit, "variable": "z"}
+
+
+def data_fields(data) -> dict:
+    """The record's fields of a JSON output: ``N``, ``dt`` and its ``time_unit``, the
+    ``input`` and ``output`` names."""
+    return {"N": data.N, "dt": data.dt, "time_unit": data.time_unit,
+            "input": data.input_name, "output": data.output_name}
 
 
 def record_line(path, data) -> str:

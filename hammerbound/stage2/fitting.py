@@ -162,7 +162,7 @@ def check_not_crossed(est, problem, bounds):
         raise EmptyFeasibleSetError(
             f"no parameters explain the data within the bounds: the certified bounds on "
             f"{name} cross ({bounds[k, 0]:.6g} > {bounds[k, 1]:.6g}). "
-            f"{assumptions(est, problem)}")
+            f"{assumptions(est, problem)}", relaxation=est.method)
 
 
 def assumption_list(est, problem) -> list[str]:

@@ -274,3 +274,24 @@ def test_the_verdict_says_which_relaxation_found_the_set_empty(monkeypatch):
         hint = widened_box_hint(problem, relaxation)
         assert len(boxes) == n_lps
         assert ("may be what excludes the system" in hint) == (relaxation != "exact")
+
+
+def test_crossed_ends_name_the_method_that_certified_them():
+    """Certified ends that cross are an empty verdict of the method that produced them:
+    the error records it (``relaxation``), so the hint does not solve the LP again."""
+    from types import SimpleNamespace
+
+    from hammerbound.stage2.fitting import check_not_crossed
+
+    u, y = _unstable()
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.05, method="lp",
+                                   theta_box={"a1": (-3, 3)})
+    est.fit(u, y, input_bound=0.02)
+    crossed = np.array(est.bounds_)
+    crossed[1] = [crossed[1, 1] + 0.1, crossed[1, 1]]
+    for method in ("lp", "exact"):
+        with pytest.raises(EmptyFeasibleSetError, match="the certified bounds on b1 cross") \
+                as exc:
+            check_not_crossed(SimpleNamespace(**{**est.get_params(), "method": method}),
+                              est.problem_, crossed)
+        assert exc.value.relaxation == method

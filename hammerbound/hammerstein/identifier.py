@@ -22,6 +22,8 @@ unit-gain linear block ``theta`` in one of two ways (``procedure``):
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
@@ -208,7 +210,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
 
         self.assumptions_ = (
             f"steady-state output errors |eta| <= {bound_text(bl.output_bound_)}",
-            "u > 0 steady states on the right line, u < 0 on the left (square waves)",
+            "u > 0 steady states on the right line, u < 0 on the left (square waves), "
+            "settled: a transient left counts against the steady-state output bound",
             f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",
             f"inner signal within the stage-1 bounds |dx_t| <= "
             f"{bound_text(lin.problem_.input_bound)}",
@@ -228,10 +231,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                            steady_bound=None if steady is None else steady_bound(bl),
                            output_bound=output_bound)
         self.one_record_ = f
-        pool = [i.point for i in f.result.infos]
-
-        def sampler(n, random_state):
-            return joint_samples(f.problem, f.result.root_box, pool, n, random_state)
+        # a partial of a module-level function (not a closure): the fitted identifier
+        # pickles (joblib.dump, pickle), as the two-stage one does
+        sampler = partial(joint_samples, f.problem, f.result.root_box,
+                          [i.point for i in f.result.infos])
 
         self.linear_ = LinearBlockView(
             f.problem, f.theta_bounds, f.result.infos[: 2 * f.problem.p], method=lin.method,
@@ -279,7 +282,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
                 f"{self.inner_signal}, N = {pr.N}, dt = {dt}\n"
                 f"assumptions: output error bounds |eta| <= "
-                f"{bound_text(self.backlash_.output_bound_)} (steady state), "
+                f"{bound_text(self.backlash_.output_bound_)} (settled steady states), "
                 f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "
                 f"bounds |dx_t| <= {bound_text(pr.input_bound)}; unit steady-state gain of "
                 f"the linear block (22.8); {_theta_box_text(lin)}")

@@ -17,9 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..data.gain_sign import negative_gain_hint, record_gain
 from ..data.validation import warn_bound_covers_output
 from ..exceptions import (
     DataValidationError,
+    EmptyFeasibleSetError,
     NotIdentifiedWarning,
     ParameterValidationError,
     SearchLimitWarning,
@@ -112,7 +114,8 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
         out.append(f"|b_j| <= 1e4{which} (default theta box; pass theta_box to change)")
     if steady is not None:
         out.append("steady-state points: u > 0 on the right line, u < 0 on the left (the "
-                   "last move before each hold went the same way)")
+                   "last move before each hold went the same way), settled: a transient left "
+                   "counts against the steady-state output bound")
     return tuple(out)
 
 
@@ -211,6 +214,18 @@ def _at_assumed_limit(problem, prior):
     return skip
 
 
+def _with_gain_sign(exc, problem):
+    """``exc`` again, with the hint of a reverse-acting plant when the record's
+    least-squares gain (input -> output, the model's orders) is negative."""
+    gain = record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
+                       b_lags_of(problem.nb, problem.nk))
+    hint = negative_gain_hint(gain)
+    if not hint:
+        return exc
+    return EmptyFeasibleSetError(f"{exc} {hint}", side=exc.side, first_index=exc.first_index,
+                                 relaxation=exc.relaxation)
+
+
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                    output_bound=None) -> OneRecordFit:
     """Certified intervals of both blocks from the record ``data`` (an IOData)."""
@@ -227,10 +242,14 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                              data.y, ob, stacklevel=5)
     problem = _problem(lin, data, prior, steady, steady_bound, ob)
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
-    res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
-                        max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
-                        deadline=deadline, n_jobs=lin.n_jobs,
-                        skip=_at_assumed_limit(problem, prior), progress=bool(lin.progress))
+    try:
+        res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
+                            max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
+                            deadline=deadline, n_jobs=lin.n_jobs,
+                            skip=_at_assumed_limit(problem, prior),
+                            progress=bool(lin.progress))
+    except EmptyFeasibleSetError as exc:
+        raise _with_gain_sign(exc, problem) from exc
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,

@@ -13,6 +13,7 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
 from .._compat import DEPRECATED, renamed_value
+from ..data.gain_sign import negative_gain_hint, steady_slope
 from ..data.validation import as_bound, as_flag, as_real, check_scale
 from ..exceptions import (
     DataValidationError,
@@ -213,7 +214,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             f"the output bound: the set becomes empty at measurement index {k}. Check that "
             "sample, output_bound (too small?) and that the data are at steady state. "
             f"(Certified in exact arithmetic by the constraints {which}, with the tolerance "
-            "of docs/tolerances.md.)",
+            "of docs/tolerances.md.)"
+            + _sign_hint(problem.u, problem.y),
             side=side, first_index=k,
         )
 
@@ -343,8 +345,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
                 f"and right {len(self.right_.vertices)} vertices, inputs in "
                 f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]\n"
                 f"assumptions: output error bound |eta| <= {bound_text(self.output_bound_)}; "
-                "the steady-state samples are at steady state; unit steady-state gain of the "
-                "linear block (22.8)")
+                "the steady-state samples are settled (a transient left adds to their errors); "
+                "unit steady-state gain of the linear block (22.8)")
         return self.intervals_.summary(title=head)
 
     # ------------------------------------------------------------------ model set (issue 16)
@@ -377,6 +379,13 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         from ..modelset.compensation import build_inverse
 
         return build_inverse(self, v_range=v_range, x0=x0)
+
+
+def _sign_hint(u, y) -> str:
+    """' ' + the hint of a reverse-acting plant when the side's outputs fall as its inputs
+    rise (least-squares slope), else ''."""
+    hint = negative_gain_hint(steady_slope(u, y), "steady-state slope (output against input)")
+    return " " + hint if hint else ""
 
 
 def _is_complex(X):

@@ -323,8 +323,10 @@ def run_speed(args):
     the ends it stops keep certified outer bounds, status "limit")."""
     path = C.RESULTS / f"one_record_speed{args.tag}.json"
     rows = C.read_json(path)["rows"] if path.exists() else []
+    hull = args.hull_rows == "on"
     have = {(r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"]) for r in rows
-            if r.get("pricing", "steepest edge") == args.pricing}
+            if r.get("pricing", "steepest edge") == args.pricing
+            and r.get("hull_rows", False) == hull}
     if args.pricing == "steepest edge":  # the ablation: HiGHS's default dual pricing
         from hammerbound.joint import relaxation
 
@@ -332,6 +334,12 @@ def run_speed(args):
             raise SystemExit("--pricing 'steepest edge' needs --n-jobs 1")
 
         relaxation.LP_OPTIONS.pop("simplex_dual_edge_weight_strategy", None)
+    if not hull:  # the ablation: no envelope rows of the play operator
+        from hammerbound.joint import relaxation
+
+        if args.n_jobs != 1:
+            raise SystemExit("--hull-rows off needs --n-jobs 1")
+        relaxation.HULL_ROWS = False
     env = C.environment()
     for N, deta, seed, method in itertools.product(args.N, args.levels, range(args.seeds),
                                                    args.methods):
@@ -350,7 +358,7 @@ def run_speed(args):
                      "inside": bool(np.all((TRUTH >= b[:, 0]) & (TRUTH <= b[:, 1]))),
                      "not_identified": notid,
                      "loadavg": C.loadavg(), "time_limit": args.time_limit,
-                     "pricing": args.pricing})
+                     "pricing": args.pricing, "hull_rows": hull})
         C.log(f"speed N={N} deta={deta} seed={seed} {method}: {sec:.1f} s "
               f"{sorted(set(statuses))}")
         C.write_json({"environment": env, "rows": rows}, path)
@@ -380,6 +388,9 @@ def main(argv=None):
     ap.add_argument("--pricing", choices=("devex", "steepest edge"), default="devex",
                     help="speed: dual pricing of the one-record LPs (the package uses devex; "
                          "'steepest edge' is HiGHS's default, for the ablation)")
+    ap.add_argument("--hull-rows", choices=("on", "off"), default="on",
+                    help="speed: the play operator's envelope rows (joint.hull_rows; 'off' "
+                         "for the ablation, with --n-jobs 1)")
     args = ap.parse_args(argv)
     if args.part == "soundness":
         args.seeds = args.seeds or (2 if args.quick else 6)

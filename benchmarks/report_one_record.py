@@ -154,23 +154,26 @@ def _gaps(r):
 
 def section_speed():
     parts = []
-    for tag in ("_s36", "_s35", "_s35_pricing", "_n300", "_n1000", "", "_quick"):
+    for tag in ("_s37", "_s37_hull", "_s36", "_s35", "_s35_pricing", "_n300", "_n1000", "",
+                "_quick"):
         j = _json(f"one_record_speed{tag}.json")
         if not j or not j["rows"]:
             continue
         body = [[r["N"], r.get("deta", 0.05), r.get("seed", 7), r["method"],
-                 r.get("pricing", "steepest edge"), r["n_jobs"],
+                 r.get("pricing", "steepest edge"),
+                 "on" if r.get("hull_rows", False) else "off", r["n_jobs"],
                  f"{r['seconds']:.1f}", ", ".join(r["statuses"]),
                  r.get("optimal_ends", "–") if r["method"] == "exact" else "–",
                  _gaps(r) if r["method"] == "exact" else "–",
                  r.get("nodes", "–") if r["method"] == "exact" else "–",
                  "–" if r.get("time_limit") is None else f"{r['time_limit']:g}",
+                 " ".join(f"{w:.3g}" for w in r["width"][:4]),
                  "yes" if r["inside"] else "**no**", r["loadavg"]]
                 for r in j["rows"]]
         parts.append(f"`one_record_speed{tag}`\n\n" + _table(
-            ["N", "Δη", "seed", "method", "LP pricing", "jobs", "wall s", "statuses",
-             "optimal ends (of 16)", "gap / width, median / max", "nodes", "time limit s",
-             "truth inside", "load"], body) + "\n\n" + _env(j))
+            ["N", "Δη", "seed", "method", "LP pricing", "hull rows", "jobs", "wall s",
+             "statuses", "optimal ends (of 16)", "gap / width, median / max", "nodes",
+             "time limit s", "widths m_l c_l m_r c_r", "truth inside", "load"], body) + "\n\n" + _env(j))
     return "\n\n".join(parts) + "\n" if parts else "_No results (`--part speed` not run)._\n"
 
 

@@ -291,3 +291,61 @@ def frequency_response(thetas, omega, na, lags, dt=1.0):
     za = np.exp(-1j * np.outer(omega * dt, np.arange(1, na + 1)))
     zb = np.exp(-1j * np.outer(omega * dt, lags))
     return (th[:, na:] @ zb.T) / (1 + th[:, :na] @ za.T)
+
+
+# ------------------------------------------------------------------ random boxes
+# (the symbolic play operator's tests: records, backlash boxes about the chapter's backlash
+# and random well-posed points in them)
+
+def short_steps(rng, n, lo=-2.0, hi=2.0):
+    u = []
+    while len(u) < n:
+        u += [rng.uniform(lo, hi)] * int(rng.integers(1, 8))
+    return np.array(u[:n])
+
+
+def box_around(rng, rel):
+    g = np.asarray(GAMMA_TRUE) * (1 + rel * rng.uniform(-1, 1, 4))
+    w = rel * np.asarray(GAMMA_TRUE) * rng.uniform(0.0, 1.0, 4)
+    return np.column_stack([g - w, g + w])
+
+
+def random_point(rng, gbox, zbox, u):
+    """A point of the box where the backlash is well-posed on the record (``L_t >= R_t``,
+    the region the method works in) with ``x_0`` in the band at ``u_0``."""
+    g = gbox[:, 0] + rng.uniform(0, 1, 4) * (gbox[:, 1] - gbox[:, 0])
+    ml, cl, mr, cr = g
+    if np.any(ml * (u + cl) < mr * (u - cr)):
+        return None
+    lo, hi = max(zbox[0], mr * (u[0] - cr)), min(zbox[1], ml * (u[0] + cl))
+    if lo > hi:
+        return None
+    return g, lo + rng.uniform() * (hi - lo)
+
+
+def record_and_box(seed, rel):
+    """A random-step record (mostly well-posed for the wide boxes too) and a backlash box
+    of relative width ``rel`` around the chapter's, with a first-value box in the band."""
+    rng = np.random.default_rng(seed)
+    u = short_steps(rng, 80, -1.5, 1.5)
+    gbox = box_around(rng, rel)
+    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
+    mid = 0.5 * (band[0] + band[1])
+    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
+    return rng, u, gbox, zbox
+
+
+def points(rng, gbox, zbox, u, want, tries):
+    """Up to ``want`` random well-posed points ``(g, z0, x, scale)`` of the box, with our
+    own play operator's inner signal ``x`` and a rounding scale."""
+    found = 0
+    for _ in range(tries):
+        if found == want:
+            return
+        pt = random_point(rng, gbox, zbox, u)
+        if pt is None:
+            continue
+        g, z0 = pt
+        x = play(u, *g, z0)
+        found += 1
+        yield g, z0, x, 1e-12 * (1 + np.abs(x).max())

@@ -69,13 +69,14 @@ def _obbt_order(problem):
     return [*range(na), p + 4, p + 1, p + 3, p, p + 2, *range(na, p)]
 
 
-def _tighten_one(problem, box, k, deadline=None, on_stop=None, basis=None):
+def _tighten_one(problem, box, k, deadline=None, on_stop=None, basis=None, hull=None):
     """Certified bounds of row ``k`` from one relaxation (None: certified empty), the LP
     points and the basis of the last LP (``(snapshot, column keys, row keys)``, or None);
     the LPs stop at ``deadline`` or their time limit (keeping the bounds they certify;
     ``on_stop()`` is called for each LP that ended before optimality). ``basis``, from the
-    previous row (:func:`obbt`), is where the first LP starts (see :data:`CARRY_BASIS`)."""
-    rel = build_relaxation(problem, box, deadline=deadline)
+    previous row (:func:`obbt`), is where the first LP starts (see :data:`CARRY_BASIS`);
+    ``hull``: :func:`~.relaxation.build_relaxation`'s."""
+    rel = build_relaxation(problem, box, deadline=deadline, hull=hull)
     warm = CARRY_BASIS and basis is not None and start_from(rel, basis)
     out = box[k].copy()
     points = []
@@ -101,7 +102,7 @@ def _tighten_one(problem, box, k, deadline=None, on_stop=None, basis=None):
 
 
 def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadline=None,
-         on_point=None, rows=None, on_stop=None):
+         on_point=None, rows=None, on_stop=None, hull=None):
     """Shrink the box by OBBT rounds until a round shrinks no width by more than
     ``shrink`` (relative). Sequential: the relaxation is rebuilt after each row, so what one
     row's bounds decide (e.g. the branch of a sample) helps the next. Every bound is
@@ -121,7 +122,8 @@ def obbt(problem: RecordProblem, box=None, *, max_rounds=30, shrink=0.01, deadli
         for k in order:
             if past(deadline):  # every row so far is certified: stop here
                 return box
-            row, points, basis = _tighten_one(problem, box, k, deadline, on_stop, basis)
+            row, points, basis = _tighten_one(problem, box, k, deadline, on_stop, basis,
+                                              hull)
             if row is None:
                 raise EmptyFeasibleSetError(
                     "no backlash and linear block explain the record within the bounds "
@@ -169,7 +171,8 @@ def map_jobs(fn, items, n_jobs, each=None):
     return out
 
 
-def _window_obbt(problem, box, rows, deadline, max_rounds, shrink, on_stop=None):
+def _window_obbt(problem, box, rows, deadline, max_rounds, shrink, on_stop=None,
+                 hull=None):
     """``box`` tightened by OBBT over the record's windows (:mod:`.windows`), or None
     when a window certifies it empty."""
     p = problem.p
@@ -177,7 +180,7 @@ def _window_obbt(problem, box, rows, deadline, max_rounds, shrink, on_stop=None)
         wp = window_problem(problem, box, s, e)
         try:
             wb = obbt(wp, wp.box, max_rounds=max_rounds, shrink=shrink, rows=rows,
-                      deadline=deadline, on_stop=on_stop)
+                      deadline=deadline, on_stop=on_stop, hull=hull)
         except EmptyFeasibleSetError:
             return None
         box = box.copy()
@@ -188,7 +191,7 @@ def _window_obbt(problem, box, rows, deadline, max_rounds, shrink, on_stop=None)
 
 
 def _part_obbt(problem, box, rows, deadline, max_rounds=1, shrink=0.01, window_rounds=0,
-               full=True):
+               full=True, hull=None):
     """OBBT of one part in a worker: ``(box or None if certified empty, LP points, number
     of LPs that ended before optimality)``; first ``window_rounds`` rounds over the windows
     of a long record, then (``full``, and always for a record too short for windows) over
@@ -196,12 +199,13 @@ def _part_obbt(problem, box, rows, deadline, max_rounds=1, shrink=0.01, window_r
     points, stops = [], []
     on_stop = partial(stops.append, 1)
     if window_rounds and windows(problem):
-        box = _window_obbt(problem, box, rows, deadline, window_rounds, shrink, on_stop)
+        box = _window_obbt(problem, box, rows, deadline, window_rounds, shrink, on_stop,
+                           hull)
         if box is None or not full:
             return box, points, len(stops)
     try:
         box = obbt(problem, box, max_rounds=max_rounds, shrink=shrink, rows=rows,
-                   deadline=deadline, on_point=points.append, on_stop=on_stop)
+                   deadline=deadline, on_point=points.append, on_stop=on_stop, hull=hull)
     except EmptyFeasibleSetError:
         return None, points, len(stops)
     return box, points, len(stops)
@@ -218,7 +222,9 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
     rows = [*range(problem.na), p + 4, p, p + 2, *cols]
     res = np.array([max(prior[k, 1] - prior[k, 0], 1e-300) / parts for k in cols])
     # one round per generation, over the windows only on a long record
-    part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False)
+    # without the envelope rows (relaxation.HULL_ROWS: they cost, not helped, here)
+    part = partial(_part_obbt, max_rounds=1, shrink=0.01, window_rounds=1, full=False,
+                   hull=False)
     queue, out = [prior.copy()], []
     generation = 0
     while queue:

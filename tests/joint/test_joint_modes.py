@@ -9,6 +9,7 @@ random points with our own play operator (tests/oracles.py, not the package's).
 import numpy as np
 import pytest
 from oracles import play as own_play
+from oracles import points, record_and_box, short_steps
 
 from hammerbound.joint.modes import (
     AMBIG,
@@ -22,30 +23,10 @@ from hammerbound.joint.modes import (
 GAMMA = np.array([0.25, 0.0628, 0.26, 0.0489])
 
 
-def steps(rng, n, lo=-2.0, hi=2.0):
-    u = []
-    while len(u) < n:
-        u += [rng.uniform(lo, hi)] * int(rng.integers(1, 8))
-    return np.array(u[:n])
 
 
-def box_around(rng, rel):
-    g = GAMMA * (1 + rel * rng.uniform(-1, 1, 4))
-    w = rel * GAMMA * rng.uniform(0.0, 1.0, 4)
-    return np.column_stack([g - w, g + w])
 
 
-def random_point(rng, gbox, zbox, u):
-    """A point of the box where the backlash is well-posed on the record (``L_t >= R_t``,
-    the region the method works in) with ``x_0`` in the band at ``u_0``."""
-    g = gbox[:, 0] + rng.uniform(0, 1, 4) * (gbox[:, 1] - gbox[:, 0])
-    ml, cl, mr, cr = g
-    if np.any(ml * (u + cl) < mr * (u - cr)):
-        return None
-    lo, hi = max(zbox[0], mr * (u[0] - cr)), min(zbox[1], ml * (u[0] + cl))
-    if lo > hi:
-        return None
-    return g, lo + rng.uniform() * (hi - lo)
 
 
 def assert_claims(st, u, g, z0, x, scale):
@@ -67,32 +48,8 @@ def assert_claims(st, u, g, z0, x, scale):
             assert x[t] >= prev - scale
 
 
-def record_and_box(seed, rel):
-    """A random-step record (mostly well-posed for the wide boxes too) and a backlash box
-    of relative width ``rel`` around the chapter's, with a first-value box in the band."""
-    rng = np.random.default_rng(seed)
-    u = steps(rng, 80, -1.5, 1.5)
-    gbox = box_around(rng, rel)
-    band = (gbox[2, 0] * (u[0] - gbox[3, 1]), gbox[0, 1] * (u[0] + gbox[1, 1]))
-    mid = 0.5 * (band[0] + band[1])
-    zbox = np.array([mid - rel * abs(band[1] - band[0]), mid + rel * abs(band[1] - band[0])])
-    return rng, u, gbox, zbox
 
 
-def points(rng, gbox, zbox, u, want, tries):
-    """Up to ``want`` random well-posed points ``(g, z0, x, scale)`` of the box, with our
-    own play operator's inner signal ``x`` and a rounding scale."""
-    found = 0
-    for _ in range(tries):
-        if found == want:
-            return
-        pt = random_point(rng, gbox, zbox, u)
-        if pt is None:
-            continue
-        g, z0 = pt
-        x = own_play(u, *g, z0)
-        found += 1
-        yield g, z0, x, 1e-12 * (1 + np.abs(x).max())
 
 
 def form_value(u, g, z0, kind, src):
@@ -120,7 +77,7 @@ def test_every_claim_holds_at_random_points_of_the_box(seed, rel):
 
 def test_a_point_box_has_no_ambiguity_and_reproduces_the_play_operator():
     rng = np.random.default_rng(3)
-    u = steps(rng, 200)
+    u = short_steps(rng, 200)
     ml, cl, mr, cr = GAMMA
     z0 = mr * (u[0] - cr)
     st = inner_structure(u, np.vstack([np.column_stack([GAMMA, GAMMA]), [z0, z0]]))
@@ -206,7 +163,7 @@ def test_relaxation_of_the_truths_branches_brackets_the_truth(seed):
     rng = np.random.default_rng(seed)
     theta = np.r_[A_TRUE[1:], B_TRUE[1:]]
     for _ in range(20):  # a record with ambiguous samples over the box
-        u = steps(rng, 120)
+        u = short_steps(rng, 120)
         x = own_play(u, *GAMMA, 0.0)
         truth = np.r_[theta, GAMMA, x[0]]
         box = np.column_stack([truth - 0.05 * np.abs(truth) - 1e-3,

@@ -43,10 +43,11 @@ def test_a_carried_basis_fits_the_child_and_changes_no_bound(node):
     """A child split on an ambiguous sample's branch has other columns and rows than its
     parent. The parent's basis carried over by keys has one basic variable per row, HiGHS
     accepts it, the status is the cold solve's (infeasible children are certified
-    infeasible either way) and both certified bounds lie below the LP's value. On this
-    record they also agree; in general the start basis can change how tight a certificate
-    from an LP's duals is (a review found a cold solve certifying -0.548 for an LP of value
-    6e-6, warm 4e-6), never its validity."""
+    infeasible either way), the optimum is the same, and both certified bounds lie below
+    it. The start basis can change how tight a certificate from an LP's duals is (a review
+    found a cold solve certifying -0.548 for an LP of value 6e-6, warm 4e-6; here, with the
+    envelope rows, a cold -0.140 and warm -3.8e-6 for a value of 6.4e-6), never its
+    validity."""
     pr, box, rel = node
     k, sense = pr.p + 2, 1.0  # m_r min
     assert _solve(rel, k, sense).status == "optimal"
@@ -68,7 +69,8 @@ def test_a_carried_basis_fits_the_child_and_changes_no_bound(node):
             if cold.status == "optimal":
                 for res in (warm, cold):
                     assert res.bound <= res.value + 1e-9 * max(1.0, abs(res.value))
-                assert warm.bound == pytest.approx(cold.bound, rel=1e-6, abs=1e-5)
+                # the same LP: the same optimum (its certificates may differ, see above)
+                assert warm.value == pytest.approx(cold.value, rel=1e-6, abs=1e-6)
     assert "optimal" in seen
 
 

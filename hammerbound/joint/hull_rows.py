@@ -116,12 +116,11 @@ def hull_rows(rows, problem, box, st, bc, key_of):
     for j, (upper, (m, c, sign), cols, coef) in enumerate((
             (True, (g[2], g[3], -1.0), (B_MR, B_DR), (ut, -np.ones(n))),
             (False, (g[0], g[1], 1.0), (B_ML, B_DL), (ut, np.ones(n))))):
-        alpha, beta, gamma, ok = envelope_planes(_line_ranges(ut, m, c, sign),
-                                                 (s_lo, s_hi), upper)
+        p_lo, p_hi = _line_ranges(ut, m, c, sign)
+        alpha, beta, gamma, ok = envelope_planes((p_lo, p_hi), (s_lo, s_hi), upper)
         k, q = np.nonzero(ok)  # sample index, plane
         if k.size == 0:
             continue
-        p_lo, p_hi = _line_ranges(ut, m, c, sign)
         a, b, gam = _without_small(alpha[k, q], beta[k, q], gamma[k, q],
                                    (p_lo[k], p_hi[k]), (s_lo[k], s_hi[k]), upper)
         # v - a (m u_t +- d) - b (S form) on the right side; five entries per row
@@ -158,7 +157,7 @@ def _without_small(a, b, gamma, p_range, s_range, upper):
     a, b, gamma = a.copy(), b.copy(), gamma.copy()
     for coef, (lo, hi) in ((a, p_range), (b, s_range)):
         small = (coef != 0) & (np.abs(coef) < SMALL)
-        end = hi if upper else lo
+        end = np.where((coef > 0) == upper, hi, lo)  # where the term is largest (upper)
         shift = coef[small] * end[small]
         pad = _MARGIN * (np.abs(shift) + np.abs(gamma[small]) + 1.0)
         gamma[small] += shift + pad if upper else shift - pad

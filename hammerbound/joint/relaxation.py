@@ -56,20 +56,21 @@ def solve_lp(lp, primal=False):
     import highspy
 
     m, n = lp.A.shape
+    before = lp.h.getOptionValue("simplex_iteration_limit")
+    before = before[1] if isinstance(before, tuple) else before  # (status, value) in highspy
     lp.h.setOptionValue("simplex_iteration_limit", int(ITERATION_CAP * (m + n)))
     try:
         res = lp.solve(primal=primal)
     finally:
-        lp.h.setOptionValue("simplex_iteration_limit", _NO_CAP)
+        lp.h.setOptionValue("simplex_iteration_limit", int(before))
     if lp.h.getModelStatus() != highspy.HighsModelStatus.kIterationLimit:
         return res
     lp.h.clearSolver()
     again = lp.solve(primal=False)
     again.iterations += res.iterations
+    stopped = f"stopped after {res.iterations} simplex iterations; solved again from scratch"
+    again.note = "; ".join(x for x in (res.note, stopped, again.note) if x)
     return again
-
-
-_NO_CAP = 2**31 - 1  # HiGHS's default simplex_iteration_limit
 
 
 def round_down(v):

@@ -119,3 +119,22 @@ def test_obbt_from_the_previous_rows_basis_keeps_every_bound(monkeypatch):
     w_cold = boxes[False][:, 1] - boxes[False][:, 0]
     w_carry = boxes[True][:, 1] - boxes[True][:, 0]
     assert np.all(w_carry <= 1.01 * w_cold + 1e-9)
+
+
+def test_a_solve_past_the_iteration_cap_is_solved_again_from_scratch(node, monkeypatch):
+    """A stalled simplex (seen from warm starts) is cut at ITERATION_CAP iterations per row
+    and column and solved again cold: the same certified bound, a note that says so, and
+    HiGHS's iteration limit as it was before."""
+    from hammerbound.joint import relaxation
+
+    pr, box, _ = node
+    k = pr.p + 2
+    ref = _solve(build_relaxation(pr, box), k, 1.0)
+    monkeypatch.setattr(relaxation, "ITERATION_CAP", 0.001)
+    rel = build_relaxation(pr, box)
+    capped = _solve(rel, k, 1.0)
+    assert capped.status == ref.status == "optimal"
+    assert capped.bound == pytest.approx(ref.bound, rel=1e-9, abs=1e-12)
+    assert "solved again from scratch" in capped.note
+    limit = rel.lp.h.getOptionValue("simplex_iteration_limit")
+    assert (limit[1] if isinstance(limit, tuple) else limit) == 2**31 - 1

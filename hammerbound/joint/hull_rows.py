@@ -21,13 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .modes import AMBIG, INIT, LEFT, RIGHT
+from .modes import _MARGIN, AMBIG, INIT, LEFT, RIGHT, line_ranges
 
 __all__ = ["envelope_planes", "hull_rows"]
 
-# relative margin of a plane's constant and of the ranges (far above rounding, far below
-# any data scale; the ranges' margin is the one of :func:`.modes.line_range`)
-_MARGIN = 1e-12
+# _MARGIN (of .modes, the ranges' margin): the relative margin of a plane's constant too
 # a plane that misses its fourth corner by more than this (relative) is the other
 # triangulation's, not the envelope's
 _MISS = 1e-9
@@ -35,23 +33,13 @@ _MISS = 1e-9
 SMALL = 1e-3
 
 
-def _line_ranges(u, m, c, sign):
-    """:func:`.modes.line_range` for an array of inputs ``u``."""
-    v = np.stack([mm * (u + sign * cc) for mm in m for cc in c])
-    lo, hi = v.min(axis=0), v.max(axis=0)
-    pad = _MARGIN * (np.abs(lo) + np.abs(hi) + np.abs(u) * max(m) + 1e-300)
-    return lo - pad, hi + pad
-
-
-def _state_ranges(st, u, g):
-    """Ranges of the states before the ambiguous samples (over the box ``g``, rows
-    ``m_l, c_l, m_r, c_r, z0``), as arrays."""
-    kind = np.array([a.src_kind for a in st.ambiguous], dtype=np.int64)
-    src = np.array([a.src for a in st.ambiguous], dtype=np.int64)
+def _state_ranges(kind, src, st, u, g):
+    """Ranges of the states ``(kind, src)`` (arrays) before the ambiguous samples, over the
+    box ``g`` (rows ``m_l, c_l, m_r, c_r, z0``)."""
     lo, hi = np.empty(kind.size), np.empty(kind.size)
     for k, (m, c, sign) in ((RIGHT, (g[2], g[3], -1.0)), (LEFT, (g[0], g[1], 1.0))):
         sel = kind == k
-        lo[sel], hi[sel] = _line_ranges(u[src[sel]], m, c, sign)
+        lo[sel], hi[sel] = line_ranges(u[src[sel]], m, c, sign)
     sel = kind == INIT
     lo[sel], hi[sel] = g[4, 0], g[4, 1]
     amb = np.flatnonzero(kind == AMBIG)
@@ -108,15 +96,16 @@ def hull_rows(rows, problem, box, st, bc, key_of):
     g = np.asarray(box, dtype=float)[p: p + 5]
     t = np.array([a.t for a in st.ambiguous], dtype=np.int64)
     n = t.size
-    s_lo, s_hi = _state_ranges(st, u, g)
+    state = _StateView(st)
+    s_lo, s_hi = _state_ranges(state.kind, state.src, st, u, g)
     # the state's linear form (beta index, coefficient) x 2, as for an equation's sample
-    s_idx, s_val = _form_terms(_StateView(st), u, np.arange(n))
+    s_idx, s_val = _form_terms(state, u, np.arange(n))
     ut = u[t]
     sizes = _beta_sizes(g, st)
     for j, (upper, (m, c, sign), cols, coef) in enumerate((
             (True, (g[2], g[3], -1.0), (B_MR, B_DR), (ut, -np.ones(n))),
             (False, (g[0], g[1], 1.0), (B_ML, B_DL), (ut, np.ones(n))))):
-        p_lo, p_hi = _line_ranges(ut, m, c, sign)
+        p_lo, p_hi = line_ranges(ut, m, c, sign)
         alpha, beta, gamma, ok = envelope_planes((p_lo, p_hi), (s_lo, s_hi), upper)
         k, q = np.nonzero(ok)  # sample index, plane
         if k.size == 0:

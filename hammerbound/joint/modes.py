@@ -28,7 +28,7 @@ import numpy as np
 from ..systems.models import play_lines
 
 __all__ = ["INIT", "LEFT", "RIGHT", "AMBIG", "UP", "DOWN", "HOLD", "Ambiguous", "Decided",
-           "InnerStructure", "band_range", "inner_structure", "line_range"]
+           "InnerStructure", "band_range", "inner_structure", "line_range", "line_ranges"]
 
 INIT, RIGHT, LEFT, AMBIG = 0, 1, 2, 3
 #: branches a sample can be *decided* to take (see :class:`Decided`)
@@ -43,6 +43,16 @@ def line_range(u, m, c, sign):
     v = [mm * (u + sign * cc) for mm in m for cc in c]
     lo, hi = min(v), max(v)
     pad = _MARGIN * (abs(lo) + abs(hi) + abs(u) * max(m) + 1e-300)
+    return lo - pad, hi + pad
+
+
+def line_ranges(u, m, c, sign):
+    """:func:`line_range` for an array of inputs ``u`` (arrays ``lo, hi``; the same
+    corners and margin, element by element)."""
+    u = np.asarray(u, dtype=float)
+    v = np.stack([mm * (u + sign * cc) for mm in m for cc in c])
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    pad = _MARGIN * (np.abs(lo) + np.abs(hi) + np.abs(u) * max(m) + 1e-300)
     return lo - pad, hi + pad
 
 

@@ -31,9 +31,11 @@ def interval_records(names, bounds, status=None) -> list[dict]:
     """One dict per parameter with the keys of :data:`COLUMNS`."""
     b = np.asarray(bounds, dtype=float).reshape(-1, 2)
     status = list(status) if status is not None else ["optimal"] * len(names)
-    return [{"parameter": str(n), "lower": float(lo), "centre": float(0.5 * (lo + hi)),
-             "upper": float(hi), "half_width": float(0.5 * (hi - lo)), "status": s}
-            for n, (lo, hi), s in zip(names, b, status, strict=True)]
+    with np.errstate(invalid="ignore"):  # [-inf, inf] has no centre: NaN (null in JSON)
+        return [{"parameter": str(n), "lower": float(lo),
+                 "centre": float(0.5 * lo + 0.5 * hi), "upper": float(hi),
+                 "half_width": float(0.5 * hi - 0.5 * lo), "status": s}
+                for n, (lo, hi), s in zip(names, b, status, strict=True)]
 
 
 def interval_frame(names, bounds, status=None):

@@ -405,6 +405,11 @@ CASES: list[ErrorCase] = [
       lambda: ident(procedure="two-stage").fit(
           with_value(u_prbs(), 0, 0.5), y_prbs(), steady_state=(u_ss(), y_ss())),
       DataValidationError, "ordinary record"),
+    C("h-constant-input-steady", "identifier",
+      "constant input with steady-state data (procedure 'auto')",
+      "HammersteinBacklashIdentifier(bl, lin).fit(ones_like(u_prbs), y_prbs, steady_state=...)",
+      lambda: ident().fit(np.ones_like(u_prbs()), y_prbs(), steady_state=(u_ss(), y_ss())),
+      DataValidationError, "the input is constant"),
     C("h-length-mismatch", "identifier", "PRBS input and output of different lengths",
       "HammersteinBacklashIdentifier(bl, lin).fit(u_prbs, y_prbs[:-1], steady_state=...)",
       lambda: ident().fit(u_prbs(), y_prbs()[:-1],

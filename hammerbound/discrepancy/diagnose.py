@@ -442,7 +442,7 @@ def _message(bound, gap_before, consistent_before, chosen, added, fits, combos, 
             )
         return msg
     if chosen is not None:
-        parts = [f"{e.name} ({e.param_label()} = {_num(v)})"
+        parts = [f"{e.name} ({e.param_label()} = {_num(v)}{e.value_note})"
                  for e, (_, v) in zip(chosen.effects, chosen.model.effects, strict=True)]
         what = " + ".join(parts)
         if len(added) == 1 and not old:
@@ -474,6 +474,8 @@ def _message(bound, gap_before, consistent_before, chosen, added, fits, combos, 
     else:
         msg += (f" No candidate shrinks the gap by the factor min_improvement = "
                 f"{min_improvement:g}.")
-    msg += (" Check the output bound, or the missing effect is not in the candidate "
-            "library.")
+    msg += (" Check the output bound; or the missing effect is not in the candidate "
+            "library; or the model's fixed parts are off: refit='linear' refits only B (a "
+            "black box's output gain) and the candidates' parameters, while A and the "
+            "backlash stay as given (for an identifier, those of its central model).")
     return msg

@@ -252,7 +252,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                                       infos=self.bound_info_, method="one-record")
         self.assumptions_ = f.assumptions
         self.system_ = None
-        if np.all(np.isfinite(f.gamma_bounds)):
+        if np.all(np.isfinite(f.gamma_bounds)) and np.all(np.isfinite(f.theta_bounds)):
             ml, cl, mr, cr = f.gamma_bounds.mean(axis=1)
             self.system_ = _central_system(Backlash(ml, cl, mr, cr), self.linear_.A_,
                                            self.linear_.B_, data.dt)
@@ -370,9 +370,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             from ..exceptions import UnboundedSetError
 
             raise UnboundedSetError(
-                "no central model: the record does not bound every backlash parameter "
-                "(see the NotIdentifiedWarning of fit); identify from a record that reverses "
-                "by more than the dead band.")
+                "no central model: the record does not bound every parameter (see the "
+                "NotIdentifiedWarning of fit and the infinite ends of summary()); identify "
+                "from a record that reverses by more than the dead band and moves the input "
+                "often, or give a gamma_box / theta_box from what you know.")
 
     def output_envelope(self, X, y=None, output_bound=None):
         """Guaranteed one-step-ahead band of the noise-free output.

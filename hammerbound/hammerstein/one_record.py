@@ -181,6 +181,34 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     return gb, tuple(found)
 
 
+def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
+    """``b_j`` ends at the *default* box ``|b_j| <= 1e4`` (an arbitrary assumption, not
+    the record's answer) become infinite, with a warning naming them; rows of a
+    ``theta_box`` the user gave keep their ends (the user's prior, status "box")."""
+    tb = np.array(theta_bounds, dtype=float)
+    given = given_rows(lin.theta_box, problem.na, problem.nb, problem.nk)
+    names = problem.names
+    hit = []
+    for k in range(problem.na, problem.p):
+        for j in (0, 1):
+            if not given[k] and at_prior_limit(tb[k, j], problem.box, k, j):
+                tb[k, j] = -np.inf if j == 0 else np.inf
+                hit.append(names[k])
+    if not hit:
+        return tb, ()
+    which = ", ".join(dict.fromkeys(hit))
+    more = "give more time (total_time_limit), or " if stopped_by_time else ""
+    warnings.warn(
+        f"the record does not bound {which}: the search reached the default box "
+        "|b_j| <= 1e4, an assumption and not the record's answer, so those ends are "
+        "reported as infinite (and there is no central model). The other intervals hold "
+        f"under that box (see assumptions_). To bound them, {more}use a record that moves "
+        "the input more often, or pass a theta_box from what you know of the gain.",
+        # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
+        NotIdentifiedWarning, stacklevel=5)
+    return tb, tuple(dict.fromkeys(hit))
+
+
 def _advice(stopped_by_time, lps_stopped, box_given=False) -> str:
     """What to do about backlash ends the record did not bound, for the cause
     :func:`~hammerbound.joint.unidentified` names: more time when the time limit stopped
@@ -254,8 +282,10 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
                                      0 if d is None else d.lps_stopped, lin.method)
-    _warn_stopped(res.infos, {name for name, _ in found})
+    tb, b_found = _unbounded_b(problem, res.bounds[: problem.p], lin,
+                               d is not None and d.stopped_by_time)
+    _warn_stopped(res.infos, {name for name, _ in found} | set(b_found))
     statuses = tuple(i.status for i in res.infos)
-    return OneRecordFit(problem, res, prior, res.bounds[: problem.p].copy(), gb, statuses,
+    return OneRecordFit(problem, res, prior, tb, gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,
                         time.perf_counter() - t0)

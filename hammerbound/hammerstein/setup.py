@@ -145,6 +145,8 @@ def _not_two_level(u) -> str:
     magnitude, or its two levels that are not opposite."""
     u = np.asarray(u, dtype=float)
     levels = np.unique(u)
+    if levels.size == 1:
+        return f"it is constant, u = {levels[0]:.6g}"
     if levels.size == 2:
         return f"its two levels {levels[0]:.6g} and {levels[1]:.6g} are not opposite"
     mags, counts = np.unique(np.abs(u), return_counts=True)

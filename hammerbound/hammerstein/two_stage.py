@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..exceptions import DataValidationError
+from ..exceptions import DataValidationError, EmptyFeasibleSetError
 from ..stage1.inner_signal import read_prbs_level
 
 __all__ = ["TwoStageFit", "fit_two_stage", "steady_pair"]
@@ -52,6 +52,33 @@ def fit_two_stage(bl, lin, data, steady_state, *, prbs_level, inner_signal,
     u_star = read_prbs_level(data.u, prbs_level)
     inner = bl.inner_signal_bounds(u_star)  # checks Result 1
     record = inner.stage2_record(data, inner_signal)
-    lin.fit(record.data, input_bound=record.input_bound, input_groups=record.input_groups,
-            output_bound=output_bound)
+    try:
+        lin.fit(record.data, input_bound=record.input_bound,
+                input_groups=record.input_groups, output_bound=output_bound)
+    except EmptyFeasibleSetError as exc:
+        raise _in_two_stage_terms(exc, record.input_bound, u_star) from exc
     return TwoStageFit(bl, lin, u_star, inner, record)
+
+
+def _in_two_stage_terms(exc, input_bound, u_star) -> EmptyFeasibleSetError:
+    """Stage 2's empty verdict in the terms of the two-stage procedure: its input error
+    bound is stage 1's inner-signal bound (not a parameter of the user's), the unit gain
+    (22.8) is part of the procedure, and a stage-1 bound too tight (steady-state points not
+    settled, or a steady-state output bound too small) empties stage 2 as surely as its
+    own data."""
+    import numpy as np
+
+    text = str(exc).replace("the input error bound (input_bound)",
+                            "the inner-signal bound from stage 1")
+    text = text.replace("; pass steady_state_gain=None for a plain EIV problem", "")
+    dx = np.atleast_1d(np.asarray(input_bound, dtype=float))
+    lo, hi = float(dx.min()), float(dx.max())
+    span = f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g}"
+    text += (f" In the two-stage procedure stage 2's input error bound is stage 1's "
+             f"inner-signal bound |dx_t| <= {span} at u* = {u_star:g}, computed from the "
+             "steady-state points: if they had not settled (a transient left) or their "
+             "output bound is too small, that bound is too tight and stage 2 is empty "
+             "although its own record is fine: check the steady-state points as well as "
+             "the PRBS record.")
+    return EmptyFeasibleSetError(text, side=exc.side, first_index=exc.first_index,
+                                 relaxation=exc.relaxation)

@@ -71,6 +71,20 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
             return as_bound("output_bound", output_bound, n)
         return as_bound("output_bound", float(np.max(self.problem_.deta)), n)
 
+    def _polys(self, theta=None):
+        """The central (or given ``theta``) polynomials; no central model when an
+        interval of the linear block is infinite (the record did not bound it)."""
+        if theta is None and not np.all(np.isfinite(self.bounds_)):
+            from ..exceptions import UnboundedSetError
+
+            names = [n for n, row in zip(self.param_names_, self.bounds_, strict=True)
+                     if not np.all(np.isfinite(row))]
+            raise UnboundedSetError(
+                f"no central model of the linear block: the record does not bound "
+                f"{', '.join(names)} (see the NotIdentifiedWarning of fit). Pass theta= for "
+                "a model of your choice, or give a theta_box from what you know.")
+        return super()._polys(theta)
+
     def sample(self, n, random_state=None, **_):
         """``n`` certified points of the joint set (:class:`JointSamples`: ``theta`` rows,
         each with the backlash ``gamma`` that makes it feasible)."""

@@ -252,8 +252,10 @@ class IntervalSet(Result):
 
     @property
     def center(self) -> np.ndarray:
-        """Central estimate (22.23): the midpoints (halves first: no overflow)."""
-        return 0.5 * self.bounds[:, 0] + 0.5 * self.bounds[:, 1]
+        """Central estimate (22.23): the midpoints (halves first: no overflow); NaN for
+        an interval unbounded on both sides (``[-inf, inf]``: no centre)."""
+        with np.errstate(invalid="ignore"):
+            return 0.5 * self.bounds[:, 0] + 0.5 * self.bounds[:, 1]
 
     @property
     def radius(self) -> np.ndarray:

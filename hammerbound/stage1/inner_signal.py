@@ -56,8 +56,9 @@ def read_prbs_level(u, prbs_level=None) -> float:
         more = " ..." if levels.size > 5 else ""
         hint = ("Pass prbs_level=u* for a two-level signal with rounding noise." if levels.size == 2
                 else "The two-stage method needs a PRBS +-u* for stage 2; for an ordinary "
-                     "record (steps, sines, closed-loop data) fit without steady-state data "
-                     "to identify both blocks from the one record.")
+                     "record (steps, sines, closed-loop data) use procedure='one-record' to "
+                     "identify both blocks from it (with the steady-state points, if "
+                     "given, used jointly).")
         raise DataValidationError(
             f"the PRBS input must take exactly two values +-u*; got {levels.size} distinct "
             f"value(s) {shown}{more}. {hint}")
@@ -172,5 +173,5 @@ class InnerSignalBounds:
         groups = self.input_groups(data.u, inner_signal)
         inner = IOData(xc, data.y, data.dt, input_name="x", output_name=data.output_name,
                        input_unit=data.output_unit, output_unit=data.output_unit, t0=data.t0,
-                       sample_index=data.sample_index)
+                       sample_index=data.sample_index, time_unit=data.time_unit)
         return Stage2Record(inner, dx, groups, inner_signal)

@@ -129,7 +129,7 @@ def test_delay_is_the_total_delay_of_the_refit(seed, mode):
     assert np.all(B[:4] == 0.0)
     assert B[4:6] == pytest.approx(DT_TRUE_B[4:6], abs=0.01)
     assert dict(rep.refined_model.effects)["delay"] == 4.0
-    assert "delay (d = 4)" in rep.message
+    assert "delay (d = 4 samples in all" in rep.message
     assert _consistent(y, rep.refined_model.predict(u), bound)
 
 

@@ -128,6 +128,9 @@ def test_out_of_library_effect_is_not_named(tmp_path):
     assert not rep.consistent_after
     assert rep.refined_model.effects == ()
     assert "None of the candidates explains the data" in rep.message
+    # and the model's fixed parts (A, the backlash) are named as a cause (trial 6: an
+    # identified model's slightly-off A read as "not in the library")
+    assert "A and the backlash stay as given" in rep.message
     # the closest candidates are separate, labelled fields with the share they remove
     assert 1 <= len(rep.closest) == len(rep.closest_gap_removed) <= 2
     assert all(0.0 <= f < 1.0 for f in rep.closest_gap_removed)

@@ -44,8 +44,11 @@ _TERMS = [
     # (the command line has no flag for the moment size budget)
     (r" \(\w*max_work; raise it to build anyway\)", ""),
     (r" \(\w*max_work=inf builds it anyway\)", ""),
-    (r"\(bound_info_ gives each end's status and certified gap\)",
+    (r"\(bound_info_ gives each end's status(?: and certified gap)?\)",
      "(the status column gives each end's status; --json its details)"),
+    (r"\(see assumptions_\)", "(see the assumptions printed)"),
+    (r"use procedure='one-record' to identify both blocks from it",
+     "pass it as --record DATA.csv (not --prbs) to identify both blocks from it"),
 ]
 
 

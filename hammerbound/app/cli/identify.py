@@ -117,7 +117,7 @@ def _two_records(args) -> int:
         BacklashSetEstimator(steady_bound),
         LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
                               **stage2_kwargs(args)),
-        inner_signal=args.inner_signal)
+        inner_signal=args.inner_signal, procedure="two-stage")
     steady = (ss[args.u_col], ss[args.y_col])
     ident.fit(data, steady_state=steady)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
@@ -141,7 +141,8 @@ def _two_records(args) -> int:
 
 def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
     pr = ident.linear_.problem_
-    return {"parameters": list(ident.param_names_),
+    return {"procedure": "two-stage",
+            "parameters": list(ident.param_names_),
             "lower": ident.bounds_[:, 0].tolist(), "upper": ident.bounds_[:, 1].tolist(),
             "intervals": ident.intervals_.records(),
             "u_star": ident.u_star_,
@@ -151,4 +152,5 @@ def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:
             "data": {"steady": str(args.steady), "prbs": str(args.prbs), **data_fields(data),
                      "output_bound": output_bound, "steady_output_bound": steady_bound},
             "assumed": assumed,
+            "assumptions": [cli_terms(a) for a in ident.assumptions_],
             "transfer_function": tf}

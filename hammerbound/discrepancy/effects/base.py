@@ -170,6 +170,9 @@ class Effect:
         vals = tuple(theta) + tuple(coefs)
         return float(vals[0]) if len(vals) == 1 else vals
 
+    #: words after the fitted value in a verdict (e.g. what a delay's ``d`` counts)
+    value_note = ""
+
     def param_label(self) -> str:
         """Parameter name(s) shown in reports."""
         return ",".join((*self.param_names, *self.linear_names))

@@ -19,6 +19,7 @@ class Delay(Effect):
     param_names = ("d",)
     description = "q^-d (integer d >= 1) extra input delay"
     pins_leading = True
+    value_note = " samples in all, the model's own delay included"
 
     def search_space(self, ctx):
         return (Param("d", 1, max(1, ctx.max_delay), integer=True),)

@@ -154,7 +154,7 @@ CASES: list[ErrorCase] = [
     C("s1-nan-output", "stage 1", "NaN in the steady-state outputs",
       "BacklashSetEstimator(0.05).fit(u_ss, y_ss with y_ss[3] = nan)",
       lambda: hb.BacklashSetEstimator(0.05).fit(u_ss(), with_value(y_ss(), 3, np.nan)),
-      DataValidationError, "NaN"),
+      DataValidationError, "drop those points"),
     C("s1-inf-input", "stage 1", "infinite steady-state input",
       "BacklashSetEstimator(0.05).fit(u_ss with u_ss[0] = inf, y_ss)",
       lambda: hb.BacklashSetEstimator(0.05).fit(with_value(u_ss(), 0, np.inf), y_ss()),

@@ -346,11 +346,16 @@ class DiagnosisReport(Result):
                 lines.append(f"{c.name:<30} {c.minimax_error:>12.5g}  {str(c.consistent):>10}"
                              f" {100 * c.gap_fraction_removed:>11.0f}%")
         if self.candidates:
-            lines.append("candidate     param        value   minimax err  consistent  improvement")
+            # columns as wide as the longest name (asym_backlash, output_saturation, ...)
+            wn = max(13, *(len(c.name) for c in self.candidates))
+            wp = max(5, *(len(c.param_name) for c in self.candidates))
+            wv = max(12, *(len(_val(c.value)) for c in self.candidates))
+            lines.append(f"{'candidate':<{wn}} {'param':>{wp}} {'value':>{wv}}   minimax err  "
+                         "consistent  improvement")
             for c in self.candidates:
                 lines.append(
-                    f"{c.name:<13} {c.param_name:>5} {_val(c.value):>12} {c.minimax_error:>13.5g}"
-                    f"  {str(c.consistent):>10} {c.improvement:>12.3g}"
+                    f"{c.name:<{wn}} {c.param_name:>{wp}} {_val(c.value):>{wv}} "
+                    f"{c.minimax_error:>13.5g}  {str(c.consistent):>10} {c.improvement:>12.3g}"
                 )
         lines.append(self.message)
         return "\n".join(lines)

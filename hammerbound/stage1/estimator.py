@@ -34,6 +34,28 @@ __all__ = ["BacklashSetEstimator", "InnerSignalBounds"]  # InnerSignalBounds: fr
 _SIDES = ("left", "right")
 
 
+
+def _first_nonfinite_point(X, y) -> None:
+    """Refuse a NaN or infinite steady-state point, naming it and the fix (the points are
+    independent, unlike a record's samples: dropping one is safe). Anything not a plain
+    numeric array is left to scikit-learn's validation."""
+    import scipy.sparse as sp
+
+    for name, v in (("X (steady-state inputs)", X), ("y (steady-state outputs)", y)):
+        if sp.issparse(v):
+            continue
+        try:
+            a = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            continue
+        bad = np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) \
+            if a.ndim >= 1 and a.size else np.array([], int)
+        if bad.size:
+            raise DataValidationError(
+                f"{name} contains NaN or infinity at point {int(bad[0])} ({bad.size} point(s) "
+                "in all). The steady-state points are independent: drop those points from "
+                "both X and y (e.g. keep = np.isfinite(X).ravel() & np.isfinite(y)).")
+
 class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     """Guaranteed backlash parameter bounds from steady-state data (stage 1, section 22.3).
 
@@ -109,6 +131,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
         if not sp.issparse(X) and np.ndim(X) == 1:
             X = np.reshape(np.asarray(X, dtype=object if _is_complex(X) else None), (-1, 1))
+        _first_nonfinite_point(X, y)
         try:
             X, y = validate_data(self, X, y, dtype="numeric", y_numeric=True)
         except (TypeError, ValueError) as exc:  # re-raise as our typed error, message kept

@@ -86,6 +86,11 @@ def test_output_saturation_found_among_all_candidates():
     rep = diagnose(chapter_system(), SAT_U, y, SAT_NB, candidates="all")
     assert rep.effect == "output_saturation", rep.summary()
     assert rep.consistent_after and rep.combinations == ()
+    # the candidate table keeps its columns with long names (trial 6: they shifted)
+    lines = rep.summary().splitlines()
+    head = next(i for i, s in enumerate(lines) if s.startswith("candidate "))
+    rows = lines[head + 1: head + 1 + len(rep.candidates)]
+    assert {len(r) for r in rows} == {len(lines[head])}, "\n".join(lines[head:])
 
 
 @pytest.mark.parametrize("mode", ["uniform", "at_bound"])

@@ -331,6 +331,7 @@ def _candidate_fit(cf, gap_before, consistent, fraction, removed):
         exhaustive=cf.exhaustive,
         n_evaluations=cf.n_evaluations,
         gap_fraction_removed=removed,
+        model=cf.model,
     )
 
 

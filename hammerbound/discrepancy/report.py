@@ -53,6 +53,10 @@ class CandidateFit:
         ``(gap_before - minimax_error) / (gap_before - output_bound)`` clipped to [0, 1]:
         the share of the gap above the output bound that the candidate removes (0 when the
         model is already consistent).
+    model : RefinedModel or None
+        The model refitted with this candidate added (its parameters at ``value``). When no
+        candidate alone explains the data, ``diagnose(report.candidate(name).model, ...)``
+        continues from it, one effect at a time (``max_effects=1``).
     """
 
     name: str
@@ -67,6 +71,7 @@ class CandidateFit:
     exhaustive: bool
     n_evaluations: int
     gap_fraction_removed: float = 0.0
+    model: RefinedModel | None = field(default=None, repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -385,7 +390,8 @@ class DiagnosisReport(Result):
             "nominal_gap": d.nominal_gap,
             "hints": list(d.hints),
             "conditions": [c.__dict__ for c in d.conditions],
-            "candidates": [c.__dict__ for c in self.candidates],
+            "candidates": [{k: v for k, v in c.__dict__.items() if k != "model"}
+                           for c in self.candidates],
             "refined_model": {
                 "effects": [list(e) for e in rm.effects],
                 "A": None if rm.A is None else rm.A.tolist(),

@@ -308,3 +308,26 @@ def test_iodata_misuse_says_what_to_pass(call, error, words):
     with pytest.raises(error) as exc:
         call(G, IOData(u, y, dt=0.1), u, y)
     assert words in str(exc.value)
+
+
+# ------------------------------------------- trial 6: one effect at a time, from a candidate
+def test_step_by_step_from_the_closest_candidate():
+    """Delay 2 + offset -0.08: with ``max_effects=1`` no single candidate explains the data;
+    the closest candidate's ``model`` is a model to continue from, and the second round
+    names the other effect and is consistent (before, no candidate carried a model and
+    ``refined_model`` had no effect added, so the search could not go on)."""
+    rng = np.random.default_rng(7)
+    u = np.repeat(rng.uniform(-2.0, 2.0, 30), 10)
+    ud = np.r_[0.0, 0.0, u[:-2]]
+    bound = 0.02
+    y = _chapter(ud) - 0.08 + _noise(u.size, 0.9 * bound, "uniform", 1)
+    r1 = diagnose(chapter_system(), u, y, bound, max_effects=1, candidates=["delay", "offset"])
+    assert r1.effect is None and not r1.consistent_after
+    first = r1.candidate(r1.closest[0])
+    assert first.model is not None and first.model.effects[-1][0] == first.name
+    assert "model" not in json.dumps(r1.to_dict()["candidates"][0])
+    r2 = diagnose(first.model, u, y, bound, max_effects=1, candidates=["delay", "offset"])
+    assert r2.consistent_after, r2.summary()
+    names = {n for n, _ in r2.refined_model.effects}
+    assert names == {"delay", "offset"}
+    assert dict(r2.refined_model.effects)["offset"] == pytest.approx(-0.08, abs=bound)

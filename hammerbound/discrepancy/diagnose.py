@@ -443,7 +443,7 @@ def _message(bound, gap_before, consistent_before, chosen, added, fits, combos, 
             )
         return msg
     if chosen is not None:
-        parts = [f"{e.name} ({e.param_label()} = {_num(v)}{e.value_note})"
+        parts = [f"{e.name} ({e.param_label()} = {_num(v)}{e.value_note(chosen.model)})"
                  for e, (_, v) in zip(chosen.effects, chosen.model.effects, strict=True)]
         what = " + ".join(parts)
         if len(added) == 1 and not old:

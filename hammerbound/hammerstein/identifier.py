@@ -240,7 +240,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             f.problem, f.theta_bounds, f.result.infos[: 2 * f.problem.p], method=lin.method,
             dt=data.dt, names=(data.input_name, data.output_name),
             units=(data.input_unit, data.output_unit),
-            time_unit=getattr(data, "time_unit", ""), sampler=sampler)
+            time_unit=getattr(data, "time_unit", ""), sampler=sampler,
+            theta_box=lin.theta_box, assumptions=f.assumptions)
         self.backlash_ = BacklashBoxView(f.gamma_bounds, (data.u.min(), data.u.max()),
                                          sampler)
         self.gamma_bounds_, self.theta_bounds_ = f.gamma_bounds, f.theta_bounds

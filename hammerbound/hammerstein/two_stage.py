@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..exceptions import DataValidationError, EmptyFeasibleSetError
+from ..exceptions import DataValidationError, EmptyFeasibleSetError, UnboundedSetError
 from ..stage1.inner_signal import read_prbs_level
 
 __all__ = ["TwoStageFit", "fit_two_stage", "steady_pair"]
@@ -57,7 +57,19 @@ def fit_two_stage(bl, lin, data, steady_state, *, prbs_level, inner_signal,
                 input_groups=record.input_groups, output_bound=output_bound)
     except EmptyFeasibleSetError as exc:
         raise _in_two_stage_terms(exc, record.input_bound, u_star) from exc
+    except UnboundedSetError as exc:
+        raise UnboundedSetError(_procedure_words(str(exc))) from exc
     return TwoStageFit(bl, lin, u_star, inner, record)
+
+
+def _procedure_words(text: str) -> str:
+    """A stage-2 message without advice the two-stage procedure cannot take: its input
+    error bound comes from stage 1 and its gain is fixed at 1 (22.8)."""
+    text = text.replace("the input error bound (input_bound)",
+                        "the inner-signal bound from stage 1")
+    text = text.replace("; pass steady_state_gain=None for a plain EIV problem", "")
+    return text.replace("enlarge theta_box or check the gain.",
+                        "enlarge theta_box (the two-stage procedure fixes the gain at 1).")
 
 
 def _in_two_stage_terms(exc, input_bound, u_star) -> EmptyFeasibleSetError:
@@ -68,9 +80,11 @@ def _in_two_stage_terms(exc, input_bound, u_star) -> EmptyFeasibleSetError:
     own data."""
     import numpy as np
 
-    text = str(exc).replace("the input error bound (input_bound)",
-                            "the inner-signal bound from stage 1")
-    text = text.replace("; pass steady_state_gain=None for a plain EIV problem", "")
+    text = _procedure_words(str(exc))
+    if exc.first_index is None and "theta_box and the gain equality" in text:
+        # the a priori box alone cannot meet the gain: no data, stage 1's or stage 2's, matter
+        return EmptyFeasibleSetError(text, side=exc.side, first_index=None,
+                                     relaxation=exc.relaxation)
     dx = np.atleast_1d(np.asarray(input_bound, dtype=float))
     lo, hi = float(dx.min()), float(dx.max())
     span = f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g}"

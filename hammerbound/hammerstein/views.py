@@ -28,7 +28,7 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
     method = "one-record"
 
     def __init__(self, problem, bounds, infos, *, method, dt, names, units, time_unit,
-                 sampler):
+                 sampler, theta_box=None, assumptions=()):
         self.na, self.nb, self.nk = problem.na, problem.nb, problem.nk
         self.steady_state_gain = float(problem.gain)
         self.method = method
@@ -45,6 +45,8 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
         self.signal_units_ = units
         self.time_unit_ = time_unit
         self._sampler = sampler
+        self.theta_box = theta_box
+        self.assumptions_ = tuple(assumptions)
 
     def __sklearn_tags__(self):
         """scikit-learn's tags (its validation helpers read them): a fitted regressor."""
@@ -71,19 +73,53 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
             return as_bound("output_bound", output_bound, n)
         return as_bound("output_bound", float(np.max(self.problem_.deta)), n)
 
+    def summary(self) -> str:
+        """Text summary: the linear block's intervals of the joint (one-record) fit and the
+        assumptions the fit rests on (those of the whole identifier)."""
+        pr = self.problem_
+        from ..tables import dt_text
+
+        head = (f"linear block of a one-record fit: method {self.method}, na={pr.na} "
+                f"nb={pr.nb} nk={pr.nk}, N = {pr.N}, "
+                f"dt = {dt_text(self.dt_, self.time_unit_)}, "
+                f"gain B(1)/A(1) = {self.steady_state_gain:g}")
+        if self.assumptions_:
+            head += "\nassumptions: " + "; ".join(self.assumptions_)
+        return self.intervals_.summary(title=head)
+
+    def _require_bounded(self, what):
+        """Refuse ``what`` (it needs every interval finite) when the record left an
+        interval of the linear block unbounded (a ``b_j`` at the default box)."""
+        if np.all(np.isfinite(self.bounds_)):
+            return
+        from ..exceptions import UnboundedSetError
+
+        names = [n for n, row in zip(self.param_names_, self.bounds_, strict=True)
+                 if not np.all(np.isfinite(row))]
+        raise UnboundedSetError(
+            f"no {what}: the record does not bound {', '.join(names)} (see the "
+            "NotIdentifiedWarning of fit). Identify from a record that moves the input "
+            "more often, or give a theta_box from what you know.")
+
     def _polys(self, theta=None):
         """The central (or given ``theta``) polynomials; no central model when an
         interval of the linear block is infinite (the record did not bound it)."""
-        if theta is None and not np.all(np.isfinite(self.bounds_)):
-            from ..exceptions import UnboundedSetError
-
-            names = [n for n, row in zip(self.param_names_, self.bounds_, strict=True)
-                     if not np.all(np.isfinite(row))]
-            raise UnboundedSetError(
-                f"no central model of the linear block: the record does not bound "
-                f"{', '.join(names)} (see the NotIdentifiedWarning of fit). Pass theta= for "
-                "a model of your choice, or give a theta_box from what you know.")
+        if theta is None:
+            self._require_bounded("central model of the linear block "
+                                  "(to_transfer_function(theta=...) gives one of your choice)")
         return super()._polys(theta)
+
+    def frequency_response_bounds(self, omega=None, dt=None, *, on_gain_plane=False):
+        self._require_bounded("frequency envelope of the linear block")
+        return super().frequency_response_bounds(omega, dt, on_gain_plane=on_gain_plane)
+
+    frequency_response_bounds.__doc__ = ModelSetMixin.frequency_response_bounds.__doc__
+
+    def uncertainty_weight(self, *args, **kwargs):
+        self._require_bounded("uncertainty weight of the linear block")
+        return super().uncertainty_weight(*args, **kwargs)
+
+    uncertainty_weight.__doc__ = ModelSetMixin.uncertainty_weight.__doc__
 
     def sample(self, n, random_state=None, **_):
         """``n`` certified points of the joint set (:class:`JointSamples`: ``theta`` rows,

@@ -37,24 +37,27 @@ _SIDES = ("left", "right")
 
 def _first_nonfinite_point(X, y) -> None:
     """Refuse a NaN or infinite steady-state point, naming it and the fix (the points are
-    independent, unlike a record's samples: dropping one is safe). Anything not a plain
-    numeric array is left to scikit-learn's validation."""
+    independent, unlike a record's samples: dropping one is safe). Only plain numeric
+    arrays of one or two dimensions are checked here; anything else (strings, sparse,
+    3-D) is left to scikit-learn's validation and its own message."""
     import scipy.sparse as sp
 
     for name, v in (("X (steady-state inputs)", X), ("y (steady-state outputs)", y)):
         if sp.issparse(v):
             continue
         try:
-            a = np.asarray(v, dtype=float)
+            a = np.asarray(v)
         except (TypeError, ValueError):
             continue
-        bad = np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) \
-            if a.ndim >= 1 and a.size else np.array([], int)
+        if a.dtype.kind not in "fiu" or a.ndim not in (1, 2) or a.size == 0:
+            continue
+        bad = np.flatnonzero(~np.isfinite(a.reshape(a.shape[0], -1)).all(axis=1))
         if bad.size:
             raise DataValidationError(
                 f"{name} contains NaN or infinity at point {int(bad[0])} ({bad.size} point(s) "
                 "in all). The steady-state points are independent: drop those points from "
-                "both X and y (e.g. keep = np.isfinite(X).ravel() & np.isfinite(y)).")
+                "both X and y.")
+
 
 class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     """Guaranteed backlash parameter bounds from steady-state data (stage 1, section 22.3).

@@ -258,7 +258,11 @@ class LinearModelMixin:
         acc_hi = np.zeros(t.size)
 
         def add_product(pl, ph, vl, vh):
-            c = np.stack([pl * vl, pl * vh, ph * vl, ph * vh])
+            # an unbounded end times 0 is 0 (the interval's numbers are real; a one-record
+            # b_j the record does not bound is [-inf, inf]): not NaN
+            with np.errstate(invalid="ignore"):
+                c = np.stack([pl * vl, pl * vh, ph * vl, ph * vh])
+            c = np.where(np.isnan(c), 0.0, c)
             return c.min(axis=0), c.max(axis=0)
 
         for i in range(1, na + 1):

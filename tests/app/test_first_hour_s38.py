@@ -20,6 +20,7 @@ import warnings
 import numpy as np
 import pytest
 from oracles import GAMMA_TRUE, hammerstein, one_record
+from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound.app.cli import main
@@ -200,3 +201,97 @@ def test_cli_prints_no_zero_model(tmp_path, capsys):
     assert "RuntimeWarning" not in cap.err
     assert "see assumptions_" not in cap.err and "bound_info_" not in cap.err
 
+
+
+# ------------------------------------------------ review of the above (helper, same day)
+def test_no_frequency_envelope_or_weight_when_b_is_unbounded():
+    """An infinite b_j gave a NaN magnitude envelope that excluded every model: refused."""
+    idf, _ = _b_at_box_fit()
+    with pytest.raises(UnboundedSetError, match="no frequency envelope"):
+        idf.linear_.frequency_response_bounds()
+    with pytest.raises(UnboundedSetError, match="no uncertainty weight"):
+        idf.linear_.uncertainty_weight()
+    assert idf.linear_.to_transfer_function(theta=[-0.5, 0.1, 0.3, 0.3]) is not None
+
+
+def test_one_step_band_with_an_unbounded_b_at_a_zero_input():
+    """0 * [-inf, inf] is 0 in the band (it was NaN), and the band holds the data."""
+    idf, _ = _b_at_box_fit()
+    x = np.r_[np.zeros(6), np.ones(4)]
+    y = np.zeros(10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env = idf.linear_.one_step_envelope(x, y, input_bound=0.0)
+    lo, hi = env.lower[2:], env.upper[2:]
+    assert not np.any(np.isnan(lo)) and not np.any(np.isnan(hi))
+    assert np.all(np.isfinite(lo[:4])) and np.all(lo <= 0.0) and np.all(hi >= 0.0)
+
+
+def test_the_one_record_linear_view_has_a_summary():
+    idf, _ = _b_at_box_fit()
+    text = idf.linear_.summary()
+    assert text.startswith("linear block of a one-record fit: method lp, na=2 nb=2 nk=1")
+    assert "|b_j| <= 1e4 (default theta box" in text and "not identified" in text
+
+
+def _settled_two_stage(theta_box=None, n=80, bound=0.02):
+    rng = np.random.default_rng(1)
+    us, ys = _steady(rng, bound)
+    u, y = _prbs(rng, n, bound)
+    idf = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(bound),
+        hb.LinearEIVSetEstimator(output_bound=bound, method="lp", theta_box=theta_box))
+    return idf, u, y, (us, ys)
+
+
+def test_a_box_that_misses_the_gain_is_not_blamed_on_the_data():
+    idf, u, y, steady = _settled_two_stage(
+        {"a1": (0.5, 0.6), "a2": (0.5, 0.6), "b1": (0.0, 0.1), "b2": (0.0, 0.1)})
+    with pytest.raises(EmptyFeasibleSetError) as info:
+        idf.fit(u, y, steady_state=steady)
+    text = str(info.value)
+    assert "theta_box and the gain equality" in text
+    assert "fixes the gain at 1" in text and "check the gain" not in text
+    assert "steady-state points" not in text
+
+
+def test_an_unbounded_stage_two_names_no_absent_flag(tmp_path, capsys):
+    """Ten PRBS samples cannot bound a third-order block: UnboundedSetError, whose
+    assumptions said 'pass steady_state_gain=None' (``--steady-state-gain`` on the CLI)."""
+    rng = np.random.default_rng(1)
+    us, ys = _steady(rng, 0.02)
+    u = np.r_[1.0, -np.ones(9)]
+    y = hammerstein(u, GAMMA_TRUE, B, A) + rng.uniform(-0.02, 0.02, u.size)
+    ss = _write(tmp_path / "steady.csv", us, ys)
+    pr = _write(tmp_path / "prbs.csv", u, y)
+    rc = main(["identify", "--steady", str(ss), "--prbs", str(pr), "--output-bound", "3",
+               "--steady-output-bound", "0.02", "--na", "3", "--nb", "3", "--method", "lp"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "UnboundedSetError" in err
+    assert "--steady-state-gain" not in err and "steady_state_gain" not in err
+
+
+def test_an_offset_prbs_gets_cli_advice(tmp_path, capsys):
+    rng = np.random.default_rng(1)
+    us, ys = _steady(rng, 0.02)
+    u, y = _prbs(rng, 60, 0.02)
+    u = np.where(u > 0, 1.01, -1.0)
+    ss = _write(tmp_path / "steady.csv", us, ys)
+    pr = _write(tmp_path / "prbs.csv", u, y)
+    rc = main(["identify", "--steady", str(ss), "--prbs", str(pr), "--output-bound", "0.02",
+               "--method", "lp"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "prbs_level" not in err
+    assert "+-u* in the file" in err and "--record DATA.csv" in err
+
+
+def test_diagnose_cli_takes_candidates_all_and_speaks_cli(tmp_path, capsys):
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.uniform(-2.0, 2.0, 8), 8)
+    y = lfilter(B, A, u) + 0.3  # a linear plant and an offset: every candidate is tried
+    path = _write(tmp_path / "d.csv", u, y + rng.uniform(-0.01, 0.01, u.size))
+    rc = main(["diagnose", str(path), "--num", "0 2.15 -1.09", "--den", "1 -0.76 0.82",
+               "--output-bound", "0.01", "--candidates", "all", "--max-effects", "1"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "Missing effect: offset" in out
+    assert "candidates='all'" not in out and "refit='linear'" not in out

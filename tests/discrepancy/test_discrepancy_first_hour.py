@@ -331,3 +331,19 @@ def test_step_by_step_from_the_closest_candidate():
     names = {n for n, _ in r2.refined_model.effects}
     assert names == {"delay", "offset"}
     assert dict(r2.refined_model.effects)["offset"] == pytest.approx(-0.08, abs=bound)
+
+
+def test_a_black_box_delay_says_what_was_added():
+    """For a black box (no numerator known) the delay's value is the added d: the verdict
+    said "the model's own delay included" (review of trial 6's wording)."""
+
+    class Box:
+        def predict(self, u):
+            return _chapter(np.r_[0.0, u[:-1]])  # its own delay: 1 sample (unknown to us)
+
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-2.0, 2.0, 30), 10)
+    y = _chapter(np.r_[np.zeros(3), u[:-3]]) + _noise(u.size, 0.018, "uniform", 2)
+    rep = diagnose(Box(), u, y, 0.02, candidates=["delay"])
+    assert rep.effect == "delay", rep.summary()
+    assert "d = 2 samples added" in rep.message

@@ -47,6 +47,12 @@ _TERMS = [
     (r"\(bound_info_ gives each end's status(?: and certified gap)?\)",
      "(the status column gives each end's status; --json its details)"),
     (r"\(see assumptions_\)", "(see the assumptions printed)"),
+    (r"Pass prbs_level=u\* for a two-level signal with rounding noise\.",
+     "Write a two-level PRBS as +-u* in the file (shift an offset or 0/1 signal); pass an "
+     "ordinary record as --record DATA.csv."),
+    (r"refit='linear' refits only B", "--refit linear refits only B"),
+    (r"\(candidates='all' tries every", "(--candidates all tries every"),
+    (r"the factor min_improvement = ", "the factor "),
     (r"use procedure='one-record' to identify both blocks from it",
      "pass it as --record DATA.csv (not --prbs) to identify both blocks from it"),
 ]

@@ -10,7 +10,7 @@ import numpy as np
 
 from ...exceptions import HammerboundError, ParameterValidationError
 from ..paths import add_force_option, check_output_file
-from .console import cli_warnings, print_error
+from .console import cli_terms, cli_warnings, print_error
 from .options import CLI_NAMES, UsageError, add_csv_options, deprecated, require
 from .printing import json_text
 
@@ -36,7 +36,8 @@ def add_arguments(p):
                         "verdict rests on it)")
     deprecated(p, "--noise-bound", "--output-bound", "output_bound", type=float)
     p.add_argument("--candidates", default=None,
-                   help=f"comma-separated subset of {','.join(CANDIDATES)}")
+                   help=f"comma-separated subset of {','.join(CANDIDATES)}, or 'all' "
+                        "(every registered effect)")
     p.add_argument("--refit", default="linear", choices=["linear", "none"])
     p.add_argument("--skip", type=int, default=0, help="initial samples not scored")
     p.add_argument("--max-delay", type=int, default=10)
@@ -133,14 +134,15 @@ def run(args) -> int:
     n = max(A.size, B.size)
     # dt=True (not given): the diagnosis takes the record's dt
     G = control.tf(np.r_[B, np.zeros(n - B.size)], np.r_[A, np.zeros(n - A.size)], True)
-    cands = None if args.candidates is None else [
-        c.strip() for c in args.candidates.split(",") if c.strip()]
+    cands = None if args.candidates is None else (
+        "all" if args.candidates.strip() == "all" else
+        [c.strip() for c in args.candidates.split(",") if c.strip()])
     rep = diagnose(G, data, output_bound=bound, candidates=cands, refit=args.refit,
                    skip=args.skip, max_delay=args.max_delay, max_effects=args.max_effects,
                    progress=args.progress)
     if args.plot:
         _plot(rep, args.plot)
-    print(json_text(rep.to_dict()) if args.json else rep.summary())
+    print(json_text(rep.to_dict()) if args.json else cli_terms(rep.summary()))
     return 0 if rep.consistent_after else 1
 
 

@@ -170,8 +170,10 @@ class Effect:
         vals = tuple(theta) + tuple(coefs)
         return float(vals[0]) if len(vals) == 1 else vals
 
-    #: words after the fitted value in a verdict (e.g. what a delay's ``d`` counts)
-    value_note = ""
+    def value_note(self, model=None) -> str:
+        """Words after the fitted value in a verdict (e.g. what a delay's ``d`` counts in
+        ``model``, the refined model)."""
+        return ""
 
     def param_label(self) -> str:
         """Parameter name(s) shown in reports."""

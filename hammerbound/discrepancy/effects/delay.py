@@ -19,7 +19,13 @@ class Delay(Effect):
     param_names = ("d",)
     description = "q^-d (integer d >= 1) extra input delay"
     pins_leading = True
-    value_note = " samples in all, the model's own delay included"
+
+    def value_note(self, model=None) -> str:
+        """The value is the total delay of a model with a numerator, the added ``d`` of a
+        black box (see :meth:`value`)."""
+        if model is None or model.B is None or not np.any(model.B):
+            return " samples added"
+        return " samples in all, the model's own delay included"
 
     def search_space(self, ctx):
         return (Param("d", 1, max(1, ctx.max_delay), integer=True),)

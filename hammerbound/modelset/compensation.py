@@ -228,6 +228,14 @@ def build_inverse_from(gamma_center, left_vertices_mb, right_vertices_mb, input_
             for _ in range(60):
                 mid = 0.5 * (a + b)
                 a, b = (mid, b) if ok(x0 + mid * (d_lo - x0), x0 + mid * (d_hi - x0)) else (a, mid)
+            if a == 0.0:
+                raise IllPosedBacklashError(
+                    "no command range around x0 keeps every backlash of the set well posed "
+                    "(some feasible backlash has its two lines crossing wherever the "
+                    "compensator would drive the input): the set is too wide for a "
+                    "guaranteed inverse. Narrow the backlash intervals (more data, a "
+                    "narrower gamma_box), or pass a v_range of your own to see where it "
+                    "fails.")
             v_range = (x0 + a * (d_lo - x0), x0 + a * (d_hi - x0))
     try:
         v_lo, v_hi = (float(x) for x in v_range)

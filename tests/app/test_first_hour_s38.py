@@ -27,6 +27,7 @@ from hammerbound.app.cli import main
 from hammerbound.exceptions import (
     DataValidationError,
     EmptyFeasibleSetError,
+    IllPosedBacklashError,
     NotIdentifiedWarning,
     UnboundedSetError,
 )
@@ -295,3 +296,27 @@ def test_diagnose_cli_takes_candidates_all_and_speaks_cli(tmp_path, capsys):
     out = capsys.readouterr().out
     assert rc == 0 and "Missing effect: offset" in out
     assert "candidates='all'" not in out and "refit='linear'" not in out
+
+
+def test_no_output_envelope_when_the_backlash_is_not_bounded():
+    """It said "X contains NaN or infinity (first at sample 0)" about a finite input."""
+    idf, _ = _b_at_box_fit()
+    assert not np.all(np.isfinite(idf.gamma_bounds_))
+    with pytest.raises(UnboundedSetError, match="no output envelope: the record does not"):
+        idf.output_envelope(np.ones(20), np.zeros(20))
+
+
+def test_no_inverse_from_a_set_too_wide_says_why():
+    """A given gamma_box left as it is (the fit stopped at once): the default command
+    range shrank to (0, 0) and the error named v_range, which the user never passed."""
+    u, y, _ = one_record(80, 0.05, "uniform", 0)
+    lin = hb.LinearEIVSetEstimator(output_bound=0.05, na=2, nb=2, method="lp",
+                                   total_time_limit=1e-3)
+    box = [[0.5, 2.0], [0.0, 0.5], [0.5, 2.0], [0.0, 0.5]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idf = hb.HammersteinBacklashIdentifier(linear=lin, procedure="one-record",
+                                               gamma_box=box).fit(u, y)
+    assert np.all(idf.gamma_bounds_ == np.array(box))
+    with pytest.raises(IllPosedBacklashError, match="too wide for a guaranteed inverse"):
+        idf.inverse()

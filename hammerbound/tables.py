@@ -65,7 +65,8 @@ def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
         # scientific notation: fixed decimals would print it as 0.0000
         mag = max(abs(r["lower"]), abs(r["upper"]))
         fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
-        nums = " ".join(f"{r[c]:>{cw}.{fmt}}" for c in ("lower", "centre", "upper",
-                                                        "half_width"))
+        # an interval [-inf, inf] has no centre: "-", not "nan"
+        nums = " ".join(f"{'-':>{cw}}" if np.isnan(r[c]) else f"{r[c]:>{cw}.{fmt}}"
+                        for c in ("lower", "centre", "upper", "half_width"))
         lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")
     return "\n".join(lines)

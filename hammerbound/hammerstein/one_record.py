@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -43,6 +43,7 @@ from ..relaxations.problem import (
     resolve_theta_box,
     theta_names,
 )
+from ..status import NOT_IDENTIFIED
 
 __all__ = ["OneRecordFit", "fit_one_record"]
 
@@ -181,6 +182,20 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     return gb, tuple(found)
 
 
+def _not_identified_infos(infos, theta_bounds, gamma_bounds) -> tuple:
+    """The ends' infos (theta's then the backlash's, min and max per parameter) with those
+    reported as infinite said so: bound +-inf, status NOT_IDENTIFIED (their search stopped
+    at an assumed limit; ``bound_info_`` and ``bounds_`` then agree)."""
+    b = np.vstack([theta_bounds, gamma_bounds])
+    out = []
+    for i, info in enumerate(infos):
+        k, e = divmod(i, 2)
+        if np.isinf(b[k, e]):
+            info = replace(info, bound=float(b[k, e]), status=NOT_IDENTIFIED)
+        out.append(info)
+    return tuple(out)
+
+
 def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
     """``b_j`` ends at the *default* box ``|b_j| <= 1e4`` (an arbitrary assumption, not
     the record's answer) become infinite, with a warning naming them; rows of a
@@ -285,6 +300,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     tb, b_found = _unbounded_b(problem, res.bounds[: problem.p], lin,
                                d is not None and d.stopped_by_time)
     _warn_stopped(res.infos, {name for name, _ in found} | set(b_found))
+    res = replace(res, infos=_not_identified_infos(res.infos, tb, gb))
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, tb, gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,

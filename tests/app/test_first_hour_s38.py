@@ -167,6 +167,12 @@ def test_b_at_the_default_box_is_not_identified():
     msgs = [str(w.message) for w in caught if issubclass(w.category, NotIdentifiedWarning)]
     assert any("does not bound b1, b2" in m and "|b_j| <= 1e4" in m for m in msgs)
     assert np.all(np.isinf(idf.theta_bounds_[2:]))
+    # bound_info_ agrees with bounds_ (it said "limit" at +-1e4)
+    for info in idf.bound_info_:
+        k = list(idf.param_names_).index(info.param)
+        end = idf.bounds_[k, 0 if info.sense == "min" else 1]
+        assert info.bound == end or (np.isfinite(end) and info.bound == pytest.approx(end))
+        assert (info.status == "not identified") == bool(np.isinf(end))
     assert np.all(np.isfinite(idf.theta_bounds_[:2]))  # the stable-A box stays (A1)
     assert idf.system_ is None
     with pytest.raises(UnboundedSetError, match="does not bound b1, b2"):
@@ -233,6 +239,8 @@ def test_the_one_record_linear_view_has_a_summary():
     text = idf.linear_.summary()
     assert text.startswith("linear block of a one-record fit: method lp, na=2 nb=2 nk=1")
     assert "|b_j| <= 1e4 (default theta box" in text and "not identified" in text
+    b1 = next(line for line in text.splitlines() if line.startswith("b1 "))
+    assert b1.split()[1:5] == ["-inf", "-", "inf", "inf"]
 
 
 def _settled_two_stage(theta_box=None, n=80, bound=0.02):

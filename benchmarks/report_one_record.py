@@ -154,8 +154,8 @@ def _gaps(r):
 
 def section_speed():
     parts = []
-    for tag in ("_s38_long", "_s37", "_s37_hull", "_s36", "_s35", "_s35_pricing", "_n300", "_n1000", "",
-                "_quick"):
+    for tag in ("_s38", "_s38_check", "_s38_long", "_s37", "_s37_hull", "_s36", "_s35",
+                "_s35_pricing", "_n300", "_n1000", "", "_quick"):
         j = _json(f"one_record_speed{tag}.json")
         if not j or not j["rows"]:
             continue

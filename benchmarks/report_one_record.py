@@ -32,7 +32,7 @@ def _stopped(r) -> bool:
 
 def section_soundness():
     parts = []
-    for tag in ("", "_n1000", "_s35", "_s36", "_s37", "_quick"):
+    for tag in ("", "_n1000", "_s35", "_s36", "_s37", "_s38", "_quick"):
         j = _json(f"one_record_soundness{tag}.json")
         if not j or not j["rows"]:
             continue

@@ -32,11 +32,23 @@ def _panels(axes):
     return axes[0].figure, axes
 
 
+def _time_axis(data, n):
+    """The first ``n`` sample times and the axis label: the record's time (``t0 + k dt``,
+    in its time unit, seconds when none is given) when it has a sampling time, else the
+    sample index."""
+    dt = getattr(data, "dt", None)
+    if not dt:
+        return np.arange(n, dtype=float), "sample t"
+    t0 = float(getattr(data, "t0", 0.0) or 0.0)
+    unit = getattr(data, "time_unit", "") or "s"
+    return t0 + float(dt) * np.arange(n), f"time ({unit})"
+
+
 def plot_report(self, axes=None, *, max_samples=None):
     """Figure of a :class:`~.report.DiagnosisReport` (see its ``plot``) in ``axes`` (4
     Axes) or a new figure; returns the Figure."""
     n = self.y.size if max_samples is None else max(1, min(int(max_samples), self.y.size))
-    t = np.arange(n)
+    t, xlabel = _time_axis(self.data, n)
     sl = slice(0, n)
     fig, axes = _panels(axes)
     fig.suptitle(
@@ -69,14 +81,14 @@ def plot_report(self, axes=None, *, max_samples=None):
             label=f"after: gap {self.gap_after:.3g}, "
                   f"{100 * self.fraction_outside_after:.0f}% outside")
     if self.skip:
-        ax.axvspan(0, min(self.skip, n), color="0.85", label="not scored (skip)")
+        ax.axvspan(t[0], t[min(self.skip, n - 1)], color="0.85", label="not scored (skip)")
     lim = 1.15 * max(np.max(np.abs(rb)), np.max(np.abs(ra)), bound)
     ax.set_ylim(-lim, 1.6 * lim)  # head-room for the legend
     ax.set_ylabel("residual y - yhat\n(minimax refit)")
-    ax.set_xlabel("sample t")
+    ax.set_xlabel(xlabel)
     ax.legend(loc="upper left", fontsize=8, ncol=3, framealpha=0.9)
     for a in axes[:3]:
-        a.set_xlim(0, max(n - 1, 1))
+        a.set_xlim(t[0], t[-1] if n > 1 else t[0] + 1)
     ax = axes[3]
     shown = [*self.candidates, *sorted(self.combinations, key=lambda c: c.minimax_error)[:4]]
     if shown:

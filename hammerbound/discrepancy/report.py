@@ -399,6 +399,8 @@ class DiagnosisReport(Result):
                 "offset": rm.offset,
                 "gain": rm.gain,
                 "dt": rm.dt,
+                # the record's time unit ("" when the data did not say)
+                "time_unit": getattr(self.data, "time_unit", "") or "",
             },
             "message": self.message,
         })

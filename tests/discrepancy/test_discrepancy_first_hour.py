@@ -278,13 +278,25 @@ def test_diagnose_and_locate_accept_iodata():
     assert rep.data is data and rep.to_dict()["refined_model"]["dt"] == 0.1
     fig = rep.plot()
     assert fig.axes[0].get_ylabel() == "input voltage [V]"
+    # the record's time on the x axis (trial 6: "sample t" beside a time column)
+    assert fig.axes[2].get_xlabel() == "time (s)"
+    assert fig.axes[2].get_xlim() == pytest.approx((0.0, 9.9))
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+    ms = IOData(u, y, dt=20.0, time_unit="ms", t0=100.0)
+    G1 = control.tf([0.0, 0.5], [1.0, -0.5], True)
+    rep_ms = diagnose(G1, ms, output_bound=0.01, candidates=["offset"])
+    assert rep_ms.to_dict()["refined_model"]["time_unit"] == "ms"
+    fig = rep_ms.plot()
+    assert fig.axes[2].get_xlabel() == "time (ms)"
+    assert fig.axes[2].get_xlim() == pytest.approx((100.0, 100.0 + 20.0 * 99))
+    plt.close(fig)
+    assert ref.plot().axes[2].get_xlabel() == "sample t"  # no sampling time: the index
+    plt.close("all")
     dis = locate(G, data, output_bound=0.01)
     assert dis.gap == pytest.approx(locate(G, u, y, 0.01).gap, rel=1e-12)
     # dt from the data when the model has none
-    G1 = control.tf([0.0, 0.5], [1.0, -0.5], True)
     assert diagnose(G1, data, output_bound=0.01, candidates=["offset"]).refined_model.dt == 0.1
 
 

@@ -33,15 +33,12 @@ def _panels(axes):
 
 
 def _time_axis(data, n):
-    """The first ``n`` sample times and the axis label: the record's time (``t0 + k dt``,
-    in its time unit, seconds when none is given) when it has a sampling time, else the
-    sample index."""
-    dt = getattr(data, "dt", None)
-    if not dt:
+    """The first ``n`` sample times and the axis label: the record's time
+    (:attr:`~hammerbound.IOData.time`, in its time unit, seconds when none is given) when
+    it has a sampling time, else the sample index."""
+    if getattr(data, "dt", None) is None:
         return np.arange(n, dtype=float), "sample t"
-    t0 = float(getattr(data, "t0", 0.0) or 0.0)
-    unit = getattr(data, "time_unit", "") or "s"
-    return t0 + float(dt) * np.arange(n), f"time ({unit})"
+    return np.asarray(data.time[:n], dtype=float), f"time ({data.time_unit or 's'})"
 
 
 def plot_report(self, axes=None, *, max_samples=None):

@@ -366,18 +366,6 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                                    n0)
         return segment_r2(yy, w, n0, sample_weight)
 
-    @staticmethod
-    def _check_bounded(what, bounds, names):
-        """Refuse ``what`` when an interval it needs is infinite (not identified)."""
-        bad = [n for n, row in zip(names, bounds, strict=True) if not np.all(np.isfinite(row))]
-        if bad:
-            from ..exceptions import UnboundedSetError
-
-            raise UnboundedSetError(
-                f"no {what}: the record does not bound {', '.join(bad)} (see the "
-                "NotIdentifiedWarning of fit); identify from a record that reverses by more "
-                "than the dead band, or give a gamma_box from what you know.")
-
     def _check_central(self):
         if self.system_ is None:
             from ..exceptions import UnboundedSetError
@@ -405,8 +393,11 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         u = as_signal("X", X)
         if self.procedure_ == "one-record":
             from ..joint.modes import inner_envelope
+            from .views import require_bounded
 
-            self._check_bounded("output envelope", self.gamma_bounds_, GAMMA_NAMES)
+            require_bounded("output envelope", GAMMA_NAMES, self.gamma_bounds_,
+                            "; identify from a record that reverses by more than the dead "
+                            "band, or give a gamma_box from what you know.")
             lo, hi = inner_envelope(u, self.gamma_bounds_)
             xc, dx = 0.5 * (lo + hi), 0.5 * (hi - lo) * (1 + 1e-12) + 1e-300
         else:

@@ -209,9 +209,10 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
             if not given[k] and at_prior_limit(tb[k, j], problem.box, k, j):
                 tb[k, j] = -np.inf if j == 0 else np.inf
                 hit.append(names[k])
+    hit = tuple(dict.fromkeys(hit))  # b_j once even when both its ends are at the box
     if not hit:
         return tb, ()
-    which = ", ".join(dict.fromkeys(hit))
+    which = ", ".join(hit)
     more = "give more time (total_time_limit), or " if stopped_by_time else ""
     warnings.warn(
         f"the record does not bound {which}: the search reached the default box "
@@ -221,7 +222,7 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
         "the input more often, or pass a theta_box from what you know of the gain.",
         # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
         NotIdentifiedWarning, stacklevel=5)
-    return tb, tuple(dict.fromkeys(hit))
+    return tb, hit
 
 
 def _advice(stopped_by_time, lps_stopped, box_given=False) -> str:

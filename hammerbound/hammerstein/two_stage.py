@@ -78,18 +78,16 @@ def _in_two_stage_terms(exc, input_bound, u_star) -> EmptyFeasibleSetError:
     (22.8) is part of the procedure, and a stage-1 bound too tight (steady-state points not
     settled, or a steady-state output bound too small) empties stage 2 as surely as its
     own data."""
-    import numpy as np
+    from ..tables import bound_text
 
     text = _procedure_words(str(exc))
     if exc.first_index is None and "theta_box and the gain equality" in text:
         # the a priori box alone cannot meet the gain: no data, stage 1's or stage 2's, matter
         return EmptyFeasibleSetError(text, side=exc.side, first_index=None,
                                      relaxation=exc.relaxation)
-    dx = np.atleast_1d(np.asarray(input_bound, dtype=float))
-    lo, hi = float(dx.min()), float(dx.max())
-    span = f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g}"
     text += (f" In the two-stage procedure stage 2's input error bound is stage 1's "
-             f"inner-signal bound |dx_t| <= {span} at u* = {u_star:g}, computed from the "
+             f"inner-signal bound |dx_t| <= {bound_text(input_bound)} at u* = {u_star:g}, "
+             "computed from the "
              "steady-state points: if they had not settled (a transient left) or their "
              "output bound is too small, that bound is too tight and stage 2 is empty "
              "although its own record is fine: check the steady-state points as well as "

@@ -22,6 +22,17 @@ from ..systems.models import GAMMA_NAMES
 __all__ = ["BacklashBoxView", "JointSamples", "LinearBlockView", "joint_samples"]
 
 
+def require_bounded(what, names, bounds, advice):
+    """Raise UnboundedSetError "no ``what``" naming the parameters whose interval is
+    infinite (the one-record fit did not bound them), followed by ``advice``."""
+    bad = [n for n, row in zip(names, bounds, strict=True) if not np.all(np.isfinite(row))]
+    if bad:
+        from ..exceptions import UnboundedSetError
+
+        raise UnboundedSetError(f"no {what}: the record does not bound {', '.join(bad)} (see "
+                                f"the NotIdentifiedWarning of fit){advice}")
+
+
 class LinearBlockView(LinearModelMixin, ModelSetMixin):
     """The linear block's certified intervals from the one-record path (read-only)."""
 
@@ -90,16 +101,9 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
     def _require_bounded(self, what):
         """Refuse ``what`` (it needs every interval finite) when the record left an
         interval of the linear block unbounded (a ``b_j`` at the default box)."""
-        if np.all(np.isfinite(self.bounds_)):
-            return
-        from ..exceptions import UnboundedSetError
-
-        names = [n for n, row in zip(self.param_names_, self.bounds_, strict=True)
-                 if not np.all(np.isfinite(row))]
-        raise UnboundedSetError(
-            f"no {what}: the record does not bound {', '.join(names)} (see the "
-            "NotIdentifiedWarning of fit). Identify from a record that moves the input "
-            "more often, or give a theta_box from what you know.")
+        require_bounded(what, self.param_names_, self.bounds_,
+                        ". Identify from a record that moves the input more often, or give "
+                        "a theta_box from what you know.")
 
     def _polys(self, theta=None):
         """The central (or given ``theta``) polynomials; no central model when an

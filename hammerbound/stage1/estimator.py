@@ -34,7 +34,6 @@ __all__ = ["BacklashSetEstimator", "InnerSignalBounds"]  # InnerSignalBounds: fr
 _SIDES = ("left", "right")
 
 
-
 def _first_nonfinite_point(X, y) -> None:
     """Refuse a NaN or infinite steady-state point, naming it and the fix (the points are
     independent, unlike a record's samples: dropping one is safe). Only plain numeric

@@ -14,6 +14,12 @@ import numpy as np
 from .base import Effect, Param
 
 
+def _no_numerator(model) -> bool:
+    """Whether ``model`` has no numerator to count a total delay in (a black box): the
+    reported value is then the added ``d``."""
+    return model is None or model.B is None or not np.any(model.B)
+
+
 class Delay(Effect):
     name = "delay"
     param_names = ("d",)
@@ -23,7 +29,7 @@ class Delay(Effect):
     def value_note(self, model=None) -> str:
         """The value is the total delay of a model with a numerator, the added ``d`` of a
         black box (see :meth:`value`)."""
-        if model is None or model.B is None or not np.any(model.B):
+        if _no_numerator(model):
             return " samples added"
         return " samples in all, the model's own delay included"
 
@@ -36,6 +42,6 @@ class Delay(Effect):
 
     def value(self, theta, coefs, model=None):
         d = int(round(theta[0]))
-        if model is None or model.B is None or not np.any(model.B):
+        if _no_numerator(model):
             return float(d)
         return float(np.flatnonzero(model.B)[0])

@@ -52,7 +52,8 @@ def solve_lp(lp, primal=False):
     that HiGHS refuses is recovered inside :meth:`~hammerbound.solvers.highs.HighsLP.solve`
     (from scratch, primal simplex, IPM); refused every time it gives no bound (``-inf``,
     status "failed"): never a wrong one. A solve past :data:`ITERATION_CAP` is solved
-    again from scratch."""
+    again from scratch, within the time the first solve had: both together stop at its
+    :attr:`~hammerbound.solvers.highs.HighsLP.stop` (one LP's time limit in all)."""
     import highspy
 
     m, n = lp.A.shape
@@ -66,7 +67,12 @@ def solve_lp(lp, primal=False):
     if lp.h.getModelStatus() != highspy.HighsModelStatus.kIterationLimit:
         return res
     lp.h.clearSolver()
-    again = lp.solve(primal=False)
+    deadline = lp.deadline
+    lp.deadline = lp.stop if deadline is None else min(deadline, lp.stop)
+    try:
+        again = lp.solve(primal=False)
+    finally:
+        lp.deadline = deadline
     again.iterations += res.iterations
     stopped = f"stopped after {res.iterations} simplex iterations; solved again from scratch"
     again.note = "; ".join(x for x in (res.note, stopped, again.note) if x)

@@ -417,6 +417,13 @@ class HighsLP:
         self._stop = time.time() + seconds_left(_run_cap(self.run_limit), self.deadline)
         return self._solve_once(primal)
 
+    @property
+    def stop(self) -> float | None:
+        """:func:`time.time` stamp at which the last :meth:`solve` stopped or stops (its
+        :attr:`run_limit` or :attr:`deadline`); None before the first solve. A caller that
+        solves again as part of the same task passes it on as the :attr:`deadline`."""
+        return self._stop
+
     def _solve_once(self, primal, retry=True) -> LPSolve:
         """One solve before :attr:`_stop` (set by :meth:`solve`); ``retry``: a run that
         ends with model status "Unknown" is solved again (:meth:`_after_unknown`)."""

@@ -138,3 +138,32 @@ def test_a_solve_past_the_iteration_cap_is_solved_again_from_scratch(node, monke
     assert "solved again from scratch" in capped.note
     limit = rel.lp.h.getOptionValue("simplex_iteration_limit")
     assert (limit[1] if isinstance(limit, tuple) else limit) == 2**31 - 1
+
+
+def test_the_re_solve_after_the_cap_stops_when_the_first_solve_would_have(node, monkeypatch):
+    """The cold re-solve is part of the same LP's task: it gets the first solve's stop as
+    its deadline (not a fresh run limit, which gave up to twice an LP's time limit), and
+    the LP's own deadline is given back afterwards."""
+    from hammerbound.joint import relaxation
+
+    pr, box, _ = node
+    monkeypatch.setattr(relaxation, "ITERATION_CAP", 0.001)
+    rel = build_relaxation(pr, box)
+    own = rel.lp.deadline
+    cls = type(rel.lp)
+    solve, seen = cls.solve, []
+
+    def spy(self, **kw):
+        seen.append(("deadline", self.deadline))
+        out = solve(self, **kw)
+        seen.append(("stop", self.stop))
+        return out
+
+    monkeypatch.setattr(cls, "solve", spy)
+    capped = _solve(rel, pr.p + 2, 1.0)
+    assert "solved again from scratch" in capped.note
+    assert [k for k, _ in seen] == ["deadline", "stop", "deadline", "stop"]
+    first_stop = seen[1][1]
+    assert seen[2][1] == (first_stop if own is None else min(own, first_stop))
+    assert seen[3][1] <= first_stop
+    assert rel.lp.deadline == own

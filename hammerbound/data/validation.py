@@ -195,6 +195,23 @@ def as_real(name: str, value, *, positive: bool = False, nonzero: bool = False,
     return v
 
 
+def discrete_dt(dt, default=None):
+    """The sampling time of a discrete ``control.TransferFunction``: a finite number > 0,
+    or python-control's ``True`` (discrete, sampling time not given). ``None`` takes
+    ``default`` (the data's sampling time), else ``True``. ``0`` would make
+    python-control build a *continuous-time* model from discrete coefficients, and
+    negative or non-finite values mean nothing here: all are refused."""
+    if dt is None:
+        dt = default
+    if dt is None or dt is True:
+        return True
+    return as_real("dt", dt, positive=True, example="0.1",
+                   want="dt must be the sampling time (a finite number > 0) or True "
+                        "(discrete, sampling time not given): the model is discrete-time "
+                        "(dt=0 would mean continuous-time; for a continuous model convert "
+                        "the discrete one with control.d2c(G, method='zoh'))")
+
+
 def as_flag(name: str, value, *, error: type = ParameterValidationError) -> bool:
     """``True`` or ``False`` (Python or numpy booleans only; ``"no"``, 0 and 1 are refused)."""
     if not _is_bool(value):

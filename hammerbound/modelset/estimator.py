@@ -84,6 +84,7 @@ class ModelSetMixin:
     def to_transfer_functions(self, n, dt=None, random_state=None):
         """``n`` certified members of the set as discrete ``control.TransferFunction`` (period
         ``dt``; default as :meth:`to_transfer_function`)."""
+        self.to_transfer_function(dt=dt)  # a wrong dt is refused before the sampling
         smp = self.sample(n, random_state=random_state)
         return [self.to_transfer_function(dt=dt, theta=th) for th in smp.theta]
 

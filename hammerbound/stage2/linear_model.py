@@ -109,10 +109,9 @@ class LinearModelMixin:
         """
         import control
 
-        if dt is None:
-            dt = getattr(self, "dt_", None)
-            dt = True if dt is None else dt
+        from ..data.validation import discrete_dt
 
+        dt = discrete_dt(dt, getattr(self, "dt_", None))
         A, B = self._polys(theta)
         n = max(A.size, B.size)
         A = np.concatenate([A, np.zeros(n - A.size)])

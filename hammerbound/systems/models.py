@@ -340,9 +340,9 @@ class HammersteinSystem:
         the system's sampling time (``True``, python-control's "not given", without one)."""
         import control
 
-        if dt is None:
-            dt = True if self.dt is None else self.dt
+        from ..data.validation import discrete_dt
 
+        dt = discrete_dt(dt, self.dt)
         n = max(self.A.size, self.B.size)
         num = np.concatenate([self.B, np.zeros(n - self.B.size)])
         den = np.concatenate([self.A, np.zeros(n - self.A.size)])

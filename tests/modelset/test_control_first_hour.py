@@ -91,3 +91,23 @@ def test_the_frequency_envelope_takes_python_control_models(est):
 def test_the_frequency_envelope_refuses_models_it_cannot_compare(est, G, match):
     with pytest.raises(ParameterValidationError, match=match):
         est.frequency_response_bounds().contains(G)
+
+
+@pytest.mark.parametrize("dt", [0, 0.0, -1, float("inf"), float("nan"), "0.05"])
+def test_a_transfer_function_is_discrete_with_a_positive_sampling_time(est, dt):
+    """dt=0 used to give a *continuous-time* transfer function with the discrete
+    coefficients, silently (trial 7); other non-sampling times reached python-control's
+    own ValueError. to_transfer_functions refuses before it samples the set."""
+    with pytest.raises(ParameterValidationError, match="sampling time"):
+        est.to_transfer_function(dt=dt)
+    with pytest.raises(ParameterValidationError, match="sampling time"):
+        est.to_transfer_functions(2, dt=dt)
+    with pytest.raises(ParameterValidationError, match="sampling time"):
+        hb.HammersteinSystem(hb.Backlash(1.0, 0.1, 1.0, 0.1), (A, B)).to_transfer_function(dt=dt)
+
+
+def test_a_transfer_function_keeps_true_and_the_data_sampling_time(est):
+    assert est.to_transfer_function().dt == 0.05
+    assert est.to_transfer_function(dt=True).dt is True
+    assert est.to_transfer_function(dt=0.2).dt == 0.2
+    assert hb.HammersteinSystem(hb.Backlash(1.0, 0.1, 1.0, 0.1), (A, B)).to_transfer_function().dt is True

@@ -145,6 +145,20 @@ def linear_block(name, est, y, x, dx, dt, n_samples, rng):
                 Wd / np.maximum(np.max(dev(np.vstack([GVd, GSd])), axis=0), 1e-300))),
             "W": str(uw.W).split("\n", 4)[-1].strip(),
         }
+        if est.steady_state_gain is None:
+            continue
+        # the weight on the gain plane: around its own central model, |W(1)| against the box's
+        up, t = timed(lambda kind=kind: est.uncertainty_weight(kind, dt=dt, on_gain_plane=True))
+        Wp = np.abs(up.W(np.exp(1j * wd * dt)))
+        G0p = responses(est.theta_of(up.central), wd, na, lags, dt)[0]
+        devp = np.abs(GSd / G0p - 1) if kind == "multiplicative" else np.abs(GSd - G0p)
+        rep[f"weight_{kind}_on_gain_plane"] = {
+            "t_fit_and_certify": t, "certified": up.certificate.holds,
+            "bounds_samples": bool(np.all(devp <= Wp)),
+            "W_at_0": float(Wp[0]), "box_W_at_0": float(Wd[0]),
+            "median_W_over_max_seen_deviation": float(np.median(
+                Wp / np.maximum(np.max(devp, axis=0), 1e-300))),
+        }
     return rep, env, S
 
 

@@ -3,6 +3,7 @@
 * :mod:`.sampling` - certified samples of the EIV set and of the backlash polygons;
 * :mod:`.frequency` - guaranteed frequency-response envelope (exact zonotope value sets);
 * :mod:`.uncertainty` - certified multiplicative / additive uncertainty weights;
+* :mod:`.gain_plane` - bounds of the models on the gain plane (22.8), exact at steady state;
 * :mod:`.compensation` - backlash inverse with a guaranteed residual error band;
 * :mod:`.plots` - Bode envelope and compensation figures.
 
@@ -11,10 +12,10 @@ The estimators expose these as methods (``LinearEIVSetEstimator.sample``,
 ``.inverse``); see ``docs/robust-control.md``.
 """
 
-from .compensation import BacklashInverse
+from .compensation import BacklashCompensator, BacklashInverse
 from .frequency import FrequencyEnvelope, denominators_stable
 from .sampling import BacklashSamples, CertifiedSamples
 from .uncertainty import UncertaintyWeight, WeightCertificate
 
-__all__ = ["BacklashInverse", "BacklashSamples", "CertifiedSamples", "FrequencyEnvelope",
-           "UncertaintyWeight", "WeightCertificate", "denominators_stable"]
+__all__ = ["BacklashCompensator", "BacklashInverse", "BacklashSamples", "CertifiedSamples",
+           "FrequencyEnvelope", "UncertaintyWeight", "WeightCertificate", "denominators_stable"]

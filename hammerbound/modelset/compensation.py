@@ -36,7 +36,7 @@ from ..data.validation import as_signal
 from ..exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
 from ..results import Result, jsonable
 
-__all__ = ["BacklashInverse", "build_inverse"]
+__all__ = ["BacklashCompensator", "BacklashInverse", "build_inverse"]
 
 
 def _signal(v):
@@ -92,22 +92,35 @@ class BacklashInverse(Result):
             )
 
     def compensate(self, v) -> np.ndarray:
-        """Backlash input ``u`` that makes the central backlash output the commanded ``v``."""
+        """Backlash input ``u`` that makes the central backlash output the commanded ``v``.
+
+        ``v`` is a whole command *sequence*: every call starts again from :attr:`x0` (the
+        branch of each step depends on the previous command). In a control loop, one
+        command at a time, use :meth:`compensator` and its ``step(v)``; a single number
+        given here is treated as a sequence of length one, with a warning.
+        """
+        if np.ndim(v) == 0:
+            import warnings
+
+            from ..exceptions import DataWarning
+
+            warnings.warn(
+                "compensate() takes a command sequence and starts from x0 at every call, so "
+                "called once per sample it picks the branch from the sign of v - x0, not "
+                "from the direction of the command. In a loop use c = inverse.compensator() "
+                "and u_t = c.step(v_t).", DataWarning, stacklevel=2)
         v = _signal(v)
         self._check_range(v)
-        u = np.empty_like(v)
-        v_prev, u_prev = self.x0, self.u_init
-        rise, fall = self._u_rise(v), self._u_fall(v)
-        for t in range(v.size):
-            if v[t] > v_prev:
-                u_prev = rise[t]
-            elif v[t] < v_prev:
-                u_prev = fall[t]
-            u[t] = u_prev
-            v_prev = v[t]
-        return u
+        c = self.compensator()
+        return np.array([c._advance(vt) for vt in v], dtype=float).reshape(v.shape)
 
     __call__ = compensate
+
+    def compensator(self) -> BacklashCompensator:
+        """A stateful compensator for a control loop: ``u_t = c.step(v_t)``, one command at
+        a time, from :attr:`x0` (``c.reset()`` starts again). It emits what
+        :meth:`compensate` emits for the same sequence, so :meth:`error_bounds` holds."""
+        return BacklashCompensator(self)
 
     # ---------------------------------------------------------------- guarantee
     def branch_errors(self, v) -> dict:
@@ -178,6 +191,47 @@ def _wellposed_margin(left_mb, right_mb, u):
     """max over the sets of R(u) - L(u) (<= 0: every feasible backlash well posed at u)."""
     return (np.max(right_mb[:, 0] * u - right_mb[:, 1])
             + np.max(-left_mb[:, 0] * u - left_mb[:, 1]))
+
+
+class BacklashCompensator:
+    """The compensator of a :class:`BacklashInverse` with its state, one command at a time
+    (made by :meth:`BacklashInverse.compensator`).
+
+    Attributes
+    ----------
+    inverse : BacklashInverse
+    v_prev, u : float
+        The last command and the input emitted for it (at start: ``x0`` and
+        :attr:`BacklashInverse.u_init`).
+    """
+
+    def __init__(self, inverse: BacklashInverse):
+        self.inverse = inverse
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the start: the inner signal at ``x0``, the input in its dead band."""
+        self.v_prev, self.u = float(self.inverse.x0), self.inverse.u_init
+
+    def step(self, v) -> float:
+        """The input for the next command ``v`` (a number inside ``inverse.v_range``)."""
+        from ..data.validation import as_real
+
+        v = as_real("v", v, example="0.1", error=DataValidationError)
+        self.inverse._check_range(np.array([v]))
+        return self._advance(v)
+
+    def _advance(self, v: float) -> float:
+        """Rising command: the right branch; falling: the left one; constant: hold."""
+        if v > self.v_prev:
+            self.u = float(self.inverse._u_rise(v))
+        elif v < self.v_prev:
+            self.u = float(self.inverse._u_fall(v))
+        self.v_prev = float(v)
+        return self.u
+
+    def __repr__(self) -> str:
+        return f"BacklashCompensator(v_prev={self.v_prev:g}, u={self.u:g})"
 
 
 def _u_range(gamma, v_lo, v_hi, x0):

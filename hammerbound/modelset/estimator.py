@@ -12,6 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..exceptions import ParameterValidationError
 from .frequency import check_omega
+from .gain_plane import plane_centre
 
 __all__ = ["ModelSetMixin"]
 
@@ -124,17 +125,12 @@ class ModelSetMixin:
 
         dt, unit = self._frequency_axis(dt)
         w = check_omega(omega, dt, unit)
-        if on_gain_plane and self.steady_state_gain is None:
-            raise ParameterValidationError(
-                "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
-                "(or use the plain envelope, on_gain_plane=False)."
-            )
-        gain = float(self.steady_state_gain) if on_gain_plane else None
+        gain = self._plane_gain(on_gain_plane)
         env = frequency_envelope(self.bounds_, self.na, self._b_lags(), w, dt=dt, gain=gain)
         return replace(env, **self._labels(unit))
 
     def uncertainty_weight(self, kind="multiplicative", order=2, dt=None, *, margin=0.05,
-                           omega=None, n_grid=8192):
+                           omega=None, n_grid=8192, on_gain_plane=False):
         """A stable, minimum-phase weight ``W`` bounding the set around the central model.
 
         ``kind="multiplicative"``: ``|G/G0 - 1| <= |W|``; ``"additive"``: ``|G - G0| <= |W|``,
@@ -147,6 +143,14 @@ class ModelSetMixin:
         ``.central`` get python-control's ``dt=True`` (sampling time not given) and
         ``.omega`` is in rad/sample (``.frequency_unit``). See
         :mod:`hammerbound.modelset.uncertainty`.
+
+        ``on_gain_plane=True`` bounds only the models on the gain plane (22.8) -- every
+        feasible model satisfies it, the box alone does not express it -- around the box
+        centre moved onto that plane (``.central``; its last ``b`` is set by the gain).
+        All these models have the same steady-state gain, so the bound vanishes at
+        ``omega = 0`` and a controller with integral action can pass a robust-stability
+        test that the box's weight (wide at low frequencies) makes impossible. Needs
+        ``steady_state_gain``.
 
         Returns
         -------
@@ -166,7 +170,22 @@ class ModelSetMixin:
         dt, unit = self._frequency_axis(dt)
         tf_dt = True if unit == "rad/sample" else dt
         w = None if omega is None else check_omega(omega, dt, unit)
+        gain = self._plane_gain(on_gain_plane)
+        theta0 = None if gain is None else plane_centre(self.bounds_, self.na, gain)
         return fit_weight(self.bounds_, self.na, self._b_lags(),
-                          self.to_transfer_function(tf_dt), dt=dt, kind=kind, order=order,
-                          omega=w, margin=margin, n_grid=n_grid, tf_dt=tf_dt,
-                          frequency_unit=unit)
+                          self.to_transfer_function(tf_dt, theta=theta0), dt=dt, kind=kind,
+                          order=order, omega=w, margin=margin, n_grid=n_grid, tf_dt=tf_dt,
+                          frequency_unit=unit, gain=gain)
+
+    def _plane_gain(self, on_gain_plane):
+        """The steady-state gain when ``on_gain_plane`` (checked), else None."""
+        from ..data.validation import as_flag
+
+        if not as_flag("on_gain_plane", on_gain_plane):
+            return None
+        if self.steady_state_gain is None:
+            raise ParameterValidationError(
+                "on_gain_plane=True needs a gain constraint: fit with steady_state_gain set "
+                "(or use the plain bound over the box, on_gain_plane=False)."
+            )
+        return float(self.steady_state_gain)

@@ -43,6 +43,7 @@ import numpy as np
 
 from ..exceptions import DataValidationError, DataWarning, ParameterValidationError
 from ..results import Result, jsonable
+from .gain_plane import plane_numerator, plane_numerator_lipschitz
 from .zonotope import Zonotopes, value_sets
 
 __all__ = ["FrequencyEnvelope", "frequency_envelope", "default_omega", "denominators_stable"]
@@ -316,7 +317,24 @@ def _gain_plane_magnitude(bounds, na, b_lags, w, dt, gain, n_sub=256):
         return np.maximum(0.5 * (x[:-1] + x[1:]) - 0.5 * lip * h, 0.0)
 
     lo_b, up_b = combine(up_i(nmax, LN), dn_i(nmin, LN), up_i(dmax, LD), dn_i(dmin, LD))
+    # |G - g| <= max|B - gA| / min|A| on the plane: exact (0) at the steady state, where the
+    # ratio of the decoupled sub-box bounds above is loosest (:mod:`.gain_plane`)
+    emax = plane_numerator(bounds, na, b_lags, wd, gain, 1.0, gain).max_abs()
+    ZA = value_sets(np.r_[1.0, bounds[:na, 0]], np.r_[1.0, bounds[:na, 1]], np.arange(na + 1), wd)
+    amin = ZA.min_abs()
+    LE = plane_numerator_lipschitz(bounds, na, b_lags, gain, dt)
+    LA = _lipschitz(np.r_[1.0, bounds[:na, 0]], np.r_[1.0, bounds[:na, 1]], np.arange(na + 1), dt)
+    e = ratio(emax, amin)[:, None]
+    e_b = ratio(up_i(emax[:, None], LE), dn_i(amin[:, None], LA))
+    lo = np.maximum(lo, (abs(gain) - e[:, 0]) * (1 - _OUT))
+    up = np.minimum(up, (abs(gain) + e[:, 0]) * (1 + _OUT))
+    lo_b = np.maximum(lo_b, (abs(gain) - e_b[:, 0]) * (1 - _OUT))
+    up_b = np.minimum(up_b, (abs(gain) + e_b[:, 0]) * (1 + _OUT))
     return lo, up, lo_b, up_b
+
+
+#: relative outward margin of the few operations after the zonotope extremes
+_OUT = 1e-12
 
 
 def frequency_envelope(bounds, na, b_lags, omega, dt=1.0, gain=None) -> FrequencyEnvelope:

@@ -53,6 +53,7 @@ import numpy as np
 
 from ..exceptions import ParameterValidationError, UnboundedSetError
 from .frequency import _lipschitz
+from .gain_plane import plane_centre, plane_numerator
 from .weight import UncertaintyWeight, WeightCertificate
 from .weight_shape import embed, fit_shape, magnitude, polynomial, start_from_roots
 from .zonotope import ROUND_RTOL, value_sets
@@ -77,24 +78,56 @@ def _split(bounds, na):
     return a_lo, a_hi, bounds[na:, 0], bounds[na:, 1]
 
 
-def deviation_bound(bounds, na, b_lags, omega, dt=1.0, kind="multiplicative"):
+def deviation_bound(bounds, na, b_lags, omega, dt=1.0, kind="multiplicative", *,
+                    gain=None):
     """Exact ``sup |G/G0 - 1|`` (or ``sup |G - G0|``) over the box at each frequency.
 
-    Returns an array of shape (n,), ``inf`` where some ``A`` in the box vanishes.
+    With ``gain``: the supremum over the box *on the gain plane* ``B(1) = gain A(1)``
+    around the plane's centre (:func:`.gain_plane.plane_centre`), bounded by the smaller of
+    the box's exact supremum and the plane bound of :mod:`.gain_plane` (0 at the steady
+    state). Returns an array of shape (n,), ``inf`` where some ``A`` in the box vanishes.
     """
     if kind not in KINDS:
         raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
+    return _points(bounds, na, np.asarray(b_lags), np.asarray(omega, dtype=float) * dt,
+                   kind, gain)["dev"]
+
+
+def _centre(bounds, na, gain):
+    """The reference model's coefficients: the box centre, or with ``gain`` the centre
+    moved onto the gain plane."""
+    bounds = np.asarray(bounds, dtype=float)
+    return bounds.mean(axis=1) if gain is None else plane_centre(bounds, na, gain)
+
+
+def _points(bounds, na, b_lags, wd, kind, gain):
+    """The deviation bound at the frequencies ``wd`` (rad per sample) and the moduli the
+    Lipschitz bounds between them need (see :class:`_ProofGrid`)."""
     a_lo, a_hi, b_lo, b_hi = _split(bounds, na)
-    wd = np.asarray(omega, dtype=float) * dt
     ZA = value_sets(a_lo, a_hi, np.arange(na + 1), wd)
-    ZB = value_sets(b_lo, b_hi, np.asarray(b_lags), wd)
-    return _deviation(ZA, ZB, kind)
+    ZB = value_sets(b_lo, b_hi, b_lags, wd)
+    theta0 = _centre(bounds, na, gain)
+    A0 = 1.0 + np.exp(-1j * np.outer(wd, np.arange(1, na + 1))) @ theta0[:na]
+    B0 = np.exp(-1j * np.outer(wd, np.asarray(b_lags, float))) @ theta0[na:]
+    dev = _deviation(ZA, ZB, kind, A0, B0)
+    amin = ZA.min_abs()
+    if gain is not None:
+        mmax = plane_numerator(bounds, na, b_lags, wd, gain, A0, B0).max_abs()
+        ref = np.abs(B0) if kind == "multiplicative" else np.abs(A0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            plane = np.where((amin > 0) & (ref > 0), mmax / (amin * np.where(ref > 0, ref, 1.0)),
+                             np.inf)
+        dev = np.minimum(dev, plane * (1 + _RTOL) + _RTOL * 1e-3)
+    return {"w": wd, "dev": dev, "amin": amin, "amax": ZA.max_abs(), "bmax": ZB.max_abs(),
+            "a0": np.abs(A0), "b0": np.abs(B0)}
 
 
-def _deviation(ZA, ZB, kind):
-    """:func:`deviation_bound` from the value sets of ``A`` and ``B``."""
+def _deviation(ZA, ZB, kind, A0, B0):
+    """The box's exact supremum of the deviation around ``G0 = B0 / A0`` from the value
+    sets of ``A`` and ``B`` (any ``G0``: the maximum-modulus argument does not need it to
+    be the box's centre)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        G0 = ZB.centre / ZA.centre
+        G0 = B0 / A0
     amin = ZA.min_abs()
     vb = ZB.vertices()  # (n, nvb)
     va = ZA.vertices()  # (n, nva), CCW; edges va[k] -> va[k+1]
@@ -132,34 +165,37 @@ def _deviation(ZA, ZB, kind):
 
 class _ProofGrid:
     """Frequencies of the proof with the exact deviation and the moduli its Lipschitz
-    bound between neighbours needs (:meth:`between`); :meth:`refine` bisects intervals."""
+    bound between neighbours needs (:meth:`between`); :meth:`refine` bisects intervals.
+    With ``gain`` the deviation is around the plane's centre, whose ``b_L`` may lie outside
+    the box: its own Lipschitz constant and distances to the box are used for it."""
 
     _FIELDS = ("w", "dev", "amin", "amax", "bmax", "a0", "b0")
 
-    def __init__(self, bounds, na, b_lags, dt, kind, w):
+    def __init__(self, bounds, na, b_lags, dt, kind, w, gain=None):
         self.bounds, self.na, self.b_lags = np.asarray(bounds, float), na, np.asarray(b_lags)
-        self.dt, self.kind = float(dt), kind
+        self.dt, self.kind, self.gain = float(dt), kind, gain
         a_lo, a_hi, b_lo, b_hi = _split(self.bounds, na)
         self.LA = _lipschitz(a_lo, a_hi, np.arange(na + 1), self.dt)
         self.LB = _lipschitz(b_lo, b_hi, self.b_lags, self.dt)
-        # radii of the box: |A - A0| <= rA, |d/dw (A - A0)| <= LrA (likewise for B)
-        ra, rb = 0.5 * (a_hi - a_lo), 0.5 * (b_hi - b_lo)
+        b0 = _centre(self.bounds, na, gain)[na:]
+        self.LB0 = _lipschitz(b0, b0, self.b_lags, self.dt)
+        # radii of the box around the centre: |A - A0| <= rA, |d/dw (A - A0)| <= LrA
+        # (likewise for B, whose centre on the plane need not be the box's)
+        ra, rb = 0.5 * (a_hi - a_lo), np.maximum(b_hi - b0, b0 - b_lo)
         self.rA, self.rB = float(np.sum(ra)), float(np.sum(rb))
         self.LrA = self.dt * float(np.sum(np.arange(na + 1) * ra))
         self.LrB = self.dt * float(np.sum(self.b_lags * rb))
         self.data = self._points(np.asarray(w, dtype=float))
 
     @classmethod
-    def uniform(cls, bounds, na, b_lags, dt, kind, n_grid):
-        return cls(bounds, na, b_lags, dt, kind, np.linspace(0.0, np.pi / dt, int(n_grid)))
+    def uniform(cls, bounds, na, b_lags, dt, kind, n_grid, gain=None):
+        return cls(bounds, na, b_lags, dt, kind, np.linspace(0.0, np.pi / dt, int(n_grid)),
+                   gain)
 
     def _points(self, w):
-        a_lo, a_hi, b_lo, b_hi = _split(self.bounds, self.na)
-        ZA = value_sets(a_lo, a_hi, np.arange(self.na + 1), w * self.dt)
-        ZB = value_sets(b_lo, b_hi, self.b_lags, w * self.dt)
-        return {"w": w, "dev": _deviation(ZA, ZB, self.kind), "amin": ZA.min_abs(),
-                "amax": ZA.max_abs(), "bmax": ZB.max_abs(), "a0": np.abs(ZA.centre),
-                "b0": np.abs(ZB.centre)}
+        out = _points(self.bounds, self.na, self.b_lags, w * self.dt, self.kind, self.gain)
+        out["w"] = w
+        return out
 
     @property
     def omega(self):
@@ -197,21 +233,23 @@ class _ProofGrid:
         def down(x, L):
             return np.maximum(0.5 * (x[:-1] + x[1:]) - 0.5 * L * h, 0.0)
 
+        LB0 = self.LB0  # of the centre's B (A0 is the box centre's A: LA)
         amin, amax, bmax = down(d["amin"], LA), up(d["amax"], LA), up(d["bmax"], LB)
-        a0max, b0max, b0min = up(d["a0"], LA), up(d["b0"], LB), down(d["b0"], LB)
+        a0max, b0max, b0min = up(d["a0"], LA), up(d["b0"], LB0), down(d["b0"], LB0)
+        a0min = np.maximum(amin, down(d["a0"], LA))  # A0 lies in A's value set
         # G/G0 - 1 = M/(A B0) and G - G0 = M/(A A0) with M = B A0 - A B0
         # = (B - B0) A0 - (A - A0) B0: small and slowly varying for a small box
         m_max = self.rB * a0max + self.rA * b0max
-        dm_max = self.LrB * a0max + self.rB * LA + self.LrA * b0max + self.rA * LB
+        dm_max = self.LrB * a0max + self.rB * LA + self.LrA * b0max + self.rA * LB0
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if self.kind == "multiplicative":
                 den = amin * b0min
                 K = (LB * a0max + bmax * LA) / den \
-                    + bmax * a0max * (LA * b0max + amax * LB) / den**2
-                dden = LA * b0max + amax * LB
+                    + bmax * a0max * (LA * b0max + amax * LB0) / den**2
+                dden = LA * b0max + amax * LB0
             else:
-                K = 2 * (LB / amin + bmax * LA / amin**2)
-                den = amin * np.maximum(amin, down(d["a0"], LA))
+                K = LB / amin + bmax * LA / amin**2 + LB0 / a0min + b0max * LA / a0min**2
+                den = amin * a0min
                 dden = LA * a0max + amax * LA
             K = np.minimum(K, dm_max / den + m_max * dden / den**2)
             K = np.where(np.isfinite(K), K, np.inf)
@@ -274,14 +312,16 @@ def _certify(W, grid, max_points):
 
 
 def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
-                   n_grid: int = 8192, _grid=None) -> WeightCertificate:
+                   n_grid: int = 8192, _grid=None, *, gain=None) -> WeightCertificate:
     """Check ``|W(e^{jw dt})| >= sup_theta deviation`` for *all* ``w`` (see module doc):
     on a uniform grid of ``n_grid`` points over ``[0, pi/dt]``, with intervals bisected
-    where the Lipschitz slack decides (up to ``8 n_grid`` points in all)."""
+    where the Lipschitz slack decides (up to ``8 n_grid`` points in all). With ``gain``
+    the supremum is over the box on the gain plane (:func:`deviation_bound`)."""
     _check_grid(n_grid)
     if kind not in KINDS:
         raise ParameterValidationError(f"kind must be one of {KINDS}; got {kind!r}.")
-    grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid) if _grid is None else _grid
+    grid = (_ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid, gain) if _grid is None
+            else _grid)
     return _certify(W, grid, _REFINE_FACTOR * int(n_grid))[0]
 
 
@@ -353,7 +393,8 @@ def _starts(n, prev, central_tf, rng, rmax):
 
 def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", order=2,
                omega=None, margin=0.05, n_grid=8192, random_state=0,
-               rmax=0.98, *, tf_dt=None, frequency_unit="rad/s") -> UncertaintyWeight:
+               rmax=0.98, *, tf_dt=None, frequency_unit="rad/s",
+               gain=None) -> UncertaintyWeight:
     """The best certified weight of order at most ``order`` above the deviation bound.
 
     For each order ``0 .. order`` the shape (poles and zeros inside ``|z| <= rmax``)
@@ -365,13 +406,15 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
     tie). The constant weight (order 0) always certifies, so a finite deviation always
     gives a weight. ``tf_dt``: the sampling time given to ``W`` (default ``dt``; ``True``
     when it is not known and ``omega`` is in rad/sample, as ``frequency_unit`` says).
+    ``gain``: bound the box *on the gain plane* around its centre there
+    (:func:`deviation_bound`); ``central_tf`` must then be that centre's model.
     """
     _check_fit_args(order, margin, n_grid)
     nyq = np.pi / dt
     w = np.linspace(0.0, nyq, 256) if omega is None else np.asarray(omega, float)
     w = np.union1d(w, np.logspace(np.log10(1e-4 * nyq), np.log10(nyq), 256))
-    dev = deviation_bound(bounds, na, b_lags, w, dt, kind)
-    grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid)
+    dev = deviation_bound(bounds, na, b_lags, w, dt, kind, gain=gain)
+    grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid, gain)
     if not (np.all(np.isfinite(dev)) and grid.finite()):
         raise UnboundedSetError(_unbounded_message(kind))
     floor = 1e-6 * max(float(np.max(dev)), 1e-300)
@@ -405,4 +448,5 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
         import control
 
         W = control.tf(W.num[0][0], W.den[0][0], tf_dt)
-    return UncertaintyWeight(W, kind, central_tf, w, dev, cert, e, frequency_unit)
+    return UncertaintyWeight(W, kind, central_tf, w, dev, cert, e, frequency_unit,
+                             on_gain_plane=gain is not None)

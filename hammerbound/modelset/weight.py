@@ -54,6 +54,9 @@ class UncertaintyWeight(Result):
     frequency_unit : str
         Unit of ``omega`` and ``certificate.omega``: ``"rad/s"`` (rad per unit of the
         sampling time) or ``"rad/sample"`` when no sampling time is known.
+    on_gain_plane : bool
+        True: the bound holds for the models of the set *on the gain plane* (22.8) (every
+        feasible model), around a central model on that plane; not for box points off it.
     """
 
     W: object
@@ -64,6 +67,7 @@ class UncertaintyWeight(Result):
     certificate: WeightCertificate
     excess_db: float = float("nan")
     frequency_unit: str = "rad/s"
+    on_gain_plane: bool = False
 
     @property
     def order(self) -> int:
@@ -94,8 +98,10 @@ class UncertaintyWeight(Result):
         """The weight, its kind and order, the proof and the over-bound."""
         c = self.certificate
         rel = "|G/G0 - 1|" if self.kind == "multiplicative" else "|G - G0|"
+        where = (" on the gain plane (every model with the steady-state gain)"
+                 if self.on_gain_plane else "")
         return (f"{self.kind} uncertainty weight of order {self.order}: {rel} <= |W| at every "
-                f"frequency, for every model of the set\n"
+                f"frequency, for every model of the set{where}\n"
                 f"W = {_tf_text(self.W)}\n"
                 f"proof: {c.omega.size} grid points on [0, {c.omega[-1]:.4g}] "
                 f"{self.frequency_unit}, smallest |W| / deviation bound {c.min_ratio:.4g} "
@@ -113,7 +119,8 @@ class UncertaintyWeight(Result):
             "dt": None if self.W.dt is True else self.W.dt,
             "poles": [[z.real, z.imag] for z in self.poles],
             "zeros": [[z.real, z.imag] for z in self.zeros],
-            "frequency_unit": self.frequency_unit, "omega": self.omega,
+            "frequency_unit": self.frequency_unit, "on_gain_plane": self.on_gain_plane,
+            "omega": self.omega,
             "deviation": self.deviation, "magnitude": self.magnitude(),
             "excess_db": self.excess_db,
             "certificate": {"holds": c.holds, "min_ratio": c.min_ratio,

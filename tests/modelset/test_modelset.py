@@ -463,6 +463,49 @@ def test_inverse_branch_band_is_attained_at_polygon_vertices(stage1):
     assert min(errs) == pytest.approx(b["rise"][0][-1], rel=1e-6, abs=1e-9)
 
 
+def test_the_compensator_steps_through_a_control_loop(stage1):
+    """One command at a time, each computed from the measured inner signal (an integral
+    loop around the tests' own play operator): the stateful compensator emits what
+    compensate() emits for the whole sequence, and the guaranteed band holds for every
+    sampled backlash (trial 7: calling compensate() per sample restarted from x0)."""
+    est, _ = stage1
+    inv = est.inverse()
+    lo_v, hi_v = inv.v_range
+    ref = 0.8 * hi_v * np.sign(np.sin(np.linspace(0, 12, 400)))  # set-point square wave
+    for g in est.sample(40, random_state=3).gamma:
+        c = inv.compensator()
+        v, u, x = [], [], [0.0]
+        vt = 0.0
+        for r in ref:
+            vt = float(np.clip(vt + 0.3 * (r - x[-1]), lo_v, hi_v))
+            u.append(c.step(vt))
+            v.append(vt)
+            x.append(float(play(np.array(u), *g, x0=0.0)[-1]))
+        v, u, x = np.array(v), np.array(u), np.array(x[1:])
+        np.testing.assert_array_equal(u, inv.compensate(v))
+        lo, hi = inv.error_bounds(v)
+        assert np.all(x - v >= lo) and np.all(x - v <= hi)
+    c.reset()
+    assert (c.v_prev, c.u) == (inv.x0, inv.u_init)
+    with pytest.raises(DataValidationError, match="command range"):
+        c.step(hi_v * 2 + 1)
+    with pytest.raises(DataValidationError, match="finite number"):
+        c.step(float("nan"))
+
+
+def test_compensate_warns_when_given_one_number(stage1):
+    from hammerbound.exceptions import DataWarning
+
+    inv = stage1[0].inverse()
+    with pytest.warns(DataWarning, match="compensator"):
+        inv.compensate(0.1)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        inv.compensate([0.1])  # a sequence of one command: as asked
+
+
 def test_inverse_validation(stage1):
     est, _ = stage1
     inv = est.inverse()

@@ -86,7 +86,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         Two-stage path: how stage 2 treats the inner-signal uncertainty. ``"independent"``
         follows the chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.
         ``"two-level"`` uses that under Result 1 the inner signal takes exactly two
-        (unknown) values: one shared error per PRBS level. Both are guaranteed.
+        (unknown) values: one shared error per PRBS level. Both are guaranteed. Only the
+        exact and moment methods use the shared errors: ``method="lp"`` bounds every
+        equation's errors by their worst case, so its intervals are the same for both
+        (the summary says so).
     prbs_level : float or None
         Two-stage path: ``u*``. Default: read from the PRBS input (two values ``+-u*``).
     procedure : {"auto", "two-stage", "one-record"}, default "auto"
@@ -279,9 +282,13 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                     f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")
             table = self.intervals_.summary(title=head)
             return table + "\nassumptions:\n" + "\n".join(f"  - {a}" for a in self.assumptions_)
+        inner = self.inner_signal
+        if inner == "two-level" and lin.method == "lp":
+            inner += (" (not used by method 'lp', which bounds each equation's errors on "
+                      "their own; method='exact' uses it)")
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
-                f"{self.inner_signal}, N = {pr.N}, dt = {dt}\n"
+                f"{inner}, N = {pr.N}, dt = {dt}\n"
                 f"assumptions: output error bounds |eta| <= "
                 f"{bound_text(self.backlash_.output_bound_)} (settled steady states), "
                 f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "

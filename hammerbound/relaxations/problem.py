@@ -191,9 +191,14 @@ class EIVProblem:
         else:
             groups = np.asarray(groups)
             if groups.shape != (n,) or not np.issubdtype(groups.dtype, np.integer):
-                raise DataValidationError("groups must be an integer array of shape (N,).")
+                raise DataValidationError(
+                    f"the input groups (input_groups= of LinearEIVSetEstimator.fit, groups= "
+                    f"here) must be an integer array of shape (N,) = ({n},), one group "
+                    f"label per sample; got shape {groups.shape} of dtype {groups.dtype}.")
             if groups.min() < 0:
-                raise DataValidationError("groups must be non-negative integers.")
+                raise DataValidationError(
+                    "the input groups (input_groups= of LinearEIVSetEstimator.fit) must be "
+                    "non-negative integers.")
         # compress group labels to 0..K-1 and check consistency of x / dx inside a group
         labels, groups = np.unique(groups, return_inverse=True)
         k = labels.shape[0]

@@ -441,8 +441,20 @@ def _column(X, name):
     return X
 
 
+def _counter_clockwise(verts, edge_cons):
+    """The vertices counter-clockwise in ``(m, beta)`` with edge ``k`` from vertex ``k`` to
+    ``k + 1``: the right side's polygon is computed in coordinates with ``-beta``, which
+    reverses its orientation."""
+    n = len(verts)
+    x, y = verts[:, 0], verts[:, 1]
+    if n < 3 or np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) >= 0:
+        return verts, edge_cons
+    return verts[::-1].copy(), [edge_cons[(n - 2 - j) % n] for j in range(n)]
+
+
 def _make_polygon_set(side, sigma, verts_mb, edge_cons, cons, **fields) -> PolygonFeasibleSet:
     n = len(verts_mb)
+    verts_mb, edge_cons = _counter_clockwise(np.asarray(verts_mb, dtype=float), list(edge_cons))
     edges = tuple(Edge(edge_cons[k], verts_mb[k], verts_mb[(k + 1) % n]) for k in range(n))
     m, beta = verts_mb[:, 0], verts_mb[:, 1]
     with np.errstate(divide="ignore", invalid="ignore"):

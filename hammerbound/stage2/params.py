@@ -10,6 +10,7 @@ import numpy as np
 from .._compat import is_given, warn_renamed
 from ..data.validation import as_real
 from ..exceptions import ParameterValidationError
+from ..relaxations.exact.limits import check_limits
 from ..relaxations.moment.size import check_work
 
 __all__ = ["METHODS", "check_params"]
@@ -38,20 +39,7 @@ def check_params(est) -> None:
         if est.b0 and nk not in (None, 0, 1):
             raise ParameterValidationError(
                 f"b0=True means a direct term (nk=0) but nk={nk}: pass only nk.")
-    mn = est.max_nodes
-    if not isinstance(mn, numbers.Integral) or isinstance(mn, bool) or mn < 0:
-        raise ParameterValidationError(f"max_nodes must be an integer >= 0; got {mn!r}.")
-    tl = est.time_limit
-    if not isinstance(tl, numbers.Real) or isinstance(tl, bool) or not tl >= 0:
-        raise ParameterValidationError(
-            f"time_limit must be a number of seconds >= 0; got {tl!r}."
-        )
-    ttl = est.total_time_limit
-    if ttl is not None and (not isinstance(ttl, numbers.Real) or isinstance(ttl, bool)
-                            or not ttl >= 0):
-        raise ParameterValidationError(
-            f"total_time_limit must be None or a number of seconds >= 0; got {ttl!r}."
-        )
+    check_limits(est.tol, est.max_nodes, est.time_limit, est.total_time_limit)
     if est.nb == 0 and est._nk() != 0:
         raise ParameterValidationError(
             "B has no coefficient: use nb >= 1 or nk=0 (the direct term b0)."
@@ -76,8 +64,7 @@ def check_params(est) -> None:
     check_work("relaxation_max_work", est.relaxation_max_work)
     as_real("steady_state_gain", est.steady_state_gain, nonzero=True, or_none=True,
             example="1.0")
-    if not (isinstance(est.tol, numbers.Real) and est.tol > 0):
-        raise ParameterValidationError(f"tol must be > 0; got {est.tol!r}.")
+
     if not (isinstance(est.n_jobs, numbers.Integral) and (est.n_jobs >= 1 or est.n_jobs == -1)):
         raise ParameterValidationError(f"n_jobs must be a positive integer or -1; got {est.n_jobs!r}.")
     if est.solver_options is not None and not isinstance(est.solver_options, dict):

@@ -83,6 +83,22 @@ def test_edges_name_active_constraints():
                 assert c.sign in "+-"
 
 
+@pytest.mark.parametrize("method", ["polygon", "algorithm"])
+def test_both_polygons_are_counter_clockwise_in_m_beta(method):
+    """As documented (trial 8: the right side's vertices went clockwise); the edges follow
+    the vertices: edge k runs from vertex k to vertex k + 1."""
+    for seed in range(4):
+        ex = chapter_example(0.05, random_state=seed)
+        est = BacklashSetEstimator(0.05, method=method).fit(ex.steady.u, ex.steady.y)
+        for fs in (est.left_, est.right_):
+            v = np.asarray(fs.vertices_mb)
+            x, y = v[:, 0], v[:, 1]
+            assert np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 0, fs.side
+            for k, e in enumerate(fs.edges):
+                np.testing.assert_array_equal(e.start, v[k])
+                np.testing.assert_array_equal(e.end, v[(k + 1) % len(v)])
+
+
 def test_inner_signal_bounds_contain_truth_and_are_exact():
     ex = chapter_example(0.02, random_state=3)
     est = BacklashSetEstimator(0.02).fit(ex.steady.u, ex.steady.y)

@@ -79,6 +79,7 @@ from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
 from ..units import Units
+from .limits import check_limits
 from .local import polish, restore
 from .mccormick import shared_groups
 from .obbt import _obbt
@@ -205,11 +206,14 @@ def exact_bounds(
 
     Raises
     ------
+    ParameterValidationError
+        ``tol``, ``max_nodes``, ``time_limit`` or ``total_time_limit`` out of range.
     EmptyFeasibleSetError
         The data are inconsistent (from the LP or from the relaxation at the root).
     UnboundedSetError
         An exact bound coincides with the a priori box.
     """
+    check_limits(tol, max_nodes, time_limit, total_time_limit)
     t0 = time.perf_counter()
     options = SearchOptions() if options is None else options
     if total_time_limit is not None:

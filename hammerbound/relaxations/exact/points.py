@@ -16,11 +16,12 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from ...exceptions import SolverError
 from ...solvers.highs_process import wall_stamp
 from ..problem import EIVProblem, check_theta
-from ..witness import WitnessLP, seek_feasible
+from ..witness import WitnessLP, fixed_theta_matrix, seek_feasible
 from ..witness import on_gain_plane as _on_gain_plane  # noqa: F401 - used by bnb
 
 #: the branch-and-bound's screen is the shared fixed-theta witness LP
@@ -85,6 +86,42 @@ class _Pool:
             return None
         return self.verify(theta)
 
+    def complete(self, theta, k, sense) -> _Point | None:
+        """Without input errors, keep ``theta``'s ``a`` and choose its ``b`` by an LP, then
+        verify (:func:`b_for_a`). Finds points of thin sets that the fixed-``theta``
+        screen misses: the node LP's ``a`` often lies in the set when its ``b`` does not."""
+        if self._out_of_time() or np.any(self.problem.dx_group > 0):
+            return None
+        b = b_for_a(self.problem, theta, k, sense)
+        if b is None:
+            return None
+        th = np.array(theta, dtype=float)
+        th[self.problem.na:] = b
+        return self.verify(th)
+
+    def complete_line(self, inside, outside, k, sense, steps=12, resolution=0.0):
+        """Bisection between a verified point ``inside`` and ``outside`` on ``a`` only, each
+        ``a`` completed by :meth:`complete` (its ``b`` re-chosen): on a thin set the segment
+        of whole ``theta`` leaves the set at once, while the ``a`` part stays in it longer.
+        Returns the verified point nearest ``outside`` (None: none better than
+        ``inside``)."""
+        if np.any(self.problem.dx_group > 0):
+            return None
+        na = self.problem.na
+        d = np.asarray(outside, dtype=float) - np.asarray(inside, dtype=float)
+        span = abs(float(d[k])) if k < na else np.inf
+        lo, hi, best = 0.0, 1.0, None
+        for _ in range(steps):
+            if (hi - lo) * span <= resolution or self._out_of_time():
+                break
+            mid = 0.5 * (lo + hi)
+            pt = self.complete(np.asarray(inside, dtype=float) + mid * d, k, sense)
+            if pt is not None:
+                lo, best = mid, pt
+            else:
+                hi = mid
+        return best
+
     def seek(self, starts, box, max_evals=800, deadline=None) -> _Point | None:
         """Look for a first verified point when none of the LP points is feasible
         (:func:`~hammerbound.relaxations.witness.seek_feasible` with :meth:`verify`)."""
@@ -119,3 +156,50 @@ class _Pool:
                 return pt
             lo *= 0.5
         return None
+
+
+#: relative margin by which :func:`b_for_a` keeps the output errors inside their bounds (the
+#: point then passes :func:`check_theta`, whose tolerance is far smaller)
+B_FOR_A_MARGIN = 1e-7
+
+
+def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | None:
+    """The ``b`` (inside the a priori box) that, with ``theta``'s ``a`` fixed, explains the
+    data with errors inside their bounds, or None (unverified: the caller checks it).
+
+    Without input errors the equations (22.34) at fixed ``a`` are linear in ``b`` and the
+    output errors ``eta``, so this is one LP: for an end of a ``b_j`` (``k >= na``) the
+    ``b`` that minimises ``sense * b_k`` with the errors ``B_FOR_A_MARGIN`` inside their
+    bounds; for an end of an ``a_i``, the ``b`` with the errors deepest inside.
+    """
+    from scipy.optimize import linprog
+
+    pr = problem
+    na, p, n = pr.na, pr.p, pr.N
+    theta = np.asarray(theta, dtype=float)
+    phi, yt = pr.regressors()
+    m_eta = fixed_theta_matrix(pr, theta).tocsc()[:, :n]
+    nb = p - na
+    deta = np.asarray(pr.deta, dtype=float)
+    # variables [b (nb), eta (n), s]: M eta - phi_b b = yt + phi_a a, |eta| <= deta (1 - s)
+    a_eq = sp.hstack([sp.csc_matrix(-phi[:, na:]), m_eta, sp.csc_matrix((m_eta.shape[0], 1))])
+    b_eq = yt + phi[:, :na] @ theta[:na]
+    g = pr.gain_row()
+    if g is not None:
+        a_eq = sp.vstack([a_eq, sp.csc_matrix(np.r_[g[0][na:], np.zeros(n + 1)][None, :])])
+        b_eq = np.r_[b_eq, g[1] - g[0][:na] @ theta[:na]]
+    eye = sp.eye(n, format="csc")
+    a_ub = sp.vstack([sp.hstack([sp.csc_matrix((n, nb)), eye, sp.csc_matrix(deta[:, None])]),
+                      sp.hstack([sp.csc_matrix((n, nb)), -eye, sp.csc_matrix(deta[:, None])])])
+    b_ub = np.r_[deta, deta]
+    c = np.zeros(nb + n + 1)
+    if k >= na:
+        c[k - na] = sense
+        s_range = (B_FOR_A_MARGIN, B_FOR_A_MARGIN)
+    else:
+        c[-1] = -1.0
+        s_range = (B_FOR_A_MARGIN, 0.5)
+    bounds = [tuple(r) for r in pr.theta_box[na:]] + [(None, None)] * n + [s_range]
+    res = linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq.tocsr(), b_eq=b_eq, bounds=bounds,
+                  method="highs")
+    return res.x[:nb].copy() if res.status == 0 else None

@@ -1,0 +1,68 @@
+"""A thin set without input errors (new-user trial 8): the set of a second-order
+output-error record is a needle in ``(a1, a2)`` that the search's witnesses did not follow,
+so two ends stayed at their time limit with gaps of a quarter of the interval. With no
+input errors the equations at fixed ``a`` are linear in ``b`` and the errors: the search
+now completes the node LP's ``a`` with the best ``b`` (one LP), and bisects on ``a`` alone.
+
+The record is simulated here; every witness is checked by the tests' own LP-free residual
+computation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+import hammerbound as hb
+from hammerbound.relaxations import exact_bounds
+from hammerbound.relaxations.exact.points import _Pool, b_for_a
+from hammerbound.relaxations.problem import check_theta
+
+THETA = np.array([-0.5, 0.06, 1.0, 0.5])  # A = 1 - 0.5 q^-1 + 0.06 q^-2, B = q^-2 (1 + 0.5 q^-1)
+D = 0.1
+
+
+@pytest.fixture(scope="module")
+def problem():
+    rng = np.random.default_rng(0)
+    n = 90
+    x = np.where(rng.random(n) < 0.5, 1.0, -1.0) + 0.3 * rng.uniform(-1, 1, n)
+    y = lfilter([0, 0, 1.0, 0.5], [1.0, -0.5, 0.06], x) + rng.uniform(-D, D, n)
+    return hb.EIVProblem(y, x, input_bound=0.0, output_bound=D, na=2, nb=2, nk=2)
+
+
+def _residuals(pr, theta, eta):
+    """(y_t - eta_t) + a1 (y_t-1 - eta_t-1) + a2 (y_t-2 - eta_t-2) - b2 x_t-2 - b3 x_t-3."""
+    y, x = pr.y - eta, pr.x
+    t = np.arange(3, pr.N)
+    return (y[t] + theta[0] * y[t - 1] + theta[1] * y[t - 2]
+            - theta[2] * x[t - 2] - theta[3] * x[t - 3])
+
+
+@pytest.fixture(scope="module")
+def res(problem):
+    return exact_bounds(problem, time_limit=10)
+
+
+def test_every_end_of_the_needle_closes_with_verified_witnesses(problem, res):
+    assert [i.status for i in res.infos] == ["optimal"] * 8
+    assert np.all((res.bounds[:, 0] <= THETA) & (THETA <= res.bounds[:, 1]))
+    for info in res.infos:
+        w, eta = info.witness, info.point.eta
+        assert np.all(np.abs(eta) <= D * (1 + 1e-7))
+        scale = np.abs(problem.y).max() * 3 + np.abs(problem.x).max() * 3
+        assert np.max(np.abs(_residuals(problem, w, eta))) <= 1e-7 * scale
+
+
+def test_b_for_a_completes_a_feasible_a_and_refuses_an_infeasible_one(problem, res):
+    w = res.infos[0].witness  # the a1 lower end's witness
+    b = b_for_a(problem, w, 0, 1.0)
+    th = np.r_[w[:2], b]
+    assert check_theta(problem, th).feasible
+    # an a below the certified lower bound of a1 has no b at all
+    far = np.r_[res.bounds[0, 0] - 0.01, w[1], w[2:]]
+    assert b_for_a(problem, far, 0, 1.0) is None
+    # with input errors the equations at fixed a are not linear in b: not used
+    noisy = hb.EIVProblem(problem.y, problem.x, input_bound=0.01, output_bound=D, na=2, nb=2,
+                          nk=2)
+    assert _Pool(noisy).complete(w, 0, 1.0) is None

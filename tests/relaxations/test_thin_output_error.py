@@ -44,6 +44,7 @@ def res(problem):
     return exact_bounds(problem, time_limit=10)
 
 
+@pytest.mark.deep
 def test_every_end_of_the_needle_closes_with_verified_witnesses(problem, res):
     assert [i.status for i in res.infos] == ["optimal"] * 8
     assert np.all((res.bounds[:, 0] <= THETA) & (THETA <= res.bounds[:, 1]))
@@ -54,15 +55,16 @@ def test_every_end_of_the_needle_closes_with_verified_witnesses(problem, res):
         assert np.max(np.abs(_residuals(problem, w, eta))) <= 1e-7 * scale
 
 
-def test_b_for_a_completes_a_feasible_a_and_refuses_an_infeasible_one(problem, res):
-    w = res.infos[0].witness  # the a1 lower end's witness
-    b = b_for_a(problem, w, 0, 1.0)
-    th = np.r_[w[:2], b]
-    assert check_theta(problem, th).feasible
-    # an a below the certified lower bound of a1 has no b at all
-    far = np.r_[res.bounds[0, 0] - 0.01, w[1], w[2:]]
-    assert b_for_a(problem, far, 0, 1.0) is None
+def test_b_for_a_completes_a_feasible_a_and_refuses_an_infeasible_one(problem):
+    # the truth's a is feasible (errors within the bound): b_for_a finds a b for it
+    b = b_for_a(problem, THETA, 0, 1.0)
+    assert b is not None and check_theta(problem, np.r_[THETA[:2], b]).feasible
+    # the lowest b2 for that a is at most the truth's, and still verified
+    low = b_for_a(problem, THETA, 2, 1.0)
+    assert low[0] <= THETA[2] + 1e-9 and check_theta(problem, np.r_[THETA[:2], low]).feasible
+    # an a far outside the set has no b at all
+    assert b_for_a(problem, np.r_[THETA[0] - 0.05, THETA[1:]], 0, 1.0) is None
     # with input errors the equations at fixed a are not linear in b: not used
     noisy = hb.EIVProblem(problem.y, problem.x, input_bound=0.01, output_bound=D, na=2, nb=2,
                           nk=2)
-    assert _Pool(noisy).complete(w, 0, 1.0) is None
+    assert _Pool(noisy).complete(THETA, 0, 1.0) is None

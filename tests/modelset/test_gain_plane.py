@@ -104,7 +104,7 @@ def test_the_plane_envelope_is_exact_at_the_steady_state(est):
     dense = np.linspace(0, np.pi, 3001)
     fine = est.frequency_response_bounds(dense, on_gain_plane=True)
     mid = 0.5 * (dense[:-1] + dense[1:])
-    for th in plane_members(est.bounds_, 1.0, 200, np.random.default_rng(2)):
+    for th in plane_members(est.bounds_, 1.0, 100, np.random.default_rng(2))[:100]:
         g = np.abs(_response(th, dense))
         assert np.all(fine.mag_lower <= g * (1 + 1e-12)) and np.all(g <= fine.mag_upper * (1 + 1e-12))
         gm = np.abs(_response(th, mid))

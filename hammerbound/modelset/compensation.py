@@ -28,12 +28,18 @@ every command sequence in the declared range.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..data.validation import as_signal
-from ..exceptions import DataValidationError, IllPosedBacklashError, ParameterValidationError
+from ..data.validation import as_real, as_signal
+from ..exceptions import (
+    DataValidationError,
+    DataWarning,
+    IllPosedBacklashError,
+    ParameterValidationError,
+)
 from ..results import Result, jsonable
 
 __all__ = ["BacklashCompensator", "BacklashInverse", "build_inverse"]
@@ -100,10 +106,6 @@ class BacklashInverse(Result):
         given here is treated as a sequence of length one, with a warning.
         """
         if np.ndim(v) == 0:
-            import warnings
-
-            from ..exceptions import DataWarning
-
             warnings.warn(
                 "compensate() takes a command sequence and starts from x0 at every call, so "
                 "called once per sample it picks the branch from the sign of v - x0, not "
@@ -215,8 +217,6 @@ class BacklashCompensator:
 
     def step(self, v) -> float:
         """The input for the next command ``v`` (a number inside ``inverse.v_range``)."""
-        from ..data.validation import as_real
-
         v = as_real("v", v, example="0.1", error=DataValidationError)
         self.inverse._check_range(np.array([v]))
         return self._advance(v)

@@ -258,14 +258,21 @@ class FrequencyEnvelope(Result):
         return plot_bode_envelope(self, ax=ax, **kwargs)
 
 
-def _gain_plane_magnitude(bounds, na, b_lags, w, dt, gain, n_sub=256):
+#: relative outward margin of the few operations after the zonotope extremes
+_OUT = 1e-12
+
+
+def _gain_plane_magnitude(bounds, na, b_lags, w, dt, gain, a_min, LA, n_sub=256):
     """Magnitude bounds over the box intersected with ``sum b = gain (1 + sum a)``.
 
     Eliminating the last ``b_L`` (and dropping its interval: an outer bound),
     ``G = N / D`` with ``N = sum_{j<L} b_j (z^-j - z^-L) + gain z^-L (1 + sum a_i)`` and
     ``D = A``. Both depend on ``a``; the ``a``-box is cut into ``n_sub`` sub-boxes and on
     each one ``max|N| / min|D|`` and ``min|N| / max|D|`` bound the ratio (zonotope
-    extremes, decoupled: outward). Returns lower, upper and the between-grid bounds.
+    extremes, decoupled: outward), intersected with ``|G| = gain +- max|B - gA| / min|A|``
+    (exact at the steady state). ``a_min``: ``min |A|`` over the box at ``w`` and ``LA`` its
+    Lipschitz constant (the caller's, :func:`frequency_envelope`). Returns lower, upper
+    and the between-grid bounds.
     """
     bounds = np.asarray(bounds, dtype=float)
     b_lags = np.asarray(b_lags)
@@ -298,7 +305,6 @@ def _gain_plane_magnitude(bounds, na, b_lags, w, dt, gain, n_sub=256):
     amax = np.max(np.abs(bounds[:na]), axis=1) if na else np.zeros(0)
     LN = dt * (float(np.sum(np.max(np.abs(bf), axis=1) * (free + L)))
                + abs(gain) * L * (1 + float(np.sum(amax))))
-    LD = dt * float(np.sum(np.arange(1, na + 1) * amax))
     h = np.diff(w)[:, None]
 
     def ratio(num, den):
@@ -316,25 +322,18 @@ def _gain_plane_magnitude(bounds, na, b_lags, w, dt, gain, n_sub=256):
     def dn_i(x, lip):
         return np.maximum(0.5 * (x[:-1] + x[1:]) - 0.5 * lip * h, 0.0)
 
-    lo_b, up_b = combine(up_i(nmax, LN), dn_i(nmin, LN), up_i(dmax, LD), dn_i(dmin, LD))
+    lo_b, up_b = combine(up_i(nmax, LN), dn_i(nmin, LN), up_i(dmax, LA), dn_i(dmin, LA))  # D = A
     # |G - g| <= max|B - gA| / min|A| on the plane: exact (0) at the steady state, where the
     # ratio of the decoupled sub-box bounds above is loosest (:mod:`.gain_plane`)
     emax = plane_numerator(bounds, na, b_lags, wd, gain, 1.0, gain).max_abs()
-    ZA = value_sets(np.r_[1.0, bounds[:na, 0]], np.r_[1.0, bounds[:na, 1]], np.arange(na + 1), wd)
-    amin = ZA.min_abs()
     LE = plane_numerator_lipschitz(bounds, na, b_lags, gain, dt)
-    LA = _lipschitz(np.r_[1.0, bounds[:na, 0]], np.r_[1.0, bounds[:na, 1]], np.arange(na + 1), dt)
-    e = ratio(emax, amin)[:, None]
-    e_b = ratio(up_i(emax[:, None], LE), dn_i(amin[:, None], LA))
+    e = ratio(emax, a_min)[:, None]
+    e_b = ratio(up_i(emax[:, None], LE), dn_i(a_min[:, None], LA))
     lo = np.maximum(lo, (abs(gain) - e[:, 0]) * (1 - _OUT))
     up = np.minimum(up, (abs(gain) + e[:, 0]) * (1 + _OUT))
     lo_b = np.maximum(lo_b, (abs(gain) - e_b[:, 0]) * (1 - _OUT))
     up_b = np.minimum(up_b, (abs(gain) + e_b[:, 0]) * (1 + _OUT))
     return lo, up, lo_b, up_b
-
-
-#: relative outward margin of the few operations after the zonotope extremes
-_OUT = 1e-12
 
 
 def frequency_envelope(bounds, na, b_lags, omega, dt=1.0, gain=None) -> FrequencyEnvelope:
@@ -386,7 +385,8 @@ def frequency_envelope(bounds, na, b_lags, omega, dt=1.0, gain=None) -> Frequenc
     ph_lo_b = np.where(ok, 0.5 * (ph_lo[:-1] + ph_lo[1:]) - 0.5 * lph * h, np.nan)
     ph_hi_b = np.where(ok, 0.5 * (ph_hi[:-1] + ph_hi[1:]) + 0.5 * lph * h, np.nan)
     if gain is not None and b_lags.size >= 1:
-        g_lo, g_up, g_lo_b, g_up_b = _gain_plane_magnitude(bounds, na, b_lags, w, dt, float(gain))
+        g_lo, g_up, g_lo_b, g_up_b = _gain_plane_magnitude(bounds, na, b_lags, w, dt, float(gain),
+                                                            a_min, LA)
         lower, upper = np.maximum(lower, g_lo), np.minimum(upper, g_up)
         lo_b, up_b = np.maximum(lo_b, g_lo_b), np.minimum(up_b, g_up_b)
     spec = {"bounds": bounds, "na": na, "b_lags": b_lags, "gain": gain}

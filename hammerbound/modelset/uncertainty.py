@@ -107,8 +107,10 @@ def _points(bounds, na, b_lags, wd, kind, gain):
     ZA = value_sets(a_lo, a_hi, np.arange(na + 1), wd)
     ZB = value_sets(b_lo, b_hi, b_lags, wd)
     theta0 = _centre(bounds, na, gain)
-    A0 = 1.0 + np.exp(-1j * np.outer(wd, np.arange(1, na + 1))) @ theta0[:na]
-    B0 = np.exp(-1j * np.outer(wd, np.asarray(b_lags, float))) @ theta0[na:]
+    # the reference model's polynomials at wd (without gain: the value sets' centres)
+    a0, b0 = np.r_[1.0, theta0[:na]], theta0[na:]
+    A0 = value_sets(a0, a0, np.arange(na + 1), wd).centre
+    B0 = value_sets(b0, b0, b_lags, wd).centre
     dev = _deviation(ZA, ZB, kind, A0, B0)
     amin = ZA.min_abs()
     if gain is not None:

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import numbers
 
-import numpy as np
-
+from ...data.validation import as_real
 from ...exceptions import ParameterValidationError
 
 __all__ = ["check_limits"]
@@ -21,11 +20,9 @@ def check_limits(tol, max_nodes, time_limit, total_time_limit=None) -> None:
     """``tol`` a finite number > 0, ``max_nodes`` an integer >= 0, ``time_limit`` (and
     ``total_time_limit`` unless None) seconds >= 0; else ParameterValidationError. A
     ``tol <= 0`` asks for a gap no search can close: every end would run to its limits."""
-    if not (isinstance(tol, numbers.Real) and not isinstance(tol, bool)
-            and np.isfinite(tol) and tol > 0):
-        raise ParameterValidationError(
-            f"tol must be a finite number > 0 (the relative gap at which an interval end "
-            f"stops, e.g. tol=1e-4); got {tol!r}.")
+    as_real("tol", tol, positive=True,
+            want="tol must be a finite number > 0 (the relative gap at which an interval "
+                 "end stops, e.g. tol=1e-4)")
     if not isinstance(max_nodes, numbers.Integral) or isinstance(max_nodes, bool) \
             or max_nodes < 0:
         raise ParameterValidationError(

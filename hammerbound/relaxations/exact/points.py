@@ -86,11 +86,16 @@ class _Pool:
             return None
         return self.verify(theta)
 
+    def _b_linear_at_fixed_a(self) -> bool:
+        """Whether the equations at fixed ``a`` are linear in ``b`` (no input errors, so no
+        products ``b_j dx``): what :meth:`complete` needs."""
+        return not np.any(self.problem.dx_group > 0)
+
     def complete(self, theta, k, sense) -> _Point | None:
         """Without input errors, keep ``theta``'s ``a`` and choose its ``b`` by an LP, then
         verify (:func:`b_for_a`). Finds points of thin sets that the fixed-``theta``
         screen misses: the node LP's ``a`` often lies in the set when its ``b`` does not."""
-        if self._out_of_time() or np.any(self.problem.dx_group > 0):
+        if self._out_of_time() or not self._b_linear_at_fixed_a():
             return None
         b = b_for_a(self.problem, theta, k, sense)
         if b is None:
@@ -105,7 +110,7 @@ class _Pool:
         of whole ``theta`` leaves the set at once, while the ``a`` part stays in it longer.
         Returns the verified point nearest ``outside`` (None: none better than
         ``inside``)."""
-        if np.any(self.problem.dx_group > 0):
+        if not self._b_linear_at_fixed_a():
             return None
         na = self.problem.na
         d = np.asarray(outside, dtype=float) - np.asarray(inside, dtype=float)

@@ -70,21 +70,24 @@ errors 15 s -> 8 s; ``python -m benchmarks.exact_idle``, notes in ``docs/benchma
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
+from joblib.externals.loky.process_executor import BrokenProcessPool
 
-from ...exceptions import EmptyFeasibleSetError
+from ...exceptions import EmptyFeasibleSetError, SearchLimitWarning
 from ...solvers.highs_process import past
 from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
 from ..units import Units
+from .isolation import SolverCrashError, crash_prone, run_isolated
 from .limits import check_limits
 from .local import polish, restore
 from .mccormick import shared_groups
 from .obbt import _obbt
 from .points import _on_gain_plane, _Pool
-from .search import SearchOptions, Workspace, search_end
+from .search import EndResult, SearchOptions, Workspace, _not_searched, search_end
 from .working_set import AUTO_MIN_EQUATIONS, initial_equations
 
 __all__ = ["SearchOptions", "exact_bounds"]
@@ -235,9 +238,21 @@ def exact_bounds(
                        and not shared_groups(problem))
     ws = initial_equations(problem, lp_box) if working_set else None
     jobs = [(k, s) for k in range(problem.p) for s in (1.0, -1.0)]
-    box, ws, outs = _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options,
-                                dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit,
-                                     progress=progress, to_data=1.0 / units.factors(problem.p)))
+    try:
+        box, ws, outs, crashes = _search_all(
+            problem, lp_box, jobs, ws, n_jobs, deadline, options,
+            dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
+                 to_data=1.0 / units.factors(problem.p)),
+            isolate=n_jobs == 1 and crash_prone(problem), t0=t0)
+    except BrokenProcessPool as err:  # a joblib worker died (n_jobs > 1)
+        crashes = [f"a worker process died ({err})"]
+        box = lp_box
+        outs = [_crashed_end(problem, lp_box, k, s, [], t0, crashes[0]) for k, s in jobs]
+    if crashes:
+        warnings.warn(f"the exact search stopped on {len(crashes)} step(s): {crashes[0]} "
+                      "The bounds of the steps that did not finish are the LP or OBBT outer "
+                      "bounds (still guaranteed; status 'limit').", SearchLimitWarning,
+                      stacklevel=2)
     polished = _polished(problem, jobs, outs, tol, options, deadline)
     if any(o.bound == np.inf for o in outs):
         # every leaf of a search was certified infeasible and no point was verified: the
@@ -260,10 +275,28 @@ def exact_bounds(
     )
 
 
-def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args):
+def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, isolate=False,
+                t0=None):
     """OBBT from the LP box, the first verified points, then one search per end in
     ``jobs`` (serially, sharing one :class:`.search.Workspace`, or on joblib workers).
-    Returns the OBBT box, the working set and the ends' results."""
+
+    With ``isolate`` (serial runs that HiGHS may crash, :func:`.isolation.crash_prone`)
+    every step runs in a worker process; a step whose process dies keeps what the steps
+    before it certified (the LP box for OBBT, the OBBT box for an end).
+
+    Returns the OBBT box, the working set, the ends' results and the messages of the
+    steps that died."""
+    crashes = []
+
+    def step(fn, *a, fallback, **kw):
+        if not isolate:
+            return fn(*a, **kw)
+        try:
+            return run_isolated(fn, *a, **kw)
+        except SolverCrashError as err:
+            crashes.append(str(err))
+            return fallback(str(err))
+
     parallel = None
     if n_jobs != 1:
         from joblib import Parallel
@@ -271,14 +304,18 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args):
         parallel = Parallel(n_jobs=n_jobs)
         parallel.__enter__()
     try:
-        box, roots, thetas, ws = _obbt(problem, lp_box, n_jobs=n_jobs, parallel=parallel,
-                                       deadline=deadline, ws=ws)
-        pts = verified_points(problem, box, roots, thetas, ws, deadline)
+        box, roots, thetas, ws = step(
+            _obbt, problem, lp_box, n_jobs=n_jobs, parallel=parallel, deadline=deadline,
+            ws=ws, picklable=isolate, fallback=lambda why: (np.array(lp_box), {}, [], ws))
+        pts = step(verified_points, problem, box, roots, thetas, ws, deadline,
+                   fallback=lambda why: [])
         args = dict(args, deadline=deadline, ws=ws, options=options)
         if parallel is None:
-            wsp = Workspace()
-            outs = [search_end(problem, box, k, s, pts, roots.get((k, s)), position=i,
-                               workspace=wsp, **args)
+            wsp = None if isolate else Workspace()
+            outs = [step(search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
+                         workspace=wsp, **args,
+                         fallback=lambda why, k=k, s=s: _crashed_end(problem, box, k, s, pts,
+                                                                     t0, why))
                     for i, (k, s) in enumerate(jobs)]
         else:
             from joblib import delayed
@@ -290,7 +327,15 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args):
     finally:
         if parallel is not None:
             parallel.__exit__(None, None, None)
-    return box, ws, outs
+    return box, ws, outs, crashes
+
+
+def _crashed_end(problem, box, k, s, points, t0, why) -> EndResult:
+    """An end whose search died with its process: the box end (or a verified point's
+    value, if better) with status "limit" and ``why`` as its message."""
+    out = _not_searched(problem, box, k, s, points, t0)
+    out.message = f"not searched to the end: {why}; the LP/OBBT outer bound is reported"
+    return out
 
 
 def _polished(problem, jobs, outs, tol, options, deadline):

@@ -12,10 +12,12 @@ a product variable ``w = x e`` constrained by its McCormick envelope over
 Each equation of (22.34) becomes the linear row
 ``phi_t . theta - eta_t - sum_i w_(i,t-i) + sum_j w_(j,g(t-j)) = -y_t``; the gain
 equality (22.8) is added as is. The relaxation contains the EIV set and is exact when
-the theta box is a point. Only the ``e`` coefficients and the right-hand sides depend on
-the theta box, so :meth:`McCormickRelaxation.set_box` updates a persistent HiGHS model in
-place (warm start). Right-hand sides and product bounds are rounded outwards, so the
-relaxation is valid in floating point and LP bounds from :mod:`._highs` are guaranteed.
+the theta box is a point. A product whose error bound is zero (e.g. ``b_j dx`` without
+input errors) is exactly zero and gets no column or rows. Only the ``e`` coefficients and
+the right-hand sides depend on the theta box, so :meth:`McCormickRelaxation.set_box`
+updates a persistent HiGHS model in place (warm start). Right-hand sides and product bounds
+are rounded outwards, so the relaxation is valid in floating point and LP bounds from
+:mod:`._highs` are guaranteed.
 """
 
 from __future__ import annotations
@@ -47,11 +49,19 @@ def _node_options(problem: EIVProblem) -> dict:
     badly scaled data the duals are too inaccurate to certify tight node bounds (data x1e-4:
     a bound that closes in 5 nodes with scaling ran into the node limit without). The
     options only affect speed: every bound is certified from the duals afterwards.
+
+    Without input errors (an output-error record) scaling stays on: there OBBT shrinks the
+    box to a small fraction of the LP box, and a warm start from the basis of the wider box
+    can be numerically singular. Unscaled, HiGHS 1.15-1.16 then crashes the process
+    (N = 3000, Delta eta = 0.1, 2 of 2 seeds: the dual phase 1 starts at an objective of
+    -9e242 and its row choice recurses without end); scaled, the same warm start solves
+    in 412 iterations (``benchmarks/report_notes.md``, "HiGHS crash").
     """
     opts = {"simplex_dual_edge_weight_strategy": 1}
     sizes = [float(np.max(np.abs(problem.y), initial=0.0)),
              float(np.max(np.abs(problem.x), initial=0.0))]
-    if all(1e-2 <= v <= 1e2 for v in sizes):
+    has_input_errors = bool(np.any(problem.dx_group > 0))
+    if has_input_errors and all(1e-2 <= v <= 1e2 for v in sizes):
         opts["simplex_scale_strategy"] = 0
     return opts
 
@@ -235,15 +245,15 @@ class McCormickRelaxation(McCormickBase):
         p, n, k = pr.p, pr.N, pr.n_groups
         phi, yt = pr.regressors()
         eta_idx = pr.eta_index()  # (m, na+1)
-        inv, npa = self._products(pr, eta_idx)
+        self.e_lo = np.concatenate([-pr.deta, -pr.dx_group])
+        self.e_hi = np.concatenate([pr.deta, pr.dx_group])
+        a_prod, b_prod = self._products(pr, eta_idx)
         P = self.px.size
         w0 = p + n + k
         self.ncol = w0 + P
         self.pw = w0 + np.arange(P)
-        self.e_lo = np.concatenate([-pr.deta, -pr.dx_group])
-        self.e_hi = np.concatenate([pr.deta, pr.dx_group])
         t = _Triplets()
-        rl, ru = self._equations(t, phi, yt, eta_idx, inv, npa, box)
+        rl, ru = self._equations(t, phi, yt, eta_idx, a_prod, b_prod, box)
         self.mc0 = nrow = len(rl)
         self.mc_rows = self._envelope_rows(t)
         nrow += 4 * P
@@ -260,34 +270,42 @@ class McCormickRelaxation(McCormickBase):
     def _products(self, pr, eta_idx):
         """The product columns' factors: ``px`` (theta index) and ``pe`` (error column)
         of the ``a_i eta`` products, one per (equation, i), then of the ``b_j dx_var[g]``
-        products, one per distinct (j, g). Returns the b-product of each (equation, j),
-        (m, nbp), and the number of a-products."""
+        products, one per distinct (j, g). A product whose error is fixed at zero (bound
+        0, e.g. no input errors: an output-error record) is exactly zero and gets no column.
+        Returns the product of each (equation, i), shape (m, na), and of each (equation, j),
+        (m, nbp): indices into ``px``, or -1 for a product that is zero."""
         p, n, k, na = pr.p, pr.N, pr.n_groups, pr.na
         m = eta_idx.shape[0]
         dx_idx = pr.dx_index()  # (m, nbp)
-        ax = np.repeat(np.arange(na), m)  # theta index
+        ax = np.repeat(np.arange(na), m)  # theta index, ordered (i, equation)
         ae = p + eta_idx[:, 1:].T.ravel()  # eta column
         pair = np.tile(np.arange(dx_idx.shape[1]), (m, 1)) * k + dx_idx  # (m, nbp)
         upairs, inv = np.unique(pair.ravel(), return_inverse=True)
         bx = na + upairs // k
         be = p + n + upairs % k
-        self.px = np.concatenate([ax, bx]).astype(np.int64)
-        self.pe = np.concatenate([ae, be]).astype(np.int64)
-        return inv.reshape(m, -1), ax.size
+        px = np.concatenate([ax, bx]).astype(np.int64)
+        pe = np.concatenate([ae, be]).astype(np.int64)
+        live = self.e_hi[pe - p] > self.e_lo[pe - p]
+        index = np.cumsum(live) - 1
+        index[~live] = -1
+        self.px, self.pe = px[live], pe[live]
+        return index[: ax.size].reshape(na, m).T, index[ax.size:][inv].reshape(m, -1)
 
-    def _equations(self, t, phi, yt, eta_idx, inv, npa, box):
-        """The equation rows (and the gain row) into the triplets ``t``; their bounds."""
+    def _equations(self, t, phi, yt, eta_idx, a_prod, b_prod, box):
+        """The equation rows (and the gain row) into the triplets ``t``; their bounds.
+        ``a_prod``, ``b_prod``: the products of each equation (:meth:`_products`)."""
         pr = self.problem
-        p, na = pr.p, pr.na
+        p = pr.p
         m = phi.shape[0]
         w0 = p + pr.N + pr.n_groups  # the first product column
         eqr = np.arange(m)
         for q in range(p):  # theta part of the equations
             t.add(eqr, np.full(m, q), phi[:, q])
         t.add(eqr, p + eta_idx[:, 0], -np.ones(m))
-        t.add(np.tile(eqr, na), w0 + np.arange(npa), -np.ones(npa))
-        for j in range(inv.shape[1]):
-            t.add(eqr, w0 + npa + inv[:, j], np.ones(m))
+        for prod, sign in ((a_prod, -1.0), (b_prod, 1.0)):
+            for j in range(prod.shape[1]):
+                on = prod[:, j] >= 0
+                t.add(eqr[on], w0 + prod[on, j], np.full(int(on.sum()), sign))
         # tolerance policy: every equation is relaxed outward by FEASIBILITY_RTOL times the
         # magnitudes of its terms over the initial (largest) box, so node certificates of
         # "empty" and of bounds hold beyond the tolerance, never for the data taken exactly

@@ -18,7 +18,7 @@ from ...exceptions import EmptyFeasibleSetError
 from ...solvers.highs_process import past
 from .mccormick import McCormickRelaxation
 from .points import _Screen
-from .working_set import WorkingSetRelaxation
+from .working_set import GROW_AFTER, WorkingSetRelaxation
 
 
 def warm_start(lp, basis) -> bool:
@@ -42,14 +42,16 @@ def _relaxation(problem, box, ws):
 def _solve(relax, screen=None):
     """Solve the node LP of ``relax``; on a working set, add the equations found violated
     at its point and re-solve until none is (every bound on the way is certified: the
-    working-set LP relaxes the full one). The result's ``iterations`` sum all re-solves."""
-    iters = 0
+    working-set LP relaxes the full one; after :data:`.working_set.GROW_AFTER` re-solves
+    the set doubles per round). The result's ``iterations`` sum all re-solves."""
+    iters = rounds = 0
     while True:
         res = relax.lp.solve()
         iters += res.iterations
+        rounds += 1
         if not isinstance(relax, WorkingSetRelaxation) or res.status != "optimal":
             break
-        add = relax.separate(res.x, screen)
+        add = relax.separate(res.x, screen, grow=rounds > GROW_AFTER)
         if add.size == 0:
             break
         relax.add_equations(add)
@@ -95,14 +97,15 @@ def _basis(lp, picklable):
 
 
 def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, deadline=None,
-          ws=None):
+          ws=None, picklable=None):
     """Optimality-based bound tightening of the theta box on the McCormick relaxation.
 
     Each round solves ``min/max theta_k`` (k = 1..p) over the relaxation on the current
     box (in parallel when ``n_jobs > 1``) and shrinks the box with the rigorous bounds.
     Every LP stops at ``deadline`` (a :func:`time.time` timestamp, if given) with the
     rigorous bound of its current duals; no further round starts after it. Every round's
-    box is a valid outer box.
+    box is a valid outer box. The bases returned are picklable with workers (``parallel``)
+    or ``picklable=True`` (the result crosses processes), else in-process snapshots.
 
     Returns
     -------
@@ -128,7 +131,7 @@ def _obbt(problem, box, n_jobs=1, rounds=4, rel_improve=0.02, parallel=None, dea
         old = box.copy()
         if nj == 1:
             res, ws_new = _obbt_task(problem, box, tasks, [bases[t] for t in tasks], deadline,
-                                     ws, picklable=parallel is not None)
+                                     ws, picklable=parallel is not None or bool(picklable))
             res = dict(zip(tasks, res, strict=True))
             ws_all = [ws_new]
         else:

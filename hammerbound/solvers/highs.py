@@ -169,26 +169,15 @@ class HighsLP:
         self.lb = np.asarray(lb, dtype=float).copy()
         self.ub = np.asarray(ub, dtype=float).copy()
         self.c = np.zeros(n) if c is None else np.asarray(c, dtype=float).copy()
+        h = new_highs(options)
         self._options = dict(options or {})
         # unscaled solves are faster on well-scaled data, but if the certified bound then
         # trails HiGHS's own value, the duals are inaccurate: scaling goes back on for good
         self._unscaled = (options or {}).get("simplex_scale_strategy") == 0
         self.rescaled = False
-        self._cutoff = None
-        self.h = self._load()
-
-    def _load(self):
-        """A new HiGHS instance holding the LP as it is now (data, options, scaling, cutoff),
-        without a basis."""
-        opts = dict(self._options)
-        if not self._unscaled:
-            opts.pop("simplex_scale_strategy", None)
-        h = new_highs(opts)
-        if self._cutoff is not None:
-            h.setOptionValue("objective_bound", self._cutoff)
-        A = self.A
         lp = highspy.HighsLp()
-        lp.num_row_, lp.num_col_ = A.shape
+        lp.num_col_ = n
+        lp.num_row_ = m
         lp.col_cost_ = self.c
         lp.col_lower_ = self.lb
         lp.col_upper_ = self.ub
@@ -199,7 +188,8 @@ class HighsLP:
         lp.a_matrix_.index_ = A.indices.astype(np.int32)
         lp.a_matrix_.value_ = A.data
         h.passModel(lp)
-        return h
+        self.h = h
+        self._cutoff = None
 
     # ---- modification ---------------------------------------------------------------
     def set_cost(self, c):
@@ -373,9 +363,7 @@ class HighsLP:
         first = _status_text(self.h, run, st)
         tried = []
         for label, opts in RECOVERY:
-            # a new instance: the basis is dropped, so the next run starts from scratch,
-            # and nothing of the refused run stays (see _fresh_after_refusal)
-            self.h = self._load()
+            self.h.clearSolver()  # drop the basis: the next run starts from scratch
             for name, value in opts.items():
                 self.h.setOptionValue(name, value)
             try:
@@ -392,7 +380,7 @@ class HighsLP:
                        f"re-run {label}, which ended with model status "
                        f"'{self.h.modelStatusToString(st)}'")
                 return st, f"HiGHS stopped with an error before a result ({first}); {how}"
-        self.h = self._load()
+        self.h.clearSolver()
         return None, refusal_message(first, tried, self.defects())
 
     def defects(self) -> str:
@@ -472,7 +460,7 @@ class HighsLP:
             res = self._result(highspy.HighsModelStatus.kUnknown, it)
             res.note = _joined(note, f"{what}; no time left to solve it again")
             return res
-        self.h = self._load()  # a new instance: from scratch, nothing of the run kept
+        self.h.clearSolver()
         res = self._solve_once(not primal, retry=False)
         res.iterations += it
         res.note = _joined(note, f"{what}; re-solved from scratch with the {other} simplex",

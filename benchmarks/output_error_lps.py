@@ -16,8 +16,11 @@ recorded, not fatal:
   a temporary directory, the child's working directory).
 
 Short records run to completion; long ones with ``total_time_limit``. Reported per run:
-CPU time of the child, the exit code (-11: segmentation fault), end statuses, nodes, and
-the widths of the intervals against those of the LP method. Writes
+CPU time of the child and of the worker process of its search, if any (shut down
+before the count), wall time, the
+exit code (-11: segmentation fault), the crashes the fit survived (a worker process of the
+search that died, ``relaxations.exact.isolation``), end statuses, nodes, and the widths
+of the intervals against those of the LP method. Writes
 ``results/output_error_lps.json``. Timings are never asserted in tests.
 """
 
@@ -32,10 +35,9 @@ import tempfile
 import numpy as np
 
 from benchmarks import _common as C
-from benchmarks.thin_output_error import record
 
 _CHILD = r"""
-import json, sys, time, resource
+import json, sys, time, resource, warnings
 import numpy as np
 from benchmarks.thin_output_error import record
 import hammerbound as hb
@@ -43,11 +45,22 @@ from hammerbound.relaxations import exact_bounds
 n, seed, limit = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 x, y = record(n, seed)
 pr = hb.EIVProblem(y, x, input_bound=0.0, output_bound=0.1, na=2, nb=2, nk=2)
-t = time.process_time()
+t, w0 = time.process_time(), time.perf_counter()
 kw = {} if limit == "none" else dict(total_time_limit=float(limit), time_limit=float(limit) / 4)
-r = exact_bounds(pr, **kw)
-cpu = time.process_time() - t
-print(json.dumps(dict(cpu_s=cpu, package=hb.__file__, statuses=[i.status for i in r.infos],
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    r = exact_bounds(pr, **kw)
+try:  # the worker of an isolated search (not in older versions): its CPU time counts
+    from hammerbound.relaxations.exact.isolation import shutdown
+    shutdown(wait=True)
+except ImportError:
+    pass
+kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+cpu = time.process_time() - t + kids.ru_utime + kids.ru_stime
+wall = time.perf_counter() - w0
+died = [str(w.message) for w in caught if "died" in str(w.message)]
+print(json.dumps(dict(cpu_s=cpu, wall_s=wall, package=hb.__file__, crashes_survived=died,
+                      statuses=[i.status for i in r.infos],
                       nodes=[int(i.nodes or 0) for i in r.infos],
                       bounds=r.bounds.tolist(), lp_bounds=r.lp.bounds.tolist(),
                       working_set=r.details.working_set,
@@ -92,8 +105,10 @@ def main(argv=None) -> int:
                     rows.append(row)
                     print(f"N={n} seed={seed} {config:7s} rc={row['returncode']} "
                           f"cpu={row.get('cpu_s', float('nan')):.1f}s "
+                          f"wall={row.get('wall_s', float('nan')):.1f}s "
                           f"nodes={sum(row.get('nodes', []))} "
                           f"width/LP={row.get('width_vs_lp', float('nan')):.3f} "
+                          f"survived={len(row.get('crashes_survived', []))} "
                           f"{sorted(set(row.get('statuses', [])))}", flush=True)
     C.write_json({"environment": C.environment(), "args": vars(args), "rows": rows},
                  C.RESULTS / "output_error_lps.json")

@@ -7,6 +7,8 @@
 * Unscaled node LPs crashed the process in HiGHS 1.15-1.16 (segmentation fault) on the
   later OBBT rounds of a long output-error record; the deep test runs that case in a child
   process.
+* HiGHS still crashes on some long output-error records (scaled or not): their searches run
+  in a worker process, and a step whose worker dies keeps the bound certified before it.
 """
 
 from __future__ import annotations
@@ -22,13 +24,13 @@ from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound.relaxations.exact import obbt
-from hammerbound.relaxations.lp import lp_bounds
 from hammerbound.relaxations.exact.mccormick import McCormickRelaxation
 from hammerbound.relaxations.exact.working_set import (
     GROW_AFTER,
     WorkingSetRelaxation,
     initial_equations,
 )
+from hammerbound.relaxations.lp import lp_bounds
 
 THETA = np.array([-0.5, 0.06, 1.0, 0.5])  # A = 1 - 0.5 q^-1 + 0.06 q^-2, B = q^-2 (1 + 0.5 q^-1)
 D = 0.1
@@ -258,3 +260,24 @@ def test_long_output_error_record_survives_a_solver_crash():
                           text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "inside True" in proc.stdout, proc.stdout
+
+
+def test_a_dead_joblib_worker_gives_the_lp_bounds(monkeypatch):
+    """With n_jobs > 1 the ends run on joblib workers; if one dies, every end reports its
+    LP bound with status "limit" and a SearchLimitWarning (never an exception)."""
+    from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+    from hammerbound.exceptions import SearchLimitWarning
+    from hammerbound.relaxations import exact_bounds
+    from hammerbound.relaxations.exact import bnb
+
+    def dies(*a, **kw):
+        raise TerminatedWorkerError("A worker process managed by the executor was "
+                                    "unexpectedly terminated.")
+
+    monkeypatch.setattr(bnb, "_search_all", dies)
+    pr = _record(60, 2)
+    with pytest.warns(SearchLimitWarning, match="worker process died"):
+        res = exact_bounds(pr, n_jobs=2)
+    assert [i.status for i in res.infos] == ["limit"] * 8
+    np.testing.assert_array_equal(res.bounds, res.lp.bounds)

@@ -168,7 +168,9 @@ def exact_bounds(
     time_limit : float, default 600
         Wall-time limit (s) per interval end.
     n_jobs : int, default 1
-        The ``2 p`` interval ends are searched in parallel with joblib.
+        The ``2 p`` interval ends are searched in parallel with joblib. With 1, a long
+        output-error record's search still runs in a worker process
+        (:mod:`.isolation`: HiGHS can crash the process there).
     progress : bool, default False
         Show a tqdm progress bar per interval end.
     theta_box : array_like, shape (p, 2), optional
@@ -215,6 +217,12 @@ def exact_bounds(
         The data are inconsistent (from the LP or from the relaxation at the root).
     UnboundedSetError
         An exact bound coincides with the a priori box.
+
+    Warns
+    -----
+    SearchLimitWarning
+        A worker process of the search died (HiGHS crashed in it): the steps it did not
+        finish report their LP or OBBT outer bounds with status ``"limit"``.
     """
     check_limits(tol, max_nodes, time_limit, total_time_limit)
     t0 = time.perf_counter()

@@ -10,14 +10,15 @@ about every second record, with scaled or unscaled LPs, devex or steepest edge; 
 records with input errors (hundreds of fits up to N = 10000). The reproducers are in
 ``benchmarks/output_error_lps.py`` and ``tests/relaxations/test_output_error_lps.py``.
 
-Such searches (:func:`crash_prone`) run in one worker process (joblib's loky executor,
-reused between fits). If the worker dies, :func:`run_isolated` raises
+Such searches (:func:`crash_prone`) run in one worker process (a loky executor of this
+module, kept between fits). If the worker dies, :func:`run_isolated` raises
 :class:`SolverCrashError` and :func:`.bnb.exact_bounds` reports the LP method's bounds,
 which stay guaranteed, with status ``"limit"``.
 """
 
 from __future__ import annotations
 
+import atexit
 import re
 
 import numpy as np
@@ -42,18 +43,40 @@ def crash_prone(problem: EIVProblem) -> bool:
     return m * (1 + 4 * problem.na) >= CRASH_ROWS
 
 
+_EXECUTOR = None
+
+
 def run_isolated(fn, *args, **kwargs):
-    """``fn(*args, **kwargs)`` in a worker process; :class:`SolverCrashError` if it dies."""
-    from joblib.externals.loky import get_reusable_executor
+    """``fn(*args, **kwargs)`` in a worker process; :class:`SolverCrashError` if it dies.
+
+    The worker (one, kept between calls, a new one after a crash) belongs to this module:
+    joblib's reusable executor is left to joblib, which would not take one it did not make.
+    """
     from joblib.externals.loky.process_executor import BrokenProcessPool
 
-    executor = get_reusable_executor(max_workers=1)
+    global _EXECUTOR
+    if _EXECUTOR is None:
+        from joblib.externals.loky import ProcessPoolExecutor
+
+        _EXECUTOR = ProcessPoolExecutor(max_workers=1)
     try:
-        return executor.submit(fn, *args, **kwargs).result()
+        return _EXECUTOR.submit(fn, *args, **kwargs).result()
     except BrokenProcessPool as err:  # TerminatedWorkerError is one
+        shutdown()
         raise SolverCrashError(f"the worker process of the exact search died ({_why(err)}); "
                                "HiGHS can crash the process on long output-error records "
                                "(see hammerbound.relaxations.exact.isolation)") from err
+
+
+def shutdown(wait: bool = True):
+    """Stop the worker process (a later :func:`run_isolated` starts a new one)."""
+    global _EXECUTOR
+    if _EXECUTOR is not None:
+        _EXECUTOR.shutdown(wait=wait)
+        _EXECUTOR = None
+
+
+atexit.register(shutdown, wait=False)
 
 
 def _why(err) -> str:

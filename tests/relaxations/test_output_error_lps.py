@@ -277,7 +277,32 @@ def test_a_dead_joblib_worker_gives_the_lp_bounds(monkeypatch):
 
     monkeypatch.setattr(bnb, "_search_all", dies)
     pr = _record(60, 2)
-    with pytest.warns(SearchLimitWarning, match="worker process died"):
+    with pytest.warns(SearchLimitWarning, match="worker process of the exact search died"):
         res = exact_bounds(pr, n_jobs=2)
     assert [i.status for i in res.infos] == ["limit"] * 8
     np.testing.assert_array_equal(res.bounds, res.lp.bounds)
+
+
+def test_an_interrupt_kills_the_running_step():
+    """A KeyboardInterrupt in this process (a notebook's "interrupt kernel") ends the step
+    running in the worker: the next call and the exit do not wait for it."""
+    import signal
+    import time
+
+    from hammerbound.relaxations.exact.isolation import run_isolated
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        run_isolated(np.add, 0, 0)  # the worker is up
+        signal.alarm(1)
+        with pytest.raises(KeyboardInterrupt):
+            run_isolated(time.sleep, 30)
+        t = time.perf_counter()
+        assert run_isolated(np.add, 1, 2) == 3
+        assert time.perf_counter() - t < 20  # not behind the 30 s sleep
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)

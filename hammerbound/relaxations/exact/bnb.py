@@ -81,7 +81,7 @@ from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
 from ..units import Units
-from .isolation import SolverCrashError, crash_prone, run_isolated
+from .isolation import SolverCrashError, crash_message, crash_prone, run_isolated
 from .limits import check_limits
 from .local import polish, restore
 from .mccormick import shared_groups
@@ -253,7 +253,7 @@ def exact_bounds(
                  to_data=1.0 / units.factors(problem.p)),
             isolate=n_jobs == 1 and crash_prone(problem), t0=t0)
     except BrokenProcessPool as err:  # a joblib worker died (n_jobs > 1)
-        crashes = [f"a worker process died ({err})"]
+        crashes = [crash_message(err)]
         box = lp_box
         outs = [_crashed_end(problem, lp_box, k, s, [], t0, crashes[0]) for k, s in jobs]
     if crashes:

@@ -63,23 +63,34 @@ def run_isolated(fn, *args, **kwargs):
         return _EXECUTOR.submit(fn, *args, **kwargs).result()
     except BrokenProcessPool as err:  # TerminatedWorkerError is one
         shutdown()
-        raise SolverCrashError(f"the worker process of the exact search died ({_why(err)}); "
-                               "HiGHS can crash the process on long output-error records "
-                               "(see hammerbound.relaxations.exact.isolation)") from err
+        raise SolverCrashError(crash_message(err)) from err
+    except BaseException:
+        # e.g. KeyboardInterrupt (a notebook's "interrupt kernel" reaches this process
+        # only): the step must not go on in the worker, nor hold up the next call or exit
+        shutdown(kill=True)
+        raise
 
 
-def shutdown(wait: bool = True):
-    """Stop the worker process (a later :func:`run_isolated` starts a new one)."""
+def crash_message(err) -> str:
+    """What to tell the user when a worker process of the search died."""
+    return (f"the worker process of the exact search died ({why(err)}): HiGHS crashed in it "
+            "(it can, on long output-error records: see hammerbound.relaxations.exact."
+            "isolation), or the system ended it (e.g. out of memory)")
+
+
+def shutdown(wait: bool = True, kill: bool = False):
+    """Stop the worker process (a later :func:`run_isolated` starts a new one); ``kill``
+    ends a step that is still running."""
     global _EXECUTOR
     if _EXECUTOR is not None:
-        _EXECUTOR.shutdown(wait=wait)
+        _EXECUTOR.shutdown(wait=wait, kill_workers=kill)
         _EXECUTOR = None
 
 
-atexit.register(shutdown, wait=False)
+atexit.register(shutdown, wait=False, kill=True)
 
 
-def _why(err) -> str:
+def why(err) -> str:
     """The exit codes loky names in ``err`` (e.g. ``SIGSEGV(-11)``), else its first line."""
     found = re.search(r"exit codes of the workers are \{(.*?)\}", str(err))
     return f"exit code {found.group(1)}" if found else str(err).strip().splitlines()[0]

@@ -145,18 +145,22 @@ def test_working_set_doubles_when_most_equations_are_needed():
     assert res.bound <= THETA[0]  # certified over all equations: the truth is above it
 
 
-_CRASH_CASE = r"""
-import time, numpy as np
+# a record of _record(n, seed) in a child process (a crash there does not end the tests)
+_RECORD = r"""
+import time, warnings, numpy as np
 from scipy.signal import lfilter
 import hammerbound as hb
-from hammerbound.relaxations.lp import lp_bounds
-from hammerbound.relaxations.units import Units
-from hammerbound.relaxations.exact.obbt import _obbt
-rng = np.random.default_rng(0)
-n = 3000
+rng = np.random.default_rng({seed})
+n = {n}
 x = np.where(rng.random(n) < 0.5, 1.0, -1.0) + 0.3 * rng.uniform(-1, 1, n)
 y = lfilter([0, 0, 1.0, 0.5], [1.0, -0.5, 0.06], x) + rng.uniform(-0.1, 0.1, n)
 pr = hb.EIVProblem(y, x, input_bound=0.0, output_bound=0.1, na=2, nb=2, nk=2)
+"""
+
+_CRASH_CASE = _RECORD.format(n=3000, seed=0) + r"""
+from hammerbound.relaxations.lp import lp_bounds
+from hammerbound.relaxations.units import Units
+from hammerbound.relaxations.exact.obbt import _obbt
 lp = lp_bounds(pr, check_box=False)
 units = Units.of_lp(pr, lp.bounds)
 box, *_ = _obbt(units.problem(pr), units.to_search(lp.bounds), rounds=4, ws=None,
@@ -233,16 +237,8 @@ def test_a_crashed_end_keeps_the_obbt_bound(monkeypatch):
     assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])
 
 
-_ISOLATED_CASE = r"""
-import warnings, numpy as np
-from scipy.signal import lfilter
-import hammerbound as hb
+_ISOLATED_CASE = _RECORD.format(n=1000, seed=1) + r"""
 from hammerbound.relaxations import exact_bounds
-rng = np.random.default_rng(1)
-n = 1000
-x = np.where(rng.random(n) < 0.5, 1.0, -1.0) + 0.3 * rng.uniform(-1, 1, n)
-y = lfilter([0, 0, 1.0, 0.5], [1.0, -0.5, 0.06], x) + rng.uniform(-0.1, 0.1, n)
-pr = hb.EIVProblem(y, x, input_bound=0.0, output_bound=0.1, na=2, nb=2, nk=2)
 with warnings.catch_warnings(record=True) as w:
     warnings.simplefilter("always")
     r = exact_bounds(pr, total_time_limit=240, time_limit=60)

@@ -255,10 +255,15 @@ def warn_limits(res, stacklevel=4):
     from ..exceptions import SearchLimitWarning
 
     ends = [f"{i.param} {i.end}" for i in res.infos if i.status == "limit"]
+    died = [f"{i.param} {i.end}" for i in res.infos
+            if i.status == "limit" and "process of the exact search died" in (i.message or "")]
     if ends:
+        why = (f" ({', '.join(died)}: the worker process of the search died, see the "
+               "warning before; more time does not help there)" if died else "")
         warnings.warn(
             f"the exact search stopped early for {len(ends)} of {len(res.infos)} interval "
             f"ends ({', '.join(ends)}): their bounds are guaranteed outer bounds (never "
             "wider than the LP bound) but may be looser than the exact ones; raise "
             "time_limit / total_time_limit / max_nodes for tighter ones (bound_info_ "
-            "gives each end's status and certified gap).", SearchLimitWarning, stacklevel=stacklevel)
+            f"gives each end's status and certified gap){why}.", SearchLimitWarning,
+            stacklevel=stacklevel)

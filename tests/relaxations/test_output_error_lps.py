@@ -302,3 +302,25 @@ def test_an_interrupt_kills_the_running_step():
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, old)
+
+
+def test_the_estimator_says_which_ends_a_crash_stopped(monkeypatch):
+    """The estimator's limit warning names the ends whose worker died: more time does not
+    help those."""
+    from hammerbound.relaxations.exact import bnb
+    from hammerbound.relaxations.exact.isolation import SolverCrashError
+
+    def fake_isolated(fn, *a, **kw):
+        if fn.__name__ == "search_end" and a[2] == 0 and a[3] < 0:  # a1 max
+            raise SolverCrashError("the worker process of the exact search died (test)")
+        return fn(*a, **kw)
+
+    monkeypatch.setattr(bnb, "crash_prone", lambda problem: True)
+    monkeypatch.setattr(bnb, "run_isolated", fake_isolated)
+    pr = _record(60, 2)
+    est = hb.LinearEIVSetEstimator(na=2, nb=2, nk=2, output_bound=D)
+    with pytest.warns(hb.exceptions.SearchLimitWarning) as caught:
+        est.fit(pr.x, pr.y, input_bound=0.0)
+    texts = [str(w.message) for w in caught]
+    assert any("a1 upper: the worker process of the search died" in t
+               and "more time does not help" in t for t in texts), texts

@@ -257,7 +257,7 @@ def exact_bounds(
         box = lp_box
         outs = [_crashed_end(problem, lp_box, k, s, [], t0, crashes[0]) for k, s in jobs]
     if crashes:
-        warnings.warn(f"the exact search stopped on {len(crashes)} step(s): {crashes[0]} "
+        warnings.warn(f"the exact search stopped on {len(crashes)} step(s): {crashes[0]}. "
                       "The bounds of the steps that did not finish are the LP or OBBT outer "
                       "bounds (still guaranteed; status 'limit').", SearchLimitWarning,
                       stacklevel=2)

@@ -250,6 +250,12 @@ class EIVProblem:
         return np.arange(self.n0, self.N)
 
     @property
+    def has_input_errors(self) -> bool:
+        """Whether any input error bound is nonzero (False: an output-error record, where
+        the equations are linear in ``b`` at fixed ``a``)."""
+        return bool(np.any(self.dx_group > 0))
+
+    @property
     def param_names(self) -> list[str]:
         return [f"a{i}" for i in range(1, self.na + 1)] + [f"b{j}" for j in self.b_lags]
 

@@ -253,10 +253,11 @@ def warn_limits(res, stacklevel=4):
     import warnings
 
     from ..exceptions import SearchLimitWarning
+    from ..relaxations.exact.isolation import CRASH_TEXT
 
     ends = [f"{i.param} {i.end}" for i in res.infos if i.status == "limit"]
     died = [f"{i.param} {i.end}" for i in res.infos
-            if i.status == "limit" and "process of the exact search died" in (i.message or "")]
+            if i.status == "limit" and CRASH_TEXT in (i.message or "")]
     if ends:
         why = (f" ({', '.join(died)}: the worker process of the search died, see the "
                "warning before; more time does not help there)" if died else "")

@@ -64,7 +64,6 @@ def check_params(est) -> None:
     check_work("relaxation_max_work", est.relaxation_max_work)
     as_real("steady_state_gain", est.steady_state_gain, nonzero=True, or_none=True,
             example="1.0")
-
     if not (isinstance(est.n_jobs, numbers.Integral) and (est.n_jobs >= 1 or est.n_jobs == -1)):
         raise ParameterValidationError(f"n_jobs must be a positive integer or -1; got {est.n_jobs!r}.")
     if est.solver_options is not None and not isinstance(est.solver_options, dict):

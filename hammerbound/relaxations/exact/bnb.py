@@ -283,8 +283,7 @@ def exact_bounds(
     )
 
 
-def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, isolate=False,
-                t0=None):
+def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, isolate, t0):
     """OBBT from the LP box, the first verified points, then one search per end in
     ``jobs`` (serially, sharing one :class:`.search.Workspace`, or on joblib workers).
 

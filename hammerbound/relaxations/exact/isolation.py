@@ -21,10 +21,10 @@ from __future__ import annotations
 import atexit
 import re
 
-import numpy as np
-
 from ..problem import EIVProblem
 
+#: how every message about a dead worker of the search begins (:func:`crash_message`)
+CRASH_TEXT = "the worker process of the exact search died"
 #: rows of the full McCormick LP from which a HiGHS run can crash (see the module docstring)
 CRASH_ROWS = 2500
 
@@ -37,7 +37,7 @@ def crash_prone(problem: EIVProblem) -> bool:
     """Whether the search of ``problem`` runs in a worker process: no input errors (the
     records on which HiGHS crashed) and a full McCormick LP of at least
     :data:`CRASH_ROWS` rows (the equations and 4 envelope rows per ``a_i eta`` product)."""
-    if np.any(problem.dx_group > 0):
+    if problem.has_input_errors:
         return False
     m = problem.equation_times.size
     return m * (1 + 4 * problem.na) >= CRASH_ROWS
@@ -73,7 +73,7 @@ def run_isolated(fn, *args, **kwargs):
 
 def crash_message(err) -> str:
     """What to tell the user when a worker process of the search died."""
-    return (f"the worker process of the exact search died ({why(err)}): HiGHS crashed in it "
+    return (f"{CRASH_TEXT} ({why(err)}): HiGHS crashed in it "
             "(it can, on long output-error records: see hammerbound.relaxations.exact."
             "isolation), or the system ended it (e.g. out of memory)")
 

@@ -60,8 +60,7 @@ def _node_options(problem: EIVProblem) -> dict:
     opts = {"simplex_dual_edge_weight_strategy": 1}
     sizes = [float(np.max(np.abs(problem.y), initial=0.0)),
              float(np.max(np.abs(problem.x), initial=0.0))]
-    has_input_errors = bool(np.any(problem.dx_group > 0))
-    if has_input_errors and all(1e-2 <= v <= 1e2 for v in sizes):
+    if problem.has_input_errors and all(1e-2 <= v <= 1e2 for v in sizes):
         opts["simplex_scale_strategy"] = 0
     return opts
 
@@ -137,6 +136,11 @@ class McCormickBase:
                 self._by_g.append((sel, r, c, self.lp.data_positions(r, c), ec,
                                    self.lp.data_positions(r, ec)))
         return self._by_g
+
+    def _can_be_nonzero(self, pe) -> np.ndarray:
+        """Per product with error column ``pe``: False where the error bound is zero, so
+        the product is exactly zero and gets no column."""
+        return self.e_hi[pe - self.p] > self.e_lo[pe - self.p]
 
     def dx_columns(self) -> np.ndarray:
         """LP columns of the input-error variables ``dx_var`` (shape (K,))."""
@@ -285,7 +289,7 @@ class McCormickRelaxation(McCormickBase):
         be = p + n + upairs % k
         px = np.concatenate([ax, bx]).astype(np.int64)
         pe = np.concatenate([ae, be]).astype(np.int64)
-        live = self.e_hi[pe - p] > self.e_lo[pe - p]
+        live = self._can_be_nonzero(pe)
         index = np.cumsum(live) - 1
         index[~live] = -1
         self.px, self.pe = px[live], pe[live]

@@ -89,7 +89,7 @@ class _Pool:
     def _b_linear_at_fixed_a(self) -> bool:
         """Whether the equations at fixed ``a`` are linear in ``b`` (no input errors, so no
         products ``b_j dx``): what :meth:`complete` needs."""
-        return not np.any(self.problem.dx_group > 0)
+        return not self.problem.has_input_errors
 
     def complete(self, theta, k, sense) -> _Point | None:
         """Without input errors, keep ``theta``'s ``a`` and choose its ``b`` by an LP, then

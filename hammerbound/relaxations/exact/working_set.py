@@ -215,9 +215,9 @@ class WorkingSetRelaxation(McCormickBase):
         ids = np.concatenate([a_ids, self.npa + b_glob])
         nx = np.concatenate([a_x, self.b_x[b_glob]]).astype(np.int64)
         ne = np.concatenate([a_e, self.b_e[b_glob]]).astype(np.int64)
-        # a product whose error is fixed at zero is exactly zero: no column (as in
-        # McCormickRelaxation._products); its wcol stays -1 and its equations skip it
-        live = self.e_hi[ne - p] > self.e_lo[ne - p]
+        # a product whose error is fixed at zero gets no column: its wcol stays -1 and
+        # its equations skip it
+        live = self._can_be_nonzero(ne)
         ids, nx, ne = ids[live], nx[live], ne[live]
         nnew = ids.size
         c0 = lp.A.shape[1]

@@ -237,6 +237,44 @@ def test_a_crashed_end_keeps_the_obbt_bound(monkeypatch):
     assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])
 
 
+
+def test_the_polish_runs_isolated_and_a_crash_there_keeps_the_witnesses(monkeypatch):
+    """On a crash-prone record the witnesses' polish (HiGHS LPs on the full record) runs in
+    the worker too; if it dies, the bounds are those of the search, every witness is the
+    verified point the search found (it still explains the data: the tests' own residuals),
+    and the warning says so."""
+    from hammerbound.exceptions import SearchLimitWarning
+    from hammerbound.relaxations import exact_bounds
+    from hammerbound.relaxations.exact import bnb
+    from hammerbound.relaxations.exact.isolation import SolverCrashError
+
+    calls = []
+
+    def fake_isolated(fn, *a, **kw):
+        calls.append(fn.__name__)
+        if fn.__name__ == "polish":
+            raise SolverCrashError("the worker process of the exact search died (test)")
+        return fn(*a, **kw)
+
+    pr = _record(60, 2)
+    plain = exact_bounds(pr)
+    monkeypatch.setattr(bnb, "crash_prone", lambda problem: True)
+    monkeypatch.setattr(bnb, "run_isolated", fake_isolated)
+    with pytest.warns(SearchLimitWarning, match="could not be polished"):
+        res = exact_bounds(pr)
+    assert calls[-1] == "polish"
+    assert [i.status for i in res.infos] == ["optimal"] * 8
+    tol = 1e-4 * np.maximum(1.0, np.abs(plain.bounds))
+    assert np.all(np.abs(res.bounds - plain.bounds) <= tol)
+    y, x = pr.y, pr.x
+    t = np.arange(3, pr.N)
+    for info in res.infos:
+        th, eta = info.point.theta, info.point.eta
+        assert np.max(np.abs(eta)) <= D
+        ybar = y - eta
+        r = ybar[t] + th[0] * ybar[t - 1] + th[1] * ybar[t - 2] - th[2] * x[t - 2] - th[3] * x[t - 3]
+        assert np.max(np.abs(r)) <= 1e-7
+
 _ISOLATED_CASE = _RECORD.format(n=1000, seed=1) + r"""
 from hammerbound.relaxations import exact_bounds
 with warnings.catch_warnings(record=True) as w:

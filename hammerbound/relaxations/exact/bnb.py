@@ -246,22 +246,24 @@ def exact_bounds(
                        and not shared_groups(problem))
     ws = initial_equations(problem, lp_box) if working_set else None
     jobs = [(k, s) for k in range(problem.p) for s in (1.0, -1.0)]
+    isolate = n_jobs == 1 and crash_prone(problem)
     try:
         box, ws, outs, crashes = _search_all(
             problem, lp_box, jobs, ws, n_jobs, deadline, options,
             dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
                  to_data=1.0 / units.factors(problem.p)),
-            isolate=n_jobs == 1 and crash_prone(problem), t0=t0)
+            isolate=isolate, t0=t0)
     except BrokenProcessPool as err:  # a joblib worker died (n_jobs > 1)
         crashes = [crash_message(err)]
         box = lp_box
         outs = [_crashed_end(problem, lp_box, k, s, [], t0, crashes[0]) for k, s in jobs]
+    polished = _polished(problem, jobs, outs, tol, options, deadline, isolate, crashes)
     if crashes:
         warnings.warn(f"the exact search stopped on {len(crashes)} step(s): {crashes[0]}. "
                       "The bounds of the steps that did not finish are the LP or OBBT outer "
-                      "bounds (still guaranteed; status 'limit').", SearchLimitWarning,
+                      "bounds (still guaranteed; status 'limit'); a witness that could not be "
+                      "polished is the verified point the search found.", SearchLimitWarning,
                       stacklevel=2)
-    polished = _polished(problem, jobs, outs, tol, options, deadline)
     if any(o.bound == np.inf for o in outs):
         # every leaf of a search was certified infeasible and no point was verified: the
         # set is empty (reporting +inf/-inf bounds with status "limit" would hide that)
@@ -345,17 +347,25 @@ def _crashed_end(problem, box, k, s, points, t0, why) -> EndResult:
     return out
 
 
-def _polished(problem, jobs, outs, tol, options, deadline):
+def _polished(problem, jobs, outs, tol, options, deadline, isolate, crashes):
     """The ends' witnesses a little inside the set (an independent check accepts them at
     the error bounds as given, not only within the acceptance tolerance): see
     :func:`.local.polish`; each end's value may worsen only by what is left of its
-    tolerance."""
+    tolerance. With ``isolate`` the polish runs in the search's worker process (its elastic
+    LPs are HiGHS runs on the full record); if that dies, the verified witnesses are kept
+    as they are and the crash is appended to ``crashes``."""
     witnesses = [o.witness for o in outs]
     if not options.polish or past(deadline):
         return witnesses
     keep = [(k, s, tol * max(1.0, abs(o.value)) - (o.value - o.bound)
              if o.status == "optimal" else np.inf) for (k, s), o in zip(jobs, outs, strict=True)]
-    return polish(problem, witnesses, keep=keep)
+    if not isolate:
+        return polish(problem, witnesses, keep=keep)
+    try:
+        return run_isolated(polish, problem, witnesses, keep=keep)
+    except SolverCrashError as err:
+        crashes.append(str(err))
+        return witnesses
 
 
 def _end_infos(problem, jobs, outs, polished, lp_box, units):

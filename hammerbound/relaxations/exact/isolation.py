@@ -11,9 +11,12 @@ records with input errors (hundreds of fits up to N = 10000). The reproducers ar
 ``benchmarks/output_error_lps.py`` and ``tests/relaxations/test_output_error_lps.py``.
 
 Such searches (:func:`crash_prone`) run in one worker process (a loky executor of this
-module, kept between fits). If the worker dies, :func:`run_isolated` raises
-:class:`SolverCrashError` and :func:`.bnb.exact_bounds` reports the LP method's bounds,
-which stay guaranteed, with status ``"limit"``.
+module, kept between fits): every step of :func:`.bnb.exact_bounds` that solves the
+McCormick or the witness LPs of the full record (OBBT, the first verified points, each
+interval end, the witnesses' polish). If the worker dies, :func:`run_isolated` raises
+:class:`SolverCrashError` and :func:`.bnb.exact_bounds` keeps what the steps before it
+certified (the LP bounds, the OBBT box, the verified witnesses unpolished), with status
+``"limit"`` for the ends not searched to the end.
 """
 
 from __future__ import annotations

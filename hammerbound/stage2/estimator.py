@@ -140,7 +140,9 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         ``2 p`` interval ends and the joblib workers (``time_limit`` is per end). It starts
         when :meth:`fit` is called; the polytopic LP and the first OBBT round always run
         (set-up, usually well under a second to a few seconds), then each end searches for
-        at most ``min(time_limit, time left)``; ends that find no time left report their
+        at most ``time_limit`` and its share of the time left (the time left divided by the
+        ends still to run; time an end does not use goes to the ends after it); ends that
+        find no time left report their
         LP/OBBT bound with status ``"limit"``. The result is always finite and guaranteed
         where the LP bound is. ``None``: no total budget. The LP method needs none; the
         moment method is guarded by its size budget instead (see ``relaxation_order``).

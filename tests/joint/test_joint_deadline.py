@@ -104,7 +104,7 @@ def test_restore_and_walk_stop_at_the_deadline(monkeypatch):
 
 
 def test_end_share_gives_what_is_left_to_the_rounds_still_to_run():
-    from hammerbound.joint.bounds import end_share
+    from hammerbound.relaxations.exact.limits import end_share
 
     assert end_share(100.0, 0, 16, 2, now=40.0) == 60.0 / 8  # 8 rounds of 2 ends
     assert end_share(100.0, 15, 16, 2, now=40.0) == 60.0  # the last end: all that is left

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+import re
 
 import control
 import numpy as np
@@ -199,8 +200,11 @@ def _progress_gaps(x, y, scale, capsys):
                           n_jobs=1).fit(x / scale, y, input_bound=0.003 / scale)
     out = capsys.readouterr()
     assert out.out == ""  # stdout belongs to the program
-    lines = [ln for ln in out.err.splitlines() if "finished" in ln]
-    return {ln.split(":")[0]: float(ln.split(", gap ")[1].split(",")[0]) for ln in lines}
+    # the last line of each end: "finished" or "stopped by ..." (max_nodes=2)
+    lines = [ln for ln in out.err.splitlines()
+             if ln.startswith("exact ") and ("finished" in ln or "stopped by" in ln)]
+    return {ln.split(":")[0]: float(re.search(r"(?:, gap|box width) ([^,) ]+)", ln).group(1))
+            for ln in lines}
 
 
 def test_exact_progress_shows_the_gap_in_the_units_of_the_data(capsys):

@@ -179,7 +179,10 @@ def exact_bounds(
         Raise :class:`UnboundedSetError` when a bound coincides with the a priori box.
     total_time_limit : float or None, default None
         Wall-time budget (s) of the whole call, shared by the ``2 p`` ends and the joblib
-        workers: each end searches for at most ``min(time_limit, time left)``; the LP and
+        workers: each end searches for at most ``time_limit`` and for its share of the
+        time left (:func:`.limits.end_share`: the time left divided by the rounds of ends
+        still to run, so that the first ends cannot use up the budget of the others, and
+        time an end does not use goes to the ends after it); the LP and
         the first OBBT round always run (set-up), further OBBT rounds and the search for a
         first feasible point only while time is left; an end that has no time left when it
         starts reports its LP/OBBT bound with status ``"limit"``.
@@ -322,7 +325,7 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
         if parallel is None:
             wsp = None if isolate else Workspace()
             outs = [step(search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
-                         workspace=wsp, **args,
+                         workspace=wsp, order=(i, len(jobs), 1), **args,
                          fallback=lambda why, k=k, s=s: _crashed_end(problem, box, k, s, pts,
                                                                      t0, why))
                     for i, (k, s) in enumerate(jobs)]
@@ -331,7 +334,7 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
 
             outs = parallel(
                 delayed(search_end)(problem, box, k, s, pts, roots.get((k, s)), position=i,
-                                    **args)
+                                    order=(i, len(jobs), n_jobs), **args)
                 for i, (k, s) in enumerate(jobs))
     finally:
         if parallel is not None:

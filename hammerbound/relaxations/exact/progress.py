@@ -33,6 +33,7 @@ class _GapBar:
         self.t0 = self.last = time.perf_counter()
         self.state = (0.0, float(gap0) * self.unit, 0)
         self.bar = None
+        self.verified = True
         if is_terminal(sys.stderr):
             from tqdm.auto import tqdm
 
@@ -40,19 +41,22 @@ class _GapBar:
                             bar_format="{desc}: {percentage:3.0f}% of gap closed |{bar}| "
                                        "{elapsed} {postfix}")
 
-    def update(self, gap, target, nodes):
+    def update(self, gap, target, nodes, verified=True):
+        """``gap``: value minus bound, or without a verified point (``verified`` False) the
+        width of the box above the bound, which stands for it."""
         gap = max(float(gap), 0.0)
         done = 1.0 - max(gap - target, 0.0) / max(self.gap0 - target, 1e-300)
         pct = 100.0 * min(max(done, 0.0), 1.0)
         self.state = (pct, gap * self.unit, nodes)
+        self.verified = bool(verified)
         if self.bar is None:
             if time.perf_counter() - self.last >= _LINE_EVERY:
                 self._line("searching")
             return
         left = self.stop_at - time.perf_counter()
-        shown = gap * self.unit
-        self.bar.set_postfix_str(f"gap {shown:.3g}, {nodes} nodes, stops within {max(left, 0):.0f} s"
-                                 if np.isfinite(left) else f"gap {shown:.3g}, {nodes} nodes",
+        gap_text = self._gap_text(gap * self.unit)
+        self.bar.set_postfix_str(f"{gap_text}, {nodes} nodes, stops within {max(left, 0):.0f} s"
+                                 if np.isfinite(left) else f"{gap_text}, {nodes} nodes",
                                  refresh=False)
         if pct > self.shown:
             self.bar.update(pct - self.shown)
@@ -60,17 +64,25 @@ class _GapBar:
         else:
             self.bar.update(0)
 
+    def _gap_text(self, gap) -> str:
+        if self.verified:
+            return f"gap {gap:.3g}"
+        return f"no verified point yet (box width {gap:.3g} above the bound)"
+
     def _line(self, what):
         import sys
 
         pct, gap, nodes = self.state
         self.last = time.perf_counter()
-        print(f"exact {self.label}: {what}, {pct:.0f}% of gap closed, gap {gap:.3g}, "
+        print(f"exact {self.label}: {what}, {pct:.0f}% of gap closed, {self._gap_text(gap)}, "
               f"{nodes} nodes, {self.last - self.t0:.1f} s", file=sys.stderr, flush=True)
 
-    def close(self):
+    def close(self, outcome="finished"):
+        """End the display; ``outcome`` says how the end's search ended ("finished" with
+        its gap within the tolerance, or e.g. "stopped by the time limit (time_limit)"),
+        shown in line mode."""
         if self.bar is None:
-            self._line("finished")
+            self._line(outcome)
         else:
             self.bar.close()
 

@@ -28,6 +28,7 @@ from .incumbent import (
     _RESTORE_GAP,
     IncumbentSearch,
 )
+from .limits import end_share
 from .local import improve
 from .mccormick import shared_groups
 from .node_box import _box_end, _cap, _reduced_cost_tightening
@@ -103,8 +104,8 @@ def _stop_time(t0, time_limit, deadline):
 
 
 def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit, progress,
-               position, deadline=None, ws=None, options=None, workspace=None, to_data=None
-               ) -> EndResult:
+               position, deadline=None, ws=None, options=None, workspace=None, to_data=None,
+               order=None) -> EndResult:
     """Minimise ``sense * theta_k`` over the EIV set by branch-and-bound (one interval end).
 
     ``root`` is ``(bound, x, basis)`` from the last OBBT round (or None). ``box0`` is the
@@ -115,9 +116,14 @@ def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit
     box end with status ``"limit"``. ``options``: :class:`SearchOptions`; ``workspace``: a
     :class:`Workspace` shared with the other ends of this process, or None; ``to_data``:
     per parameter, the factor from the search's units to the data's (the progress shows
-    the gap in the data's units), or None (the same units).
+    the gap in the data's units), or None (the same units). ``order = (i, ends, workers)``:
+    this end is the ``i``-th of ``ends`` started in order on ``workers`` processes, and
+    may use only its share of the time left before ``deadline`` (:func:`.limits.end_share`:
+    time an end leaves unused goes to the ends after it).
     """
     t0 = time.perf_counter()
+    if deadline is not None and order is not None:
+        deadline = min(deadline, time.time() + end_share(deadline, *order))
     stop_at, by_budget = _stop_time(t0, time_limit, deadline)
     if stop_at <= t0 and by_budget:
         return _not_searched(problem, box0, k, sense, points, t0)
@@ -129,7 +135,10 @@ def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit
                         position, min(s.ub, s.top) - s.end0, stop_at,
                         1.0 if to_data is None else float(to_data[k]))
     s.run()
-    return s.result(t0, by_budget)
+    res = s.result(t0, by_budget)
+    if s.bar is not None:
+        s.bar.close(s.outcome)
+    return res
 
 
 def _not_searched(problem, box0, k, sense, points, t0) -> EndResult:
@@ -266,8 +275,8 @@ class EndSearch(IncumbentSearch):
                 continue
             self._branch(lb, box, x, rc)
         if self.bar is not None:  # the last line shows the gap the end reports
-            self.bar.update(min(self.ub, self.top) - self._bound(), self.tol_eff, self.nodes)
-            self.bar.close()
+            self.bar.update(min(self.ub, self.top) - self._bound(), self.tol_eff, self.nodes,
+                            verified=np.isfinite(self.ub))
 
     def _closes(self, lb) -> bool:
         """Close a node whose bound is within the tolerance of the incumbent."""
@@ -280,7 +289,8 @@ class EndSearch(IncumbentSearch):
         if self.bar is not None:
             lb_now = max(self.end0, min(self.closed_lb, lb,
                                         self.heap[0][0] if self.heap else np.inf))
-            self.bar.update(min(self.ub, self.top) - lb_now, self.tol_eff, self.nodes)
+            self.bar.update(min(self.ub, self.top) - lb_now, self.tol_eff, self.nodes,
+                            verified=np.isfinite(self.ub))
 
     def _next(self):
         """The next node as ``(lb, box, x or None, (bound, reduced costs) or None)``; None
@@ -402,18 +412,23 @@ class EndSearch(IncumbentSearch):
         return max(bound, min(self.end0, self.ub))
 
     def _message(self, gap, elapsed, by_budget):
+        """``(status, message)`` of the end; sets :attr:`outcome`, how the search ended in
+        a few words for the progress display ("finished", "stopped by the ...")."""
         status, nodes = self.status, self.nodes
+        self.outcome = "finished"
         if status == "limit":
             if nodes >= self.max_nodes:
-                why = "node limit (max_nodes)"
+                why = "the node limit (max_nodes)"
             elif by_budget:
-                why = "total time budget (total_time_limit)"
+                why = "its share of the total time budget (total_time_limit)"
             else:
-                why = "time limit (time_limit)"
-            msg = (f"stopped by the {why} ({nodes} nodes, {elapsed:.1f} s): the bound is a "
+                why = "the time limit (time_limit)"
+            self.outcome = f"stopped by {why}"
+            msg = (f"stopped by {why} ({nodes} nodes, {elapsed:.1f} s): the bound is a "
                    f"valid outer bound, certified gap {gap:.3g}")
         elif not np.isfinite(self.ub):
             status = "limit"
+            self.outcome = "stopped without a verified-feasible point"
             msg = "no verified-feasible point found: only the outer bound is certified"
         else:
             msg = f"gap {gap:.3g} <= tol after {nodes} nodes ({self.pool.checks} check_theta calls)"

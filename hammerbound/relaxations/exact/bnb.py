@@ -81,7 +81,7 @@ from ..lp import end_statuses, lp_bounds, raise_if_box_limited
 from ..problem import EIVProblem
 from ..result import BoundInfo, ExactDetails, IntervalResult, VerifiedPoint
 from ..units import Units
-from .isolation import SolverCrashError, crash_message, crash_prone, run_isolated
+from .isolation import SolverCrashError, crash_prone, run_isolated, why
 from .limits import check_limits
 from .local import polish, restore
 from .mccormick import shared_groups
@@ -170,7 +170,8 @@ def exact_bounds(
     n_jobs : int, default 1
         The ``2 p`` interval ends are searched in parallel with joblib. With 1, a long
         output-error record's search still runs in a worker process
-        (:mod:`.isolation`: HiGHS can crash the process there).
+        (:mod:`.isolation`: HiGHS can crash the process there). If a joblib worker dies,
+        the search runs again as with 1, every step in a worker process.
     progress : bool, default False
         Show a tqdm progress bar per interval end.
     theta_box : array_like, shape (p, 2), optional
@@ -226,6 +227,8 @@ def exact_bounds(
     SearchLimitWarning
         A worker process of the search died (HiGHS crashed in it): the steps it did not
         finish report their LP or OBBT outer bounds with status ``"limit"``.
+    RuntimeWarning
+        A joblib worker died (``n_jobs > 1``): the search ran again one step at a time.
     """
     check_limits(tol, max_nodes, time_limit, total_time_limit)
     t0 = time.perf_counter()
@@ -250,16 +253,23 @@ def exact_bounds(
     ws = initial_equations(problem, lp_box) if working_set else None
     jobs = [(k, s) for k in range(problem.p) for s in (1.0, -1.0)]
     isolate = n_jobs == 1 and crash_prone(problem)
+    args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
+                to_data=1.0 / units.factors(problem.p))
     try:
-        box, ws, outs, crashes = _search_all(
-            problem, lp_box, jobs, ws, n_jobs, deadline, options,
-            dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
-                 to_data=1.0 / units.factors(problem.p)),
-            isolate=isolate, t0=t0)
+        box, ws, outs, crashes = _search_all(problem, lp_box, jobs, ws, n_jobs, deadline,
+                                             options, args, isolate=isolate, t0=t0)
     except BrokenProcessPool as err:  # a joblib worker died (n_jobs > 1)
-        crashes = [crash_message(err)]
-        box = lp_box
-        outs = [_crashed_end(problem, lp_box, k, s, [], t0, crashes[0]) for k, s in jobs]
+        # run it again one step at a time, each in a worker process: a step that dies
+        # again keeps what was certified before it (the LP bounds were a 100x wider
+        # fallback on a long output-error record, new-user trial 9)
+        warnings.warn(f"a worker process of the parallel exact search died ({why(err)}): "
+                      "HiGHS can crash on long output-error records (see hammerbound."
+                      "relaxations.exact.isolation), or the system ended it (e.g. out of "
+                      "memory). The search runs again one step at a time, in a worker "
+                      "process of its own (as with n_jobs=1).", RuntimeWarning, stacklevel=2)
+        isolate = True
+        box, ws, outs, crashes = _search_all(problem, lp_box, jobs, ws, 1, deadline,
+                                             options, args, isolate=True, t0=t0)
     polished = _polished(problem, jobs, outs, tol, options, deadline, isolate, crashes)
     if crashes:
         warnings.warn(f"the exact search stopped on {len(crashes)} step(s): {crashes[0]}. "

@@ -61,7 +61,10 @@ def run_isolated(fn, *args, **kwargs):
     if _EXECUTOR is None:
         from joblib.externals.loky import ProcessPoolExecutor
 
-        _EXECUTOR = ProcessPoolExecutor(max_workers=1)
+        # no faulthandler dump of a crash (a traceback and 166 module names on the user's
+        # stderr): the SolverCrashError's warning says what happened. loky enables the
+        # handler in its workers unless this variable is set; empty, Python leaves it off
+        _EXECUTOR = ProcessPoolExecutor(max_workers=1, env={"PYTHONFAULTHANDLER": ""})
     try:
         return _EXECUTOR.submit(fn, *args, **kwargs).result()
     except BrokenProcessPool as err:  # TerminatedWorkerError is one

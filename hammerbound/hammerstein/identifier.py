@@ -78,10 +78,11 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         bound, method and limits serve both paths. The linear block always has unit
         steady-state gain (22.8), which makes the backlash/linear split identifiable: a
         ``linear`` estimator with ``steady_state_gain=None`` (its default) is cloned with
-        ``steady_state_gain=1``; any other gain raises ``ParameterValidationError``. To
-        bound the time, give it a total budget, e.g.
-        ``LinearEIVSetEstimator(method="exact", total_time_limit=60)`` (seconds, shared by
-        all interval ends; ends stopped by it report guaranteed outer bounds).
+        ``steady_state_gain=1``; any other gain raises ``ParameterValidationError``. Its
+        ``total_time_limit`` (default 600 s, shared by all interval ends; ends stopped by it
+        report guaranteed outer bounds) bounds the time of the linear block's fit (of the
+        whole one-record fit), e.g.
+        ``LinearEIVSetEstimator(method="exact", total_time_limit=60)``.
     inner_signal : {"independent", "two-level"}, default "independent"
         Two-stage path: how stage 2 treats the inner-signal uncertainty. ``"independent"``
         follows the chapter (22.31)-(22.34): one error ``|dx_t| <= Delta x_t`` per sample.

@@ -38,6 +38,7 @@ from ..exceptions import (
     UnboundedSetError,
 )
 from ..modelset.estimator import ModelSetMixin
+from ..relaxations.exact.limits import DEFAULT_TOTAL_TIME_LIMIT
 from ..relaxations.moment.size import MOMENT_MAX_WORK
 from ..relaxations.problem import EIVProblem
 from ..stage1.feasible_set import FeasibleSet
@@ -135,17 +136,21 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         An end stopped by ``max_nodes`` or ``time_limit`` reports the best certified outer
         bound found so far (never wider than the LP bound) with status ``"limit"``, and
         the fit warns (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends.
-    total_time_limit : float or None, default None
-        Wall-time budget in seconds for the whole fit of the exact method, shared by the
-        ``2 p`` interval ends and the joblib workers (``time_limit`` is per end). It starts
-        when :meth:`fit` is called; the polytopic LP and the first OBBT round always run
-        (set-up, usually well under a second to a few seconds), then each end searches for
-        at most ``time_limit`` and its share of the time left (the time left divided by the
-        ends still to run; time an end does not use goes to the ends after it); ends that
-        find no time left report their
-        LP/OBBT bound with status ``"limit"``. The result is always finite and guaranteed
-        where the LP bound is. ``None``: no total budget. The LP method needs none; the
-        moment method is guarded by its size budget instead (see ``relaxation_order``).
+    total_time_limit : float or None, default 600
+        Wall-time budget in seconds for the whole fit, shared by the ``2 p`` interval
+        ends and the joblib workers (``time_limit`` is per end): the exact method's, and a
+        one-record fit's with any method. It starts when :meth:`fit` is called; the
+        polytopic LP and the first OBBT round always run (set-up, usually well under a
+        second to a few seconds), then each end searches for at most ``time_limit`` and
+        its share of the time left (the time left divided by the ends still to run; time
+        an end does not use goes to the ends after it); ends that find no time left report
+        their LP/OBBT bound with status ``"limit"``. The result is always finite and
+        guaranteed where the LP bound is, and the fit warns
+        (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends it stopped.
+        The default keeps a long record's exact fit from running for ``2 p x time_limit``
+        (80 min for ``p = 4``) without a word; ``None``: no total budget. The LP method on
+        the chapter's experiments takes seconds; the moment method is guarded by its size
+        budget instead (see ``relaxation_order``).
     on_failure : {"box", "raise"}, default "raise"
         Moment method: when a bound cannot be certified, raise :class:`SolverError`
         (default) or report the LP bound for it (still guaranteed).
@@ -225,7 +230,7 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                  method="exact", relaxation_order=1, relaxation_basis="sparse",
                  relaxation_max_work=MOMENT_MAX_WORK, solver="clarabel", solver_options=None,
                  theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
-                 total_time_limit=None, on_failure="raise", n_jobs=1, progress=False,
+                 total_time_limit=DEFAULT_TOTAL_TIME_LIMIT, on_failure="raise", n_jobs=1, progress=False,
                  noise_bound=DEPRECATED, b0=DEPRECATED):
         self.na = na
         self.nb = nb

@@ -99,3 +99,32 @@ def test_without_a_verified_point_the_line_does_not_call_the_box_width_a_gap(cap
     assert re.fullmatch(r"exact a1 min: stopped by the time limit \(time_limit\), 60% of gap "
                         r"closed, no verified point yet \(box width 0\.4 above the bound\), "
                         r"12 nodes, [\d.]+ s", line), line
+
+
+def test_a_fit_has_a_total_budget_by_default(monkeypatch):
+    """Without one, a long record's exact fit could run 8 x 600 s without a word (trial 9):
+    the estimator's default budget reaches the search as a deadline, and the command line
+    has the same default (``inf`` lifts it)."""
+    from hammerbound.app.cli.main import build_parser
+    from hammerbound.app.cli.options import stage2_kwargs
+    from hammerbound.relaxations.exact import bnb
+
+    seen = []
+    real = bnb.exact_bounds
+
+    def spy(*a, deadline=None, **kw):
+        seen.append(deadline)
+        return real(*a, deadline=deadline, **kw)
+
+    monkeypatch.setattr(bnb, "exact_bounds", spy)
+    pr = _problem()
+    t = time.time()
+    hb.LinearEIVSetEstimator(na=2, nb=2, nk=2, output_bound=0.1, method="exact").fit(
+        pr.x, pr.y, input_bound=0.0)
+    assert len(seen) == 1 and seen[0] is not None and 590 < seen[0] - t < 610
+    parser = build_parser()
+    eiv = ["eiv", "data.csv", "--na", "2", "--nb", "2", "--output-bound", "0.1"]
+    args = parser.parse_args(eiv)
+    assert stage2_kwargs(args)["total_time_limit"] == 600.0
+    args = parser.parse_args(eiv + ["--total-time-limit", "inf"])
+    assert stage2_kwargs(args)["total_time_limit"] is None

@@ -7,7 +7,7 @@ import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir, check_output_file
 from .console import Progress
-from .options import add_stage2_options, deprecated
+from .options import add_stage2_options, deprecated, total_budget
 
 __all__ = ["add_parser", "run"]
 
@@ -76,7 +76,7 @@ def run(args) -> int:
                            solver=args.solver, n_jobs=args.n_jobs, progress=progress,
                            linear_options={"progress": args.progress,
                                            "time_limit": args.time_limit,
-                                           "total_time_limit": args.total_time_limit,
+                                           "total_time_limit": total_budget(args),
                                            "max_nodes": args.max_nodes},
                            file=False if json_stdout else sys.stdout)
         if report_dir is not None:

@@ -20,6 +20,7 @@ import sys
 import numpy as np
 
 from ..._compat import REMOVAL
+from ...relaxations.exact.limits import DEFAULT_TOTAL_TIME_LIMIT
 
 __all__ = ["CLI_NAMES", "DeprecatedFlag", "UsageError", "add_bound_options",
            "add_csv_options", "add_model_options", "add_stage2_options", "deprecated",
@@ -146,11 +147,12 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
     p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
     p.add_argument("--time-limit", type=float, default=600.0,
                    help="exact method: seconds per interval end (default 600)")
-    p.add_argument("--total-time-limit", type=float, default=None,
+    p.add_argument("--total-time-limit", type=float, default=DEFAULT_TOTAL_TIME_LIMIT,
                    help="seconds for the whole fit of the linear block (the exact method's "
                         "stage 2, or a one-record fit with any method), shared by every "
                         "interval end and job; ends it stops report their certified bound "
-                        "with status 'limit' (default: none)")
+                        f"with status 'limit' (default {DEFAULT_TOTAL_TIME_LIMIT:g}; inf for "
+                        "none)")
     p.add_argument("--max-nodes", type=int, default=20000,
                    help="exact method: nodes per interval end (default 20000)")
     p.add_argument("--progress", action="store_true",
@@ -175,6 +177,12 @@ def theta_box_given(args) -> tuple[list[str], dict | None]:
     return [f"a priori box {text} (--theta-box)"], {n: [lo, hi] for n, (lo, hi) in rows}
 
 
+def total_budget(args) -> float | None:
+    """``--total-time-limit`` for the estimators: ``inf`` means no budget (None)."""
+    t = args.total_time_limit
+    return None if t is not None and t == np.inf else t
+
+
 def stage2_kwargs(args) -> dict:
     """Keyword arguments of LinearEIVSetEstimator from the stage-2 options."""
     rows = getattr(args, "theta_box", None)
@@ -182,5 +190,5 @@ def stage2_kwargs(args) -> dict:
         raise UsageError("--theta-box names a parameter twice: give each one once")
     return {"method": args.method, "relaxation_order": args.order, "solver": args.solver,
             "n_jobs": args.n_jobs, "progress": args.progress, "time_limit": args.time_limit,
-            "total_time_limit": args.total_time_limit, "max_nodes": args.max_nodes,
+            "total_time_limit": total_budget(args), "max_nodes": args.max_nodes,
             "theta_box": dict(rows) if rows else None}

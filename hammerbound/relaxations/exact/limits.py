@@ -10,7 +10,13 @@ import time
 from ...data.validation import as_real
 from ...exceptions import ParameterValidationError
 
-__all__ = ["check_limits", "end_share"]
+__all__ = ["DEFAULT_TOTAL_TIME_LIMIT", "check_limits", "end_share"]
+
+#: the estimators' and the command line's default wall-time budget (s) of a whole fit of
+#: the linear block: without one, a long record's exact fit could run 2 p x ``time_limit``
+#: (8 x 600 s) without a word (new-user trial 9). ``None`` (Python) or ``inf`` (command
+#: line) lifts it.
+DEFAULT_TOTAL_TIME_LIMIT = 600.0
 
 
 def _seconds(value) -> bool:

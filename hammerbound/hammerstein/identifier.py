@@ -226,7 +226,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, data.dt)
 
     def _fit_one_record(self, bl, lin, data, steady_state, output_bound):
-        from .one_record import fit_one_record
+        from .one_record import fit_one_record, in_param_order
         from .two_stage import steady_pair
         from .views import BacklashBoxView, LinearBlockView, joint_samples
 
@@ -240,8 +240,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         sampler = partial(joint_samples, f.problem, f.result.root_box,
                           [i.point for i in f.result.infos])
 
+        ends_theta, ends_gamma = in_param_order(f.result.infos, f.problem.p)
         self.linear_ = LinearBlockView(
-            f.problem, f.theta_bounds, f.result.infos[: 2 * f.problem.p], method=lin.method,
+            f.problem, f.theta_bounds, ends_theta[1], method=lin.method,
             dt=data.dt, names=(data.input_name, data.output_name),
             units=(data.input_unit, data.output_unit),
             time_unit=getattr(data, "time_unit", ""), sampler=sampler,
@@ -250,8 +251,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                                          sampler)
         self.gamma_bounds_, self.theta_bounds_ = f.gamma_bounds, f.theta_bounds
         # the search's ends are theta's then the backlash's: here in the order of bounds_
-        two_p = 2 * f.problem.p
-        self.bound_info_ = tuple(f.result.infos[two_p:]) + tuple(f.result.infos[:two_p])
+        self.bound_info_ = ends_gamma + ends_theta[0]
         self.intervals_ = IntervalSet(GAMMA_NAMES + self.linear_.param_names_,
                                       np.vstack([f.gamma_bounds, f.theta_bounds]),
                                       infos=self.bound_info_, method="one-record")

@@ -157,6 +157,13 @@ def _warn_stopped(infos, named):
             SearchLimitWarning, stacklevel=5)
 
 
+def _lead(stopped_by_time) -> str:
+    """How a not-identified warning begins: with the time limit when it stopped the
+    search (new-user trial 9 read "the record does not bound" as the record's fault)."""
+    return ("within the time limit the search did not bound" if stopped_by_time
+            else "the record does not bound")
+
+
 def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
                          method="exact"):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
@@ -175,7 +182,7 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     causes = "; ".join(sorted({c for _, c in found}))
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
-    warnings.warn(f"the record does not bound {names}: {causes}. Those ends are {what}. "
+    warnings.warn(f"{_lead(stopped_by_time)} {names}: {causes}. Those ends are {what}. "
                   + _advice(stopped_by_time, lps_stopped, prior.user_given),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
@@ -215,7 +222,7 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
     which = ", ".join(hit)
     more = "give more time (total_time_limit), or " if stopped_by_time else ""
     warnings.warn(
-        f"the record does not bound {which}: the search reached the default box "
+        f"{_lead(stopped_by_time)} {which}: the search reached the default box "
         "|b_j| <= 1e4, an assumption and not the record's answer, so those ends are "
         "reported as infinite (and there is no central model). The other intervals hold "
         f"under that box (see assumptions_). To bound them, {more}use a record that moves "
@@ -306,3 +313,31 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     return OneRecordFit(problem, res, prior, tb, gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,
                         time.perf_counter() - t0)
+
+
+def in_param_order(infos, p):
+    """The one-record ends (theta's, then the backlash's; each witness the search's vector
+    ``[theta, gamma, z0]``) with witnesses in the order of the parameters they are shown
+    with, and ``inner`` (the end's parameter at its witness) filled in (new-user trial 9:
+    the witness did not follow ``param_names_``, and ``inner`` was None).
+
+    Returns ``((identifier_theta_ends, linear_view_theta_ends), backlash_ends)``: the
+    identifier's witnesses are ``[m_l, c_l, m_r, c_r, theta]`` (its ``param_names_``), the
+    linear view's ``theta`` (as :class:`~hammerbound.LinearEIVSetEstimator`'s). The full
+    joint witness, with the initial backlash state ``z0``, stays in ``point``."""
+    def with_witness(info, vector, k):
+        if info.point is None:
+            return info
+        vector = np.asarray(vector, dtype=float)
+        return replace(info, witness=vector, inner=float(vector[k]))
+
+    def joint(info):
+        return None if info.point is None else np.concatenate([info.point.gamma,
+                                                               info.point.theta])
+
+    theta_ends, gamma_ends = infos[: 2 * p], infos[2 * p:]
+    ident = tuple(with_witness(i, joint(i), 4 + j // 2) for j, i in enumerate(theta_ends))
+    view = tuple(with_witness(i, None if i.point is None else i.point.theta, j // 2)
+                 for j, i in enumerate(theta_ends))
+    gamma = tuple(with_witness(i, joint(i), j // 2) for j, i in enumerate(gamma_ends))
+    return (ident, view), gamma

@@ -165,7 +165,11 @@ def _b_at_box_fit():
 def test_b_at_the_default_box_is_not_identified():
     idf, caught = _b_at_box_fit()
     msgs = [str(w.message) for w in caught if issubclass(w.category, NotIdentifiedWarning)]
-    assert any("does not bound b1, b2" in m and "|b_j| <= 1e4" in m for m in msgs)
+    # stopped by the time limit: the warning leads with that, not with the record
+    # (new-user trial 9: "the record does not bound ..." when only time was short)
+    assert any(m.startswith("within the time limit the search did not bound b1, b2")
+               and "|b_j| <= 1e4" in m and "give more time (total_time_limit)" in m
+               for m in msgs), msgs
     assert np.all(np.isinf(idf.theta_bounds_[2:]))
     # bound_info_ agrees with bounds_ (it said "limit" at +-1e4)
     for info in idf.bound_info_:

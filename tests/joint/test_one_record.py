@@ -141,6 +141,32 @@ def test_exact_truth_inside_and_witnesses_verified_independently(noise, limit):
             k = names.index(info.param)
             lo, hi = np.concatenate([f.theta_bounds_, f.gamma_bounds_])[k]
             assert lo - 1e-9 <= vec[k] <= hi + 1e-9
+    _assert_witnesses_follow_the_names(f)
+
+
+def _assert_witnesses_follow_the_names(f):
+    """Each witness is a vector in the order of the ``param_names_`` it is shown with
+    (identifier: backlash first; the linear view: theta), and ``inner`` is the end's
+    parameter there (new-user trial 9: the search's ``[theta, gamma, z0]`` and None)."""
+    for est in (f, f.linear_):
+        names = list(est.param_names_)
+        for info in est.bound_info_:
+            if info.point is None:
+                continue
+            want = dict(zip(["ml", "cl", "mr", "cr"], info.point.gamma, strict=True)) \
+                | dict(zip(f.linear_.param_names_, info.point.theta, strict=True))
+            assert info.witness.shape == (len(names),)
+            np.testing.assert_array_equal(info.witness, [want[n] for n in names])
+            assert info.inner == want[info.param]
+
+
+def test_exact_witnesses_follow_param_names_quick():
+    """Quick tier: the ends stopped at once (1 node each), witnesses in the names' order."""
+    u = steps(40, seed=5, hold=(3, 8))
+    y = record(u, 0.05, "bound", seed=5)
+    f, _ = fit(u, y, 0.05, method="exact", time_limit=0.05, max_nodes=1)
+    assert any(i.point is not None for i in f.bound_info_)
+    _assert_witnesses_follow_the_names(f)
 
 
 def test_independent_witness_check_rejects_a_wrong_point():

@@ -31,9 +31,12 @@ def interval_records(names, bounds, status=None) -> list[dict]:
     """One dict per parameter with the keys of :data:`COLUMNS`."""
     b = np.asarray(bounds, dtype=float).reshape(-1, 2)
     status = list(status) if status is not None else ["optimal"] * len(names)
-    with np.errstate(invalid="ignore"):  # [-inf, inf] has no centre: NaN (null in JSON)
+    # an interval unbounded on a side ([0, inf], [-inf, inf]) has no centre: NaN ("-" in
+    # the text, null in JSON; a half-open interval showed "inf", trial 9)
+    with np.errstate(invalid="ignore"):
         return [{"parameter": str(n), "lower": float(lo),
-                 "centre": float(0.5 * lo + 0.5 * hi), "upper": float(hi),
+                 "centre": float(0.5 * lo + 0.5 * hi) if np.isfinite(lo) and np.isfinite(hi)
+                 else float("nan"), "upper": float(hi),
                  "half_width": float(0.5 * hi - 0.5 * lo), "status": s}
                 for n, (lo, hi), s in zip(names, b, status, strict=True)]
 
@@ -65,7 +68,7 @@ def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
         # scientific notation: fixed decimals would print it as 0.0000
         mag = max(abs(r["lower"]), abs(r["upper"]))
         fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
-        # an interval [-inf, inf] has no centre: "-", not "nan"
+        # an unbounded interval has no centre: "-", not "nan" or "inf"
         nums = " ".join(f"{'-':>{cw}}" if np.isnan(r[c]) else f"{r[c]:>{cw}.{fmt}}"
                         for c in ("lower", "centre", "upper", "half_width"))
         lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")

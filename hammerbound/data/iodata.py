@@ -331,5 +331,20 @@ def unpack(X, y, *, what="X", func="fit"):
     if y is None:
         raise DataValidationError(
             f"{func} requires y to be passed, but the target y is None: pass the measured "
-            f"output y, or an IOData (input, output, dt) as {what}.")
+            f"output y, or an IOData (input, output, dt) as {what}.{_columns_hint(X, func)}")
     return X, y, None
+
+
+def _columns_hint(X, func) -> str:
+    """Advice when ``X`` holds several columns (new-user trial 9: a DataFrame of both the
+    input and the output): how to pass them."""
+    cols = getattr(X, "columns", None)
+    ncol = len(cols) if cols is not None else (np.shape(X)[1] if np.ndim(X) == 2 else 0)
+    if ncol < 2:
+        return ""
+    names = (f" ({', '.join(map(str, list(cols)[:4]))}{', ...' if ncol > 4 else ''})"
+             if cols is not None else "")
+    return (f" {func} got {ncol} columns{names}: the model has one input and one output. "
+            "For a table holding both: IOData.from_frame(frame, u='<input column>', "
+            f"y='<output column>'), or {func}(frame['<input column>'], "
+            "frame['<output column>']).")

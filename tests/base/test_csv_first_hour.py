@@ -61,3 +61,18 @@ def test_decimal_comma_and_missing_header_and_directory(tmp_path):
         hb.IOData.from_csv(path)
     with pytest.raises(DataValidationError, match="is a directory, not a CSV file"):
         hb.IOData.from_csv(tmp_path)
+
+
+def test_a_table_of_both_signals_as_x_gets_advice():
+    """A DataFrame holding the input and the output passed as X alone (trial 9): the error
+    names its columns and the two ways to pass them."""
+    pd = pytest.importorskip("pandas")
+    rng = np.random.default_rng(0)
+    frame = pd.DataFrame({"valve": rng.uniform(-1, 1, 50), "flow": rng.uniform(-1, 1, 50)})
+    est = hb.LinearEIVSetEstimator(output_bound=0.1, method="lp")
+    with pytest.raises(hb.exceptions.DataValidationError,
+                       match=r"2 columns \(valve, flow\).*IOData\.from_frame\(frame, "
+                             r"u='<input column>'"):
+        est.fit(frame)
+    with pytest.raises(hb.exceptions.DataValidationError, match="2 columns: the model"):
+        est.fit(frame.to_numpy())

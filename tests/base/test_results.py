@@ -66,6 +66,19 @@ def test_infinite_end_is_not_identified_and_contains_everything_there():
     assert iv.ends_with(st.NOT_IDENTIFIED) == ("m upper",)
 
 
+def test_an_unbounded_interval_has_no_centre_in_the_table():
+    """Half-open and open intervals show "-" as centre (trial 9: "inf" for a backlash
+    end, "-" for a b_j), null in the records; the half-width stays inf."""
+    iv = IntervalSet(("ml", "b1", "a1"), [[0.2, np.inf], [-np.inf, np.inf], [0.1, 0.3]])
+    rows = {r.split()[0]: r.split() for r in iv.summary().splitlines()[1:]}
+    assert rows["ml"][1:5] == ["0.2000", "-", "inf", "inf"]
+    assert rows["b1"][1:5] == ["-inf", "-", "inf", "inf"]
+    assert rows["a1"][2] == "0.2000"
+    frame = iv.to_frame()
+    centre = np.asarray(frame["centre"], dtype=float)
+    assert np.isnan(centre[0]) and np.isnan(centre[1]) and centre[2] == pytest.approx(0.2)
+
+
 def test_bad_construction_is_refused():
     with pytest.raises(ParameterValidationError, match=r"\(2, 2\)"):
         IntervalSet(("a", "b"), [[0.0, 1.0]])

@@ -55,12 +55,10 @@ def test_the_budget_is_shared_by_the_ends(monkeypatch):
 
 
 def test_time_an_end_does_not_use_goes_to_the_ends_after_it(monkeypatch):
-    """The first 4 ends close at once; the last 4 share the whole budget."""
-    real_run = search.EndSearch.run
-
+    """The first 4 ends (a1, a2) need no search time; the last 4 share what they left."""
     def run(self):
         if self.k < 2:
-            return real_run(self)
+            return  # closes at once (its bound stays the certified root bound)
         while time.perf_counter() < self.stop_at:
             time.sleep(0.005)
         self.status = "limit"
@@ -70,10 +68,12 @@ def test_time_an_end_does_not_use_goes_to_the_ends_after_it(monkeypatch):
     budget = 3.0
     res = exact_bounds(pr, total_time_limit=budget, time_limit=600.0)
     first, last = res.infos[:4], res.infos[4:]
-    assert all(i.status == "optimal" for i in first)
     spent = sum(i.time for i in first)
-    # each of the last 4 got about a quarter of what the first 4 left (not an eighth)
-    assert min(i.time for i in last) > 0.8 * (budget - spent - 0.5) / 4 - 0.1
+    # each of the last 4 got about a quarter of what the first 4 left (not an eighth of
+    # the budget, and not all of it for the first of them)
+    left = budget - spent - 0.3  # the LP, OBBT and first points before the ends
+    assert min(i.time for i in last) > 0.8 * left / 4 - 0.05, [i.time for i in res.infos]
+    assert all("its share" in i.message for i in last)
     assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])
 
 

@@ -140,10 +140,11 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
         Wall-time budget in seconds for the whole fit, shared by the ``2 p`` interval
         ends and the joblib workers (``time_limit`` is per end): the exact method's, and a
         one-record fit's with any method. It starts when :meth:`fit` is called; the
-        polytopic LP and the first OBBT round always run (set-up, usually well under a
-        second to a few seconds), then each end searches for at most ``time_limit`` and
-        its share of the time left (the time left divided by the ends still to run; time
-        an end does not use goes to the ends after it); ends that find no time left report
+        polytopic LP always runs, the set-up (bound tightening, first feasible points:
+        usually well under a second to a few seconds) while time is left, then each end
+        searches for at most ``time_limit`` and its share of the time left (the time left
+        divided by the rounds of ends still to run; time an end does not use goes to the
+        ends after it); ends that find no time left report
         their LP/OBBT bound with status ``"limit"``. The result is always finite and
         guaranteed where the LP bound is, and the fit warns
         (:class:`~hammerbound.exceptions.SearchLimitWarning`) naming the ends it stopped.

@@ -128,3 +128,38 @@ def test_a_fit_has_a_total_budget_by_default(monkeypatch):
     assert stage2_kwargs(args)["total_time_limit"] == 600.0
     args = parser.parse_args(eiv + ["--total-time-limit", "inf"])
     assert stage2_kwargs(args)["total_time_limit"] is None
+
+
+def test_parallel_ends_each_get_their_share(monkeypatch):
+    """n_jobs > 1: every end gets its share of the time left for the rounds of ends the
+    workers run (review of trial 9: joblib batched two ends on one worker and the second
+    waited behind the first, "not searched"; n_jobs=-1 counted as one worker, so the first
+    ends got an eighth, not a quarter). Threads stand for the workers here, so that the
+    searches that never close reach them."""
+    from joblib import effective_n_jobs, parallel_config
+
+    _never_closes(monkeypatch)
+    with parallel_config(backend="threading"):
+        res = exact_bounds(_problem(), total_time_limit=5.0, n_jobs=-1)
+    assert not any("not searched" in i.message for i in res.infos), \
+        [(i.param, i.sense, round(i.time, 2), i.message[:40]) for i in res.infos]
+    rounds = -(-8 // effective_n_jobs(-1))
+    assert min(i.time for i in res.infos) > 0.75 * 4.0 / rounds, [i.time for i in res.infos]
+    assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])
+
+
+def test_crash_prone_steps_run_isolated_with_parallel_jobs_too(monkeypatch):
+    """With n_jobs=2 on a crash-prone record the first verified points and the polish (HiGHS
+    on the full record, in this process before) run in the isolated worker."""
+    from hammerbound.relaxations.exact import bnb
+
+    calls = []
+
+    def recording(fn, *a, **kw):
+        calls.append(fn.__name__)
+        return fn(*a, **kw)
+
+    monkeypatch.setattr(bnb, "crash_prone", lambda problem: True)
+    monkeypatch.setattr(bnb, "run_isolated", recording)
+    exact_bounds(_problem(), n_jobs=2)
+    assert calls == ["verified_points", "polish"]

@@ -183,10 +183,10 @@ def exact_bounds(
         workers: each end searches for at most ``time_limit`` and for its share of the
         time left (:func:`.limits.end_share`: the time left divided by the rounds of ends
         still to run, so that the first ends cannot use up the budget of the others, and
-        time an end does not use goes to the ends after it); the LP and
-        the first OBBT round always run (set-up), further OBBT rounds and the search for a
-        first feasible point only while time is left; an end that has no time left when it
-        starts reports its LP/OBBT bound with status ``"limit"``.
+        time an end does not use goes to the ends after it); the LP always runs, OBBT's
+        LPs, the search for a first feasible point and the witnesses' polish only while
+        time is left (a budget the set-up uses up gives the LP bounds); an end that has no
+        time left when it starts reports its LP/OBBT bound with status ``"limit"``.
     deadline : float or None, default None
         The same budget as an absolute :func:`time.time` timestamp (e.g. shared with other
         steps of a fit); with both, the earlier one counts.
@@ -252,7 +252,7 @@ def exact_bounds(
                        and not shared_groups(problem))
     ws = initial_equations(problem, lp_box) if working_set else None
     jobs = [(k, s) for k in range(problem.p) for s in (1.0, -1.0)]
-    isolate = n_jobs == 1 and crash_prone(problem)
+    isolate = crash_prone(problem)
     args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
                 to_data=1.0 / units.factors(problem.p))
     try:
@@ -302,9 +302,12 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
     """OBBT from the LP box, the first verified points, then one search per end in
     ``jobs`` (serially, sharing one :class:`.search.Workspace`, or on joblib workers).
 
-    With ``isolate`` (serial runs that HiGHS may crash, :func:`.isolation.crash_prone`)
-    every step runs in a worker process; a step whose process dies keeps what the steps
-    before it certified (the LP box for OBBT, the OBBT box for an end).
+    With ``isolate`` (problems on which HiGHS may crash, :func:`.isolation.crash_prone`)
+    every step that does not already run on joblib workers runs in a worker process of
+    :mod:`.isolation`; a step whose process dies keeps what the steps before it certified
+    (the LP box for OBBT, the OBBT box for an end). With ``n_jobs != 1`` the ends go to
+    the joblib workers one at a time (``batch_size=1``: each takes its share of the time
+    left, :func:`.limits.end_share`, and no end waits behind another on one worker).
 
     Returns the OBBT box, the working set, the ends' results and the messages of the
     steps that died."""
@@ -323,28 +326,38 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
     if n_jobs != 1:
         from joblib import Parallel
 
-        parallel = Parallel(n_jobs=n_jobs)
+        parallel = Parallel(n_jobs=n_jobs, batch_size=1)
         parallel.__enter__()
     try:
-        box, roots, thetas, ws = step(
-            _obbt, problem, lp_box, n_jobs=n_jobs, parallel=parallel, deadline=deadline,
-            ws=ws, picklable=isolate, fallback=lambda why: (np.array(lp_box), {}, [], ws))
+        obbt_args = (problem, lp_box)
+        obbt_kw = dict(n_jobs=n_jobs, parallel=parallel, deadline=deadline, ws=ws,
+                       picklable=isolate or parallel is not None)
+        if parallel is None:
+            box, roots, thetas, ws = step(
+                _obbt, *obbt_args, **obbt_kw,
+                fallback=lambda why: (np.array(lp_box), {}, [], ws))
+        else:  # its LPs run on the joblib workers
+            box, roots, thetas, ws = _obbt(*obbt_args, **obbt_kw)
         pts = step(verified_points, problem, box, roots, thetas, ws, deadline,
                    fallback=lambda why: [])
         args = dict(args, deadline=deadline, ws=ws, options=options)
         if parallel is None:
             wsp = None if isolate else Workspace()
-            outs = [step(search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
-                         workspace=wsp, order=(i, len(jobs), 1), **args,
-                         fallback=lambda why, k=k, s=s: _crashed_end(problem, box, k, s, pts,
-                                                                     t0, why))
-                    for i, (k, s) in enumerate(jobs)]
+            outs = []
+            for i, (k, s) in enumerate(jobs):
+                t_end = time.perf_counter()
+                outs.append(step(
+                    search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
+                    workspace=wsp, order=(i, len(jobs), 1), **args,
+                    fallback=lambda why, k=k, s=s, t=t_end: _crashed_end(problem, box, k, s,
+                                                                         pts, t, why)))
         else:
-            from joblib import delayed
+            from joblib import delayed, effective_n_jobs
 
+            workers = effective_n_jobs(n_jobs)
             outs = parallel(
                 delayed(search_end)(problem, box, k, s, pts, roots.get((k, s)), position=i,
-                                    order=(i, len(jobs), n_jobs), **args)
+                                    order=(i, len(jobs), workers), **args)
                 for i, (k, s) in enumerate(jobs))
     finally:
         if parallel is not None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pytest
 from oracles import one_record
 
 from hammerbound.joint import RecordProblem, default_gamma_box, record_box

@@ -295,3 +295,20 @@ def test_crossed_ends_name_the_method_that_certified_them():
             check_not_crossed(SimpleNamespace(**{**est.get_params(), "method": method}),
                               est.problem_, crossed)
         assert exc.value.relaxation == method
+
+
+def test_a_b_end_a_limit_left_at_the_box_is_not_blamed_on_the_data():
+    """An exact fit whose budget is used up keeps the LP bound, here at the default box of
+    b1: the error says the search stopped and whether the data bound b1 is not known (it
+    said "the data do not bound b1", review of trial 9); the LP method, which is not
+    stopped, still says the data do not bound it."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1, 1, 30)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], x) + 0.3 * rng.uniform(-1, 1, 30)
+    kw = dict(na=1, nb=1, output_bound=0.3, theta_box={"a1": (-0.99, 0.99)})
+    with pytest.raises(UnboundedSetError, match=r"the search stopped \(time or node limit\)"
+                                                r".*whether the data bound it is not known"):
+        hb.LinearEIVSetEstimator(method="exact", total_time_limit=0.0, **kw).fit(
+            x, y, input_bound=1.0)
+    with pytest.raises(UnboundedSetError, match="the data do not bound b1"):
+        hb.LinearEIVSetEstimator(method="lp", **kw).fit(x, y, input_bound=1.0)

@@ -29,7 +29,7 @@ def run_one_record(args) -> int:
                            "on, e.g. --output-bound 0.05")
     if args.report:
         raise UsageError("--report needs the chapter's two experiments (--steady, --prbs); "
-                         "with --record use --json for the intervals and witnesses")
+                         "with --record use --json for the intervals in machine-readable form")
     if args.steady_output_bound is not None:
         raise UsageError("--steady-output-bound belongs to --steady; one record has one "
                          "output error bound (--output-bound)")

@@ -93,8 +93,11 @@ class BacklashInverse(Result):
         span = hi - lo
         if np.any(v < lo - 1e-12 * (1 + span)) or np.any(v > hi + 1e-12 * (1 + span)):
             raise DataValidationError(
-                f"v leaves the command range {self.v_range} the guarantee was built for; "
-                "call inverse(v_range=...) with a wider range."
+                f"v leaves the command range {self.v_range} the guarantee was built for: "
+                "saturate the command to it (np.clip(v, *inverse.v_range)), or build "
+                "inverse(v_range=...) with a wider range, which works only as far as every "
+                "backlash of the set stays well posed (else IllPosedBacklashError: narrow "
+                "the backlash intervals first, e.g. with more data)."
             )
 
     def compensate(self, v) -> np.ndarray:

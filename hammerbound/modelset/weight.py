@@ -102,6 +102,8 @@ class UncertaintyWeight(Result):
                  if self.on_gain_plane else "")
         return (f"{self.kind} uncertainty weight of order {self.order}: {rel} <= |W| at every "
                 f"frequency, for every model of the set{where}\n"
+                f"G0 = .central = {_tf_text(self.central)} (design against this model: "
+                "the bound holds around it, not around another central model)\n"
                 f"W = {_tf_text(self.W)}\n"
                 f"proof: {c.omega.size} grid points on [0, {c.omega[-1]:.4g}] "
                 f"{self.frequency_unit}, smallest |W| / deviation bound {c.min_ratio:.4g} "

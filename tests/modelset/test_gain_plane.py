@@ -148,5 +148,8 @@ def test_the_plane_needs_a_gain_and_a_flag(est):
         est.uncertainty_weight(on_gain_plane="yes")
     uw = est.uncertainty_weight(order=1, on_gain_plane=True)
     assert "on the gain plane" in uw.summary()
+    # the model the bound holds around is named (trial 10: the interval centres' model,
+    # which the CLI prints as "central model", is another one on the plane)
+    assert "G0 = .central = " in uw.summary()
     assert uw.to_dict()["on_gain_plane"] is True
     assert est.uncertainty_weight(order=0).to_dict()["on_gain_plane"] is False

@@ -339,10 +339,44 @@ def test_a_dead_joblib_worker_runs_the_search_again_one_step_at_a_time(monkeypat
     pr = _record(60, 2)
     monkeypatch.setattr(bnb, "_search_all", dies_in_parallel)
     with pytest.warns(RuntimeWarning, match=r"parallel exact search died \(exit code "
-                                            r"SIGSEGV\(-11\)\).*runs again one step"):
+                                            r"SIGSEGV\(-11\)\).*ran again one at a time"):
         res = exact_bounds(pr, n_jobs=2)
     assert isolated == [True]
     assert [i.status for i in res.infos] == ["optimal"] * 8  # not the LP bounds
+    assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])
+
+
+def test_a_worker_dying_in_the_ends_keeps_the_bound_tightening(monkeypatch):
+    """A joblib worker that dies while the ends are searched: the ends run again one at a
+    time, isolated, from the OBBT box already found (OBBT is not run again)."""
+    import threading
+
+    from joblib import parallel_config
+    from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+    from hammerbound.relaxations import exact_bounds
+    from hammerbound.relaxations.exact import bnb
+
+    real_search, real_obbt = bnb.search_end, bnb._obbt
+    obbt_runs = []
+
+    def search_end(*a, **kw):  # a "worker" (thread) dies; the retry runs in this thread
+        if threading.current_thread() is not threading.main_thread():
+            raise TerminatedWorkerError("The exit codes of the workers are {SIGSEGV(-11)}")
+        return real_search(*a, **kw)
+
+    def obbt(*a, **kw):
+        obbt_runs.append(1)
+        return real_obbt(*a, **kw)
+
+    monkeypatch.setattr(bnb, "search_end", search_end)
+    monkeypatch.setattr(bnb, "_obbt", obbt)
+    monkeypatch.setattr(bnb, "run_isolated", lambda fn, *a, **kw: fn(*a, **kw))
+    with parallel_config(backend="threading"), \
+            pytest.warns(RuntimeWarning, match="ran again one at a time"):
+        res = exact_bounds(_record(60, 2), n_jobs=2)
+    assert len(obbt_runs) == 1
+    assert [i.status for i in res.infos] == ["optimal"] * 8
     assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])
 
 

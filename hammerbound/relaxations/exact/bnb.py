@@ -71,6 +71,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from functools import partial
 
 import numpy as np
 from joblib.externals.loky.process_executor import BrokenProcessPool
@@ -256,20 +257,24 @@ def exact_bounds(
     args = dict(tol=tol, max_nodes=max_nodes, time_limit=time_limit, progress=progress,
                 to_data=1.0 / units.factors(problem.p))
     try:
-        box, ws, outs, crashes = _search_all(problem, lp_box, jobs, ws, n_jobs, deadline,
-                                             options, args, isolate=isolate, t0=t0)
-    except BrokenProcessPool as err:  # a joblib worker died (n_jobs > 1)
-        # run it again one step at a time, each in a worker process: a step that dies
-        # again keeps what was certified before it (the LP bounds were a 100x wider
-        # fallback on a long output-error record, new-user trial 9)
-        warnings.warn(f"a worker process of the parallel exact search died ({why(err)}): "
+        box, ws, outs, crashes, retried = _search_all(
+            problem, lp_box, jobs, ws, n_jobs, deadline, options, args, isolate=isolate,
+            t0=t0)
+    except BrokenProcessPool as err:  # a joblib worker died in OBBT (n_jobs > 1)
+        retried = [why(err)]
+        box, ws, outs, crashes, _ = _search_all(problem, lp_box, jobs, ws, 1, deadline,
+                                                options, args, isolate=True, t0=t0)
+    if retried:
+        # the steps not finished ran again one at a time, each in a worker process: a step
+        # that dies again keeps what was certified before it (the LP bounds were a 100x
+        # wider fallback on a long output-error record, new-user trial 9)
+        isolate = True
+        warnings.warn(f"a worker process of the parallel exact search died ({retried[0]}): "
                       "HiGHS can crash on long output-error records (see hammerbound."
                       "relaxations.exact.isolation), or the system ended it (e.g. out of "
-                      "memory). The search runs again one step at a time, in a worker "
-                      "process of its own (as with n_jobs=1).", RuntimeWarning, stacklevel=2)
-        isolate = True
-        box, ws, outs, crashes = _search_all(problem, lp_box, jobs, ws, 1, deadline,
-                                             options, args, isolate=True, t0=t0)
+                      "memory). The steps it had not finished ran again one at a time, each "
+                      "in a worker process of its own (as with n_jobs=1).", RuntimeWarning,
+                      stacklevel=2)
     polished = _polished(problem, jobs, outs, tol, options, deadline, isolate, crashes)
     if crashes:
         warnings.warn(f"the exact search stopped on {len(crashes)} step(s): {crashes[0]}. "
@@ -307,21 +312,13 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
     :mod:`.isolation`; a step whose process dies keeps what the steps before it certified
     (the LP box for OBBT, the OBBT box for an end). With ``n_jobs != 1`` the ends go to
     the joblib workers one at a time (``batch_size=1``: each takes its share of the time
-    left, :func:`.limits.end_share`, and no end waits behind another on one worker).
+    left, :func:`.limits.end_share`, and no end waits behind another on one worker); if a
+    worker dies there, the ends run again one at a time, each isolated, from the OBBT box
+    and points already found (a worker that dies in OBBT raises ``BrokenProcessPool``).
 
-    Returns the OBBT box, the working set, the ends' results and the messages of the
-    steps that died."""
-    crashes = []
-
-    def step(fn, *a, fallback, **kw):
-        if not isolate:
-            return fn(*a, **kw)
-        try:
-            return run_isolated(fn, *a, **kw)
-        except SolverCrashError as err:
-            crashes.append(str(err))
-            return fallback(str(err))
-
+    Returns the OBBT box, the working set, the ends' results, the messages of the steps
+    that died, and the reasons the parallel ends were run again (empty: they were not)."""
+    crashes, retried = [], []
     parallel = None
     if n_jobs != 1:
         from joblib import Parallel
@@ -329,40 +326,71 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
         parallel = Parallel(n_jobs=n_jobs, batch_size=1)
         parallel.__enter__()
     try:
-        obbt_args = (problem, lp_box)
+        step = partial(_step, isolate, crashes)
         obbt_kw = dict(n_jobs=n_jobs, parallel=parallel, deadline=deadline, ws=ws,
                        picklable=isolate or parallel is not None)
         if parallel is None:
             box, roots, thetas, ws = step(
-                _obbt, *obbt_args, **obbt_kw,
+                _obbt, problem, lp_box, **obbt_kw,
                 fallback=lambda why: (np.array(lp_box), {}, [], ws))
         else:  # its LPs run on the joblib workers
-            box, roots, thetas, ws = _obbt(*obbt_args, **obbt_kw)
+            box, roots, thetas, ws = _obbt(problem, lp_box, **obbt_kw)
         pts = step(verified_points, problem, box, roots, thetas, ws, deadline,
                    fallback=lambda why: [])
         args = dict(args, deadline=deadline, ws=ws, options=options)
-        if parallel is None:
-            wsp = None if isolate else Workspace()
-            outs = []
-            for i, (k, s) in enumerate(jobs):
-                t_end = time.perf_counter()
-                outs.append(step(
-                    search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
-                    workspace=wsp, order=(i, len(jobs), 1), **args,
-                    fallback=lambda why, k=k, s=s, t=t_end: _crashed_end(problem, box, k, s,
-                                                                         pts, t, why)))
-        else:
-            from joblib import delayed, effective_n_jobs
-
-            workers = effective_n_jobs(n_jobs)
-            outs = parallel(
-                delayed(search_end)(problem, box, k, s, pts, roots.get((k, s)), position=i,
-                                    order=(i, len(jobs), workers), **args)
-                for i, (k, s) in enumerate(jobs))
+        ends = (problem, box, jobs, pts, roots, args)
+        outs = None
+        if parallel is not None:
+            try:
+                outs = _parallel_ends(parallel, n_jobs, *ends)
+            except BrokenProcessPool as err:
+                retried.append(why(err))
+        if outs is None:
+            outs = _serial_ends(isolate or bool(retried), crashes, *ends)
     finally:
         if parallel is not None:
             parallel.__exit__(None, None, None)
-    return box, ws, outs, crashes
+    return box, ws, outs, crashes, retried
+
+
+def _step(isolate, crashes, fn, *a, fallback, **kw):
+    """``fn(*a, **kw)``; with ``isolate`` in the worker process of :mod:`.isolation`,
+    where a crash appends its message to ``crashes`` and returns ``fallback(message)``."""
+    if not isolate:
+        return fn(*a, **kw)
+    try:
+        return run_isolated(fn, *a, **kw)
+    except SolverCrashError as err:
+        crashes.append(str(err))
+        return fallback(str(err))
+
+
+def _serial_ends(isolate, crashes, problem, box, jobs, pts, roots, args):
+    """The ends one after the other: in this process, sharing one
+    :class:`.search.Workspace`, or with ``isolate`` each in the isolated worker
+    (:func:`_step`)."""
+    step = partial(_step, isolate, crashes)
+    wsp = None if isolate else Workspace()
+    outs = []
+    for i, (k, s) in enumerate(jobs):
+        t_end = time.perf_counter()
+        outs.append(step(
+            search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
+            workspace=wsp, order=(i, len(jobs), 1), **args,
+            fallback=lambda why, k=k, s=s, t=t_end: _crashed_end(problem, box, k, s, pts,
+                                                                 t, why)))
+    return outs
+
+
+def _parallel_ends(parallel, n_jobs, problem, box, jobs, pts, roots, args):
+    """The ends on the joblib workers, one end per dispatch."""
+    from joblib import delayed, effective_n_jobs
+
+    workers = effective_n_jobs(n_jobs)
+    return parallel(
+        delayed(search_end)(problem, box, k, s, pts, roots.get((k, s)), position=i,
+                            order=(i, len(jobs), workers), **args)
+        for i, (k, s) in enumerate(jobs))
 
 
 def _crashed_end(problem, box, k, s, points, t0, why) -> EndResult:

@@ -33,12 +33,11 @@ def interval_records(names, bounds, status=None) -> list[dict]:
     status = list(status) if status is not None else ["optimal"] * len(names)
     # an interval unbounded on a side ([0, inf], [-inf, inf]) has no centre: NaN ("-" in
     # the text, null in JSON; a half-open interval showed "inf", trial 9)
-    with np.errstate(invalid="ignore"):
-        return [{"parameter": str(n), "lower": float(lo),
-                 "centre": float(0.5 * lo + 0.5 * hi) if np.isfinite(lo) and np.isfinite(hi)
-                 else float("nan"), "upper": float(hi),
-                 "half_width": float(0.5 * hi - 0.5 * lo), "status": s}
-                for n, (lo, hi), s in zip(names, b, status, strict=True)]
+    return [{"parameter": str(n), "lower": float(lo),
+             "centre": float(0.5 * lo + 0.5 * hi) if np.isfinite(lo) and np.isfinite(hi)
+             else float("nan"), "upper": float(hi),
+             "half_width": float(0.5 * hi - 0.5 * lo), "status": s}
+            for n, (lo, hi), s in zip(names, b, status, strict=True)]
 
 
 def interval_frame(names, bounds, status=None):

@@ -231,7 +231,8 @@ class LinearEIVSetEstimator(LinearModelMixin, ModelSetMixin, RegressorMixin, Bas
                  method="exact", relaxation_order=1, relaxation_basis="sparse",
                  relaxation_max_work=MOMENT_MAX_WORK, solver="clarabel", solver_options=None,
                  theta_box=None, tol=1e-4, max_nodes=20000, time_limit=600.0,
-                 total_time_limit=DEFAULT_TOTAL_TIME_LIMIT, on_failure="raise", n_jobs=1, progress=False,
+                 total_time_limit=DEFAULT_TOTAL_TIME_LIMIT, on_failure="raise", n_jobs=1,
+                 progress=False,
                  noise_bound=DEPRECATED, b0=DEPRECATED):
         self.na = na
         self.nb = nb

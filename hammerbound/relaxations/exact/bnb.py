@@ -328,7 +328,7 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
     try:
         step = partial(_step, isolate, crashes)
         obbt_kw = dict(n_jobs=n_jobs, parallel=parallel, deadline=deadline, ws=ws,
-                       picklable=isolate or parallel is not None)
+                       picklable=isolate)
         if parallel is None:
             box, roots, thetas, ws = step(
                 _obbt, problem, lp_box, **obbt_kw,
@@ -413,13 +413,8 @@ def _polished(problem, jobs, outs, tol, options, deadline, isolate, crashes):
         return witnesses
     keep = [(k, s, tol * max(1.0, abs(o.value)) - (o.value - o.bound)
              if o.status == "optimal" else np.inf) for (k, s), o in zip(jobs, outs, strict=True)]
-    if not isolate:
-        return polish(problem, witnesses, keep=keep)
-    try:
-        return run_isolated(polish, problem, witnesses, keep=keep)
-    except SolverCrashError as err:
-        crashes.append(str(err))
-        return witnesses
+    return _step(isolate, crashes, polish, problem, witnesses, keep=keep,
+                 fallback=lambda why: witnesses)
 
 
 def _end_infos(problem, jobs, outs, polished, lp_box, units):

@@ -135,10 +135,7 @@ def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit
                         position, min(s.ub, s.top) - s.end0, stop_at,
                         1.0 if to_data is None else float(to_data[k]))
     s.run()
-    res = s.result(t0, by_budget)
-    if s.bar is not None:
-        s.bar.close(s.outcome)
-    return res
+    return s.result(t0, by_budget)
 
 
 def _not_searched(problem, box0, k, sense, points, t0) -> EndResult:
@@ -393,11 +390,14 @@ class EndSearch(IncumbentSearch):
 
     # ---- the result -----------------------------------------------------------------
     def result(self, t0, by_budget) -> EndResult:
-        """The certified bound (never below the OBBT box end), the incumbent, a message."""
+        """The certified bound (never below the OBBT box end), the incumbent, a message;
+        the progress display, if any, closes saying how the search ended."""
         ub = self.ub
         bound = self._bound()
         elapsed = time.perf_counter() - t0
-        status, msg = self._message(max(ub - bound, 0.0), elapsed, by_budget)
+        status, msg, outcome = self._message(max(ub - bound, 0.0), elapsed, by_budget)
+        if self.bar is not None:
+            self.bar.close(outcome)
         return EndResult(bound, ub, self.inc, self.nodes, elapsed, status, msg, self.iters,
                          self.root_value)
 
@@ -412,10 +412,10 @@ class EndSearch(IncumbentSearch):
         return max(bound, min(self.end0, self.ub))
 
     def _message(self, gap, elapsed, by_budget):
-        """``(status, message)`` of the end; sets :attr:`outcome`, how the search ended in
-        a few words for the progress display ("finished", "stopped by the ...")."""
+        """``(status, message, outcome)`` of the end; ``outcome``: how the search ended,
+        in a few words for the progress display ("finished", "stopped by the ...")."""
         status, nodes = self.status, self.nodes
-        self.outcome = "finished"
+        outcome = "finished"
         if status == "limit":
             if nodes >= self.max_nodes:
                 why = "the node limit (max_nodes)"
@@ -423,16 +423,16 @@ class EndSearch(IncumbentSearch):
                 why = "its share of the total time budget (total_time_limit)"
             else:
                 why = "the time limit (time_limit)"
-            self.outcome = f"stopped by {why}"
+            outcome = f"stopped by {why}"
             msg = (f"stopped by {why} ({nodes} nodes, {elapsed:.1f} s): the bound is a "
                    f"valid outer bound, certified gap {gap:.3g}")
         elif not np.isfinite(self.ub):
             status = "limit"
-            self.outcome = "stopped without a verified-feasible point"
+            outcome = "stopped without a verified-feasible point"
             msg = "no verified-feasible point found: only the outer bound is certified"
         else:
             msg = f"gap {gap:.3g} <= tol after {nodes} nodes ({self.pool.checks} check_theta calls)"
         if self.refusals:
             msg += (f"; {len(self.refusals)} node LP(s) could not be solved and kept their "
                     f"parent's certified bound ({self.refusals[0]})")
-        return status, msg
+        return status, msg, outcome

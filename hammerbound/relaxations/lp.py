@@ -203,13 +203,26 @@ def _statuses(names, infos, bounds, box, stopped) -> tuple:
                  for k in range(len(names)))
 
 
-def raise_if_box_limited(bounds, box, names) -> None:
-    """Raise :class:`UnboundedSetError` when some interval end coincides with the box."""
-    ends = box_limited_ends(bounds, box, names)
-    if ends:
-        raise UnboundedSetError(
-            "the data do not bound " + ", ".join(lab for _, lab in ends) + " inside the a "
-            "priori theta_box; supply more (or more exciting) data or a tighter theta_box.")
+def raise_if_box_limited(bounds, box, names, stopped=()) -> None:
+    """Raise :class:`UnboundedSetError` when some interval end coincides with the box.
+
+    ``stopped``: labels (``"name lower"``) of ends that a time or node limit stopped; at
+    the box those are not the data's answer, and the message says so."""
+    ends = [lab for _, lab in box_limited_ends(bounds, box, names)]
+    if not ends:
+        return
+    cut = [lab for lab in ends if lab in set(stopped)]
+    data = [lab for lab in ends if lab not in set(stopped)]
+    parts = []
+    if data:
+        parts.append("the data do not bound " + ", ".join(data) + " inside the a priori "
+                     "theta_box; supply more (or more exciting) data or a tighter theta_box")
+    if cut:
+        parts.append("no bound on " + ", ".join(cut) + " inside the a priori theta_box: "
+                     "the search stopped (time or node limit) there, so whether the data "
+                     "bound it is not known; give the search more time (total_time_limit, "
+                     "time_limit, max_nodes)")
+    raise UnboundedSetError("; ".join(parts) + ".")
 
 
 def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -> IntervalResult:

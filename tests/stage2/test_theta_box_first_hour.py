@@ -312,3 +312,18 @@ def test_a_b_end_a_limit_left_at_the_box_is_not_blamed_on_the_data():
             x, y, input_bound=1.0)
     with pytest.raises(UnboundedSetError, match="the data do not bound b1"):
         hb.LinearEIVSetEstimator(method="lp", **kw).fit(x, y, input_bound=1.0)
+
+
+def test_exact_bounds_check_box_does_not_blame_the_data_for_a_stopped_end():
+    """``exact_bounds(check_box=True)`` itself (not only the estimator) says that an end a
+    limit left at the box is not known to be unbounded (it said "the data do not bound")."""
+    from hammerbound.relaxations import EIVProblem, exact_bounds
+
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1, 1, 30)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], x) + 0.3 * rng.uniform(-1, 1, 30)
+    box = np.array([[-0.99, 0.99], [-1e4, 1e4]])
+    pr = EIVProblem(y, x, np.full(30, 1.0), np.full(30, 0.3), 1, 1, theta_box=box)
+    with pytest.raises(UnboundedSetError, match=r"no bound on .*b1 upper.*the search stopped"
+                                                r".*whether the data bound it is not known"):
+        exact_bounds(pr, total_time_limit=0.0)

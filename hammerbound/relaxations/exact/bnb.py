@@ -293,7 +293,8 @@ def exact_bounds(
     bounds, inner, infos = _end_infos(problem, jobs, outs, polished, lp.bounds, units)
     names = problem.param_names
     if check_box:
-        raise_if_box_limited(bounds, given.theta_box, names)
+        raise_if_box_limited(bounds, given.theta_box, names,
+                             [f"{i.param} {i.end}" for i in infos if i.status == "limit"])
     return IntervalResult(
         param_names=tuple(names), bounds=bounds, infos=tuple(infos), method="exact",
         time=time.perf_counter() - t0,

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -425,3 +426,36 @@ def test_the_estimator_says_which_ends_a_crash_stopped(monkeypatch):
     texts = [str(w.message) for w in caught]
     assert any("a1 upper: the worker process of the search died" in t
                and "more time does not help" in t for t in texts), texts
+
+
+def test_a_dead_worker_reruns_only_the_ends_not_finished(monkeypatch):
+    """The ends that came back before a joblib worker died are kept: only the others run
+    again (all 8 ran again before, which could double the fit's time)."""
+    import threading
+    from collections import Counter
+
+    from joblib import parallel_config
+    from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+    from hammerbound.relaxations import exact_bounds
+    from hammerbound.relaxations.exact import bnb
+
+    real_search = bnb.search_end
+    calls = Counter()
+
+    def search_end(problem, box, k, s, *a, **kw):
+        calls[k, s] += 1
+        if threading.current_thread() is not threading.main_thread() and (k, s) == (3, -1.0):
+            time.sleep(1.0)  # the last end dies after the others came back
+            raise TerminatedWorkerError("The exit codes of the workers are {SIGSEGV(-11)}")
+        return real_search(problem, box, k, s, *a, **kw)
+
+    monkeypatch.setattr(bnb, "search_end", search_end)
+    monkeypatch.setattr(bnb, "run_isolated", lambda fn, *a, **kw: fn(*a, **kw))
+    with parallel_config(backend="threading"), \
+            pytest.warns(RuntimeWarning, match="ran again one at a time"):
+        res = exact_bounds(_record(60, 2), n_jobs=2)
+    assert calls.pop((3, -1.0)) == 2
+    assert sorted(calls.values()) == [1] * 7
+    assert [i.status for i in res.infos] == ["optimal"] * 8
+    assert np.all(res.bounds[:, 0] <= THETA) and np.all(THETA <= res.bounds[:, 1])

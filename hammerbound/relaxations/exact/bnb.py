@@ -314,8 +314,9 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
     (the LP box for OBBT, the OBBT box for an end). With ``n_jobs != 1`` the ends go to
     the joblib workers one at a time (``batch_size=1``: each takes its share of the time
     left, :func:`.limits.end_share`, and no end waits behind another on one worker); if a
-    worker dies there, the ends run again one at a time, each isolated, from the OBBT box
-    and points already found (a worker that dies in OBBT raises ``BrokenProcessPool``).
+    worker dies there, the ends whose results had not come back run again one at a time,
+    each isolated, from the OBBT box and points already found (a worker that dies in OBBT
+    raises ``BrokenProcessPool``).
 
     Returns the OBBT box, the working set, the ends' results, the messages of the steps
     that died, and the reasons the parallel ends were run again (empty: they were not)."""
@@ -342,12 +343,17 @@ def _search_all(problem, lp_box, jobs, ws, n_jobs, deadline, options, args, *, i
         ends = (problem, box, jobs, pts, roots, args)
         outs = None
         if parallel is not None:
-            try:
-                outs = _parallel_ends(parallel, n_jobs, *ends)
-            except BrokenProcessPool as err:
-                retried.append(why(err))
+            outs, died = _parallel_ends(n_jobs, *ends)
+            if died is not None:
+                retried.append(died)
+                # only the ends whose result did not come back run again
+                rest = [i for i, o in enumerate(outs) if o is None]
+                again = _serial_ends(True, crashes, problem, box, [jobs[i] for i in rest],
+                                     pts, roots, args, positions=rest)
+                for i, o in zip(rest, again, strict=True):
+                    outs[i] = o
         if outs is None:
-            outs = _serial_ends(isolate or bool(retried), crashes, *ends)
+            outs = _serial_ends(isolate, crashes, *ends)
     finally:
         if parallel is not None:
             parallel.__exit__(None, None, None)
@@ -366,32 +372,50 @@ def _step(isolate, crashes, fn, *a, fallback, **kw):
         return fallback(str(err))
 
 
-def _serial_ends(isolate, crashes, problem, box, jobs, pts, roots, args):
+def _serial_ends(isolate, crashes, problem, box, jobs, pts, roots, args, positions=None):
     """The ends one after the other: in this process, sharing one
     :class:`.search.Workspace`, or with ``isolate`` each in the isolated worker
-    (:func:`_step`)."""
+    (:func:`_step`). ``positions``: the ends' places in the progress display (default
+    0, 1, ...)."""
     step = partial(_step, isolate, crashes)
     wsp = None if isolate else Workspace()
+    positions = range(len(jobs)) if positions is None else positions
     outs = []
-    for i, (k, s) in enumerate(jobs):
+    for i, ((k, s), pos) in enumerate(zip(jobs, positions, strict=True)):
         t_end = time.perf_counter()
         outs.append(step(
-            search_end, problem, box, k, s, pts, roots.get((k, s)), position=i,
+            search_end, problem, box, k, s, pts, roots.get((k, s)), position=pos,
             workspace=wsp, order=(i, len(jobs), 1), **args,
             fallback=lambda why, k=k, s=s, t=t_end: _crashed_end(problem, box, k, s, pts,
                                                                  t, why)))
     return outs
 
 
-def _parallel_ends(parallel, n_jobs, problem, box, jobs, pts, roots, args):
-    """The ends on the joblib workers, one end per dispatch."""
-    from joblib import delayed, effective_n_jobs
+def _parallel_ends(n_jobs, problem, box, jobs, pts, roots, args):
+    """The ends on the joblib workers, one end per dispatch. Returns the ends' results
+    in the order of ``jobs`` and None, or, if a worker died, the results that came back
+    (None for the others) and the reason (:func:`.isolation.why`)."""
+    from joblib import Parallel, delayed, effective_n_jobs
 
     workers = effective_n_jobs(n_jobs)
-    return parallel(
-        delayed(search_end)(problem, box, k, s, pts, roots.get((k, s)), position=i,
-                            order=(i, len(jobs), workers), **args)
-        for i, (k, s) in enumerate(jobs))
+    outs = [None] * len(jobs)
+    # the loky executor of the OBBT's Parallel is reused; results come back as each end
+    # finishes, so those are kept if a worker dies later
+    run = Parallel(n_jobs=n_jobs, batch_size=1, return_as="generator_unordered")
+    try:
+        for i, out in run(delayed(_numbered)(i, problem, box, k, s, pts, roots.get((k, s)),
+                                             position=i, order=(i, len(jobs), workers),
+                                             **args)
+                          for i, (k, s) in enumerate(jobs)):
+            outs[i] = out
+    except BrokenProcessPool as err:
+        return outs, why(err)
+    return outs, None
+
+
+def _numbered(i, *a, **kw):
+    """``(i, search_end(*a, **kw))``: an end's result with its place (unordered results)."""
+    return i, search_end(*a, **kw)
 
 
 def _crashed_end(problem, box, k, s, points, t0, why) -> EndResult:

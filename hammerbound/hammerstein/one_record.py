@@ -27,6 +27,7 @@ from ..exceptions import (
     SearchLimitWarning,
 )
 from ..joint import (
+    ASSUMED_LIMIT_RTOL,
     GAMMA_NAMES,
     GammaPrior,
     RecordProblem,
@@ -171,7 +172,8 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     gb = bounds[p: p + 4].copy()
     found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed(),
                          stopped_by_time=stopped_by_time, lps_stopped=lps_stopped,
-                         method=method)
+                         method=method,
+                         rtol=1e-6 if prior.user_given else ASSUMED_LIMIT_RTOL)
     if not found:
         return gb, ()
     for name, _cause in found:
@@ -213,7 +215,8 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
     hit = []
     for k in range(problem.na, problem.p):
         for j in (0, 1):
-            if not given[k] and at_prior_limit(tb[k, j], problem.box, k, j):
+            if not given[k] and at_prior_limit(tb[k, j], problem.box, k, j,
+                                               ASSUMED_LIMIT_RTOL):
                 tb[k, j] = -np.inf if j == 0 else np.inf
                 hit.append(names[k])
     hit = tuple(dict.fromkeys(hit))  # b_j once even when both its ends are at the box
@@ -260,7 +263,7 @@ def _at_assumed_limit(problem, prior):
         i, j = k - p, (0 if sense > 0 else 1)
         if not 0 <= i < 4 or not assumed[i, j]:
             return False
-        return at_prior_limit(bound, prior.box, i, j)
+        return at_prior_limit(bound, prior.box, i, j, ASSUMED_LIMIT_RTOL)
 
     return skip
 

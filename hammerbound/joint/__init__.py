@@ -20,6 +20,7 @@ steady-state data).
 
 from .bounds import record_bounds
 from .prior import (
+    ASSUMED_LIMIT_RTOL,
     GammaPrior,
     at_prior_limit,
     default_gamma_box,
@@ -30,6 +31,7 @@ from .prior import (
 from .problem import GAMMA_NAMES, RecordProblem, Witness, verify_point
 
 __all__ = [
+    "ASSUMED_LIMIT_RTOL",
     "GAMMA_NAMES",
     "GammaPrior",
     "RecordProblem",

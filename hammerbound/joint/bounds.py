@@ -110,6 +110,14 @@ def _at_prior(infos, prior):
     return tuple(out)
 
 
+def _end_outcome(label, result, deadline) -> str:
+    """What an interval end's progress line says (an end the deadline left without a node
+    was not searched: trial 11 read "status limit, 0 nodes" after the deadline as work)."""
+    if result.nodes == 0 and result.status == "limit" and past(deadline):
+        return f"{label}: not searched, time limit reached (the tightened box's bound)"
+    return f"{label}, status {result.status}, {result.nodes} nodes"
+
+
 def record_bounds(problem: RecordProblem, *, method="exact", tol=1e-4, max_nodes=2000,
                   time_limit=None, deadline=None, n_jobs=1, skip=None,
                   progress=False) -> IntervalResult:
@@ -208,7 +216,7 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
     bar.start("interval end", len(args))
     labels = iter(f"{names[k]} {'min' if s > 0 else 'max'}" for k, s in todo)
     found = iter(map_jobs(_end_job, args, n_jobs, each=lambda r: bar.done(
-        f"{next(labels)}, status {r.status}, {r.nodes} nodes")))
+        _end_outcome(next(labels), r, deadline))))
     bar.close()
     results = [_not_searched(box, k, s) if (k, s) in skipped else next(found)
                for k, s in jobs]

@@ -27,7 +27,7 @@ import numpy as np
 from ..exceptions import DataValidationError
 from .modes import band_range
 
-__all__ = ["GammaPrior", "at_prior_limit", "default_gamma_box", "record_box",
+__all__ = ["ASSUMED_LIMIT_RTOL", "GammaPrior", "at_prior_limit", "default_gamma_box", "record_box",
            "reversal_summary", "unidentified"]
 
 DEFAULT_B_BOUND = 1.0e4
@@ -71,17 +71,27 @@ def reversal_summary(u) -> dict:
     return {"down": down, "up": up, "monotone": down == 0.0 or up == 0.0}
 
 
-def at_prior_limit(bound, prior, i, j) -> bool:
-    """Whether ``bound`` sits at the a priori limit ``prior[i, j]``: within ``1e-6`` of
+#: An end within this fraction (of the limit's magnitude or the row's width) of a
+#: *default* a priori limit -- an assumption, not the record's answer -- is taken as set
+#: by it and reported as not identified (infinite; the outward direction). New-user
+#: trial 11: ``b1 >= -9999.975`` under the default ``|b_j| <= 1e4`` was reported as a
+#: finite bound of the relaxation, though it came from ``b2 <= 1e4`` through the gain
+#: equality, and the warning said b1 was not bounded.
+ASSUMED_LIMIT_RTOL = 1e-3
+
+
+def at_prior_limit(bound, prior, i, j, rtol=1e-6) -> bool:
+    """Whether ``bound`` sits at the a priori limit ``prior[i, j]``: within ``rtol`` of
     the limit's magnitude or of the row's width, whichever is larger (relative, so the
     units of the record do not matter: an absolute ``1e-6`` took every identified end of a
-    slope below ``1e-6`` for one at its limit)."""
+    slope below ``1e-6`` for one at its limit). Default limits (assumptions) use
+    :data:`ASSUMED_LIMIT_RTOL`."""
     lim = prior[i, j]
-    return abs(bound - lim) <= 1e-6 * max(abs(lim), prior[i, 1] - prior[i, 0])
+    return abs(bound - lim) <= rtol * max(abs(lim), prior[i, 1] - prior[i, 0])
 
 
 def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps_stopped=0,
-                 method="exact") -> list[tuple[str, str]]:
+                 method="exact", rtol=1e-6) -> list[tuple[str, str]]:
     """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
 
     ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)
@@ -89,7 +99,7 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
     ``stopped_by_time``: the time limit stopped the search; ``lps_stopped``: that many
     relaxation LPs ended before optimality (their own time limit, or a solver failure);
     either is then the cause named, not the input; ``method``: the method that ran (the
-    exact one is suggested only after the LP method).
+    exact one is suggested only after the LP method); ``rtol``: of :func:`at_prior_limit`.
     """
     rev = reversal_summary(u)
     out = []
@@ -97,7 +107,7 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
         for j in (0, 1):
             if not assumed[i, j]:
                 continue
-            if not at_prior_limit(bounds[i, j], prior, i, j):
+            if not at_prior_limit(bounds[i, j], prior, i, j, rtol):
                 continue
             if stopped_by_time:
                 cause = ("the time limit stopped the search before the record bounded it "

@@ -258,6 +258,16 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
     return out
 
 
+def _leaf_outcome(result, deadline) -> str:
+    """What a leaf's progress line says: a leaf that returns after the deadline was cut
+    short by it (trial 11: leaves skipped at the deadline were said to be "tightened")."""
+    if result[0] is None:
+        return "certified empty"
+    if past(deadline):
+        return "time limit reached (kept as far as it was tightened)"
+    return "tightened"
+
+
 def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
                  on_point=None, n_jobs=1, on_stop=None, progress=None):
     """Certified boxes whose union holds the whole set.
@@ -290,7 +300,7 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
         progress.start("leaf", len(todo))
     done = map_jobs(leaf, [(problem, b, None, deadline) for b in todo], n_jobs,
                 each=None if progress is None else
-                lambda r: progress.done("certified empty" if r[0] is None else "tightened"))
+                lambda r: progress.done(_leaf_outcome(r, deadline)))
     if progress is not None:
         progress.close()
     out = []

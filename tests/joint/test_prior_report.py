@@ -28,3 +28,41 @@ def test_the_exact_method_is_suggested_only_after_the_lp_method():
     assert "method='exact'" in lp
     assert "method='exact'" not in exact  # the exact method ran already
     assert "gamma_box" in exact and "reversals: 3 down, 3 up" in exact
+
+
+def test_an_end_just_inside_an_assumed_limit_is_not_identified():
+    """An end within ASSUMED_LIMIT_RTOL of a default limit is the limit's, not the
+    record's; with a box the user gave (rtol 1e-6) it keeps its value."""
+    from hammerbound.joint.prior import ASSUMED_LIMIT_RTOL
+
+    u = np.array([-1.5, 1.5, -1.5, 1.5])
+    bounds = np.array([[0.2, 0.3], [0.01, 2.0 - 1e-4], [0.2, 0.3], [0.01, 0.1]])
+    near = dict(unidentified(u, NAMES, bounds, PRIOR, ASSUMED, rtol=ASSUMED_LIMIT_RTOL))
+    assert list(near) == ["c_l"]
+    assert not unidentified(u, NAMES, bounds, PRIOR, ASSUMED)
+
+
+def test_a_b_end_the_default_box_sets_through_the_gain_is_not_identified():
+    """New-user trial 11: b1 >= -9999.975 (b2 <= 1e4 through the gain equality) was
+    reported as a finite bound of the relaxation while the warning said b1 was not
+    bounded; it is infinite now, like b1's upper end at the box."""
+    from types import SimpleNamespace
+
+    import hammerbound as hb
+    from hammerbound.exceptions import NotIdentifiedWarning
+    from hammerbound.hammerstein.one_record import _unbounded_b
+
+    box = np.array([[-2.0, 2.0], [-1.0, 1.0], [-1e4, 1e4], [-1e4, 1e4]])
+    problem = SimpleNamespace(na=2, nb=2, nk=1, p=4, names=("a1", "a2", "b1", "b2"),
+                              box=box)
+    tb = np.array([[-1.79, -0.69], [-0.04, 0.83], [-9999.975, 1e4], [-9999.976, 1e4]])
+    lin = hb.LinearEIVSetEstimator(output_bound=0.05, na=2, nb=2)
+    with pytest.warns(NotIdentifiedWarning, match="b1, b2"):
+        out, hit = _unbounded_b(problem, tb, lin)
+    assert hit == ("b1", "b2")
+    assert np.all(np.isinf(out[2:])) and np.array_equal(out[:2], tb[:2])
+    inside = tb.copy()
+    inside[2:, 0] = -9900.0  # 1 % inside: the relaxation's bound, kept
+    with pytest.warns(NotIdentifiedWarning):
+        out, _ = _unbounded_b(problem, inside, lin)
+    assert np.array_equal(out[2:, 0], [-9900.0, -9900.0])

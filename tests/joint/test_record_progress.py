@@ -63,3 +63,25 @@ def test_cli_progress_goes_to_stderr_and_json_stays_clean(capsys, tmp_path):
     out, err = capsys.readouterr()
     assert rc == 0 and json.loads(out)["procedure"] == "one-record"
     assert "one-record: partition generation 1" in err and "one-record: leaf 1/" in err
+
+
+def test_lines_after_the_deadline_do_not_claim_work():
+    """New-user trial 11: after the deadline every remaining leaf was reported
+    "tightened" and every end "status limit, 0 nodes", in the same instant."""
+    import time
+    from types import SimpleNamespace
+
+    from hammerbound.joint.bounds import _end_outcome
+    from hammerbound.joint.tighten import _leaf_outcome
+
+    gone, ahead = time.time() - 1.0, time.time() + 600.0
+    box = np.zeros((9, 2))
+    assert _leaf_outcome((box, [], 0), ahead) == "tightened"
+    assert _leaf_outcome((None, [], 0), gone) == "certified empty"
+    assert _leaf_outcome((box, [], 0), gone).startswith("time limit reached")
+    idle = SimpleNamespace(status="limit", nodes=0)
+    assert _end_outcome("a1 min", idle, gone) == (
+        "a1 min: not searched, time limit reached (the tightened box's bound)")
+    assert _end_outcome("a1 min", idle, ahead) == "a1 min, status limit, 0 nodes"
+    assert _end_outcome("a1 min", SimpleNamespace(status="limit", nodes=5), gone) == (
+        "a1 min, status limit, 5 nodes")

@@ -21,6 +21,7 @@ from ..data.gain_sign import negative_gain_hint, record_gain
 from ..data.validation import warn_bound_covers_output
 from ..exceptions import (
     DataValidationError,
+    DataWarning,
     EmptyFeasibleSetError,
     NotIdentifiedWarning,
     ParameterValidationError,
@@ -143,17 +144,20 @@ def _check_length(lin, n_samples, prior, steady):
             f"Use a longer record (N >= {n0 + p + free - n_steady}) or lower orders.")
 
 
-def _warn_stopped(infos, named):
+def _warn_stopped(infos, named, method="exact"):
     """Warn, naming them, about the interval ends a limit stopped (status "limit") that the
-    not-identified warning does not already name (``named``: backlash parameters)."""
+    not-identified warning does not already name (``named``: backlash parameters). The
+    per-end limits are named only for the exact method (the LP method has none)."""
     ends = [f"{i.param} {i.end}" for i in infos
             if i.status == "limit" and i.param not in named]
     if ends:
+        more = ("total_time_limit (or time_limit / max_nodes)" if method == "exact"
+                else "total_time_limit")
         warnings.warn(
             f"the search stopped early for {len(ends)} of {len(infos)} interval ends "
             f"({', '.join(ends)}): their bounds are guaranteed outer bounds but may be "
-            "looser than the record allows; raise total_time_limit (or time_limit / "
-            "max_nodes) for tighter ones (bound_info_ gives each end's status).",
+            f"looser than the record allows; raise {more} for tighter ones (bound_info_ "
+            "gives each end's status).",
             # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
             SearchLimitWarning, stacklevel=5)
 
@@ -280,10 +284,26 @@ def _with_gain_sign(exc, problem):
                                  relaxation=exc.relaxation)
 
 
+def _warn_gain_sign(problem):
+    """A DataWarning when a fit that returned (e.g. stopped by its time limit before it
+    could certify the set empty) has a record whose least-squares gain is negative: a
+    reverse-acting plant is outside the model (trial 11: ``fit(u, -y)`` under a 30 s limit
+    returned intervals without a word about it)."""
+    gain = record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
+                       b_lags_of(problem.nb, problem.nk))
+    hint = negative_gain_hint(gain)
+    if hint:
+        warnings.warn(f"{hint} The intervals hold for the model as it is; if the plant is "
+                      "reverse-acting they describe no part of it.", DataWarning,
+                      # warn -> here -> fit_one_record -> _fit_one_record -> fit -> caller
+                      stacklevel=5)
+
+
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                    output_bound=None) -> OneRecordFit:
     """Certified intervals of both blocks from the record ``data`` (an IOData)."""
     t0 = time.perf_counter()
+    lin._check_params()  # tol, limits, orders (a negative total_time_limit ran, trial 11)
     if lin.method not in ("exact", "lp"):
         raise ParameterValidationError(
             f"the one-record identification supports method='exact' (tight intervals) or "
@@ -304,13 +324,14 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                             progress=bool(lin.progress))
     except EmptyFeasibleSetError as exc:
         raise _with_gain_sign(exc, problem) from exc
+    _warn_gain_sign(problem)
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
                                      0 if d is None else d.lps_stopped, lin.method)
     tb, b_found = _unbounded_b(problem, res.bounds[: problem.p], lin,
                                d is not None and d.stopped_by_time)
-    _warn_stopped(res.infos, {name for name, _ in found} | set(b_found))
+    _warn_stopped(res.infos, {name for name, _ in found} | set(b_found), lin.method)
     res = replace(res, infos=_not_identified_infos(res.infos, tb, gb))
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, tb, gb, statuses,

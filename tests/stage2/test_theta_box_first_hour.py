@@ -193,11 +193,19 @@ def test_no_box_hint_when_the_lp_set_itself_is_not_empty():
 @pytest.mark.parametrize("extra, said", [
     (["--na", "-1", "--nb", "1"], "--na must be an integer >= 0"),
     (["--na", "1", "--nb", "1", "--total-time-limit", "-5"],
-     "--total-time-limit must be a number of seconds >= 0"),
+     "argument --total-time-limit: must be a number of seconds >= 0, or inf (or none) for "
+     "no limit; got '-5'"),
+    (["--na", "1", "--nb", "1", "--total-time-limit", "nan"],
+     "argument --total-time-limit: must be a number of seconds >= 0"),
+    (["--na", "1", "--nb", "1", "--time-limit", "-1"],
+     "argument --time-limit: must be a number of seconds >= 0; got '-1'"),
 ])
 def test_cli_names_its_flags(tmp_path, capsys, extra, said):
     path = _csv(tmp_path)
-    rc = main(["eiv", str(path), "--output-bound", "0.05", *extra])
+    try:
+        rc = main(["eiv", str(path), "--output-bound", "0.05", *extra])
+    except SystemExit as stop:  # argparse's own errors
+        rc = stop.code
     err = capsys.readouterr().err
     assert rc == 2 and said in err
 

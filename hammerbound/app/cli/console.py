@@ -105,6 +105,24 @@ def cli_warnings(command: str):
         yield
 
 
+@contextlib.contextmanager
+def recorded_warnings():
+    """Within the block, every warning shown (by :func:`cli_warnings`' stderr line, as
+    before) is also appended to the list yielded, as ``{"category", "message"}`` in
+    command-line terms: the JSON output carries them (a script reading only stdout could
+    not tell why an end was null, new-user trial 11)."""
+    seen = []
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        seen.append({"category": category.__name__, "message": to_cli(str(message))})
+        shown(message, category, filename, lineno, file, line)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield seen
+
+
 class Progress:
     """Progress lines on stderr (stdout stays the program's tables or JSON)."""
 

@@ -3,7 +3,7 @@ errors are bounded (errors in variables)."""
 
 from __future__ import annotations
 
-from .console import cli_terms
+from .console import cli_terms, recorded_warnings
 from .options import (
     CLI_NAMES,
     add_bound_options,
@@ -65,7 +65,8 @@ def run(args) -> int:
     est = LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
                                 steady_state_gain=args.steady_state_gain,
                                 **stage2_kwargs(args))
-    est.fit(data, input_bound=input_bound)
+    with recorded_warnings() as seen:
+        est.fit(data, input_bound=input_bound)
     tf_text, tf = transfer_function(est, data.dt)
     if args.json:
         out = {
@@ -79,6 +80,7 @@ def run(args) -> int:
                      "input_bound": input_bound, "output_bound": output_bound},
             "assumed": assumed,
             "transfer_function": tf,
+            "warnings": seen,
         }
         print(json_text(out))
         return 0

@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir
-from .console import cli_terms
+from .console import cli_terms, recorded_warnings
 from .options import (
     CLI_NAMES,
     UsageError,
@@ -52,8 +52,9 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true",
                    help="write the result as JSON to stdout (and nothing else)")
     p.add_argument("--report", default=None, metavar="DIR",
-                   help=f"write report.md + figures into DIR (its parent must exist; an "
-                        f"existing report there is kept unless {FORCE_FLAG} is given)")
+                   help=f"the two experiments (--steady, --prbs) only: write report.md + "
+                        f"figures into DIR (its parent must exist; an existing report there "
+                        f"is kept unless {FORCE_FLAG} is given)")
     add_force_option(p, "report files")
     p.set_defaults(func=run)
     return p
@@ -119,11 +120,13 @@ def _two_records(args) -> int:
                               **stage2_kwargs(args)),
         inner_signal=args.inner_signal, procedure="two-stage")
     steady = (ss[args.u_col], ss[args.y_col])
-    ident.fit(data, steady_state=steady)
+    with recorded_warnings() as seen:
+        ident.fit(data, steady_state=steady)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:
         out = _record(args, ident, data, output_bound, steady_bound, assumed, tf)
         out["model"]["theta_box"] = box_json
+        out["warnings"] = seen
         print(json_text(out))
     else:
         print(f"steady-state record {args.steady}: {ss[args.u_col].size} points")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .console import cli_terms
+from .console import cli_terms, recorded_warnings
 from .options import CLI_NAMES, UsageError, require, stage2_kwargs
 from .printing import assumption_lines, data_fields, json_text, record_line, transfer_function
 
@@ -30,6 +30,10 @@ def run_one_record(args) -> int:
     if args.report:
         raise UsageError("--report needs the chapter's two experiments (--steady, --prbs); "
                          "with --record use --json for the intervals in machine-readable form")
+    if getattr(args, "inner_signal", "independent") != "independent":
+        raise UsageError("--inner-signal belongs to the PRBS experiment (--prbs); with "
+                         "--record the backlash's output is bounded jointly with the linear "
+                         "block from the record itself (drop --inner-signal)")
     if args.steady_output_bound is not None:
         raise UsageError("--steady-output-bound belongs to --steady; one record has one "
                          "output error bound (--output-bound)")
@@ -46,7 +50,8 @@ def run_one_record(args) -> int:
         linear=LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk,
                                      output_bound=output_bound, **stage2_kwargs(args)),
         procedure="one-record", gamma_box=_gamma_box(args))
-    ident.fit(data, steady_state=steady)
+    with recorded_warnings() as seen:
+        ident.fit(data, steady_state=steady)
     given = [f"output error bound {output_bound:g} (--output-bound)"]
     # the linear block's central model needs only its own intervals finite (a backlash end
     # the record does not bound leaves the linear block's model as it is)
@@ -55,7 +60,7 @@ def run_one_record(args) -> int:
                    else ("central model: not given (a linear-block interval is infinite)",
                          None))
     if args.json:
-        print(json_text(_record(args, ident, data, output_bound, tf)))
+        print(json_text({**_record(args, ident, data, output_bound, tf), "warnings": seen}))
         return 0
     print("record " + record_line(args.record, data))
     if steady is not None:

@@ -134,6 +134,28 @@ def theta_box_row(text):
     return name.strip(), row
 
 
+def seconds(text, *, none=False):
+    """A number of seconds >= 0 (``inf`` allowed; with ``none``, ``none`` means ``inf``):
+    a negative or NaN limit was accepted and the fit returned the a priori box (trial 11)."""
+    word = str(text).strip().lower()
+    if none and word == "none":
+        return np.inf
+    try:
+        value = float(word)
+    except ValueError:
+        value = np.nan
+    if not value >= 0:  # also NaN
+        raise argparse.ArgumentTypeError(
+            "must be a number of seconds >= 0" + (", or inf (or none) for no limit"
+                                                  if none else "") + f"; got {text!r}")
+    return value
+
+
+def budget(text):
+    """``--total-time-limit``: :func:`seconds`, ``none`` or ``inf`` for no budget."""
+    return seconds(text, none=True)
+
+
 def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True):
     """Method, relaxation, solver, parallel jobs and the exact method's stopping rules
     (and, with ``theta_box``, the a priori box of the linear block)."""
@@ -143,16 +165,19 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
     p.add_argument("--solver", default="clarabel", help="conic backend for --method moment")
     if inner_signal:
         p.add_argument("--inner-signal", default="independent",
-                       choices=["independent", "two-level"])
+                       choices=["independent", "two-level"],
+                       help="the PRBS experiment's inner signal in stage 2: independent "
+                            "errors per sample (default) or the two unknown levels of "
+                            "Result 1 (two experiments only)")
     p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
-    p.add_argument("--time-limit", type=float, default=600.0,
+    p.add_argument("--time-limit", type=seconds, default=600.0,
                    help="exact method: seconds per interval end (default 600)")
-    p.add_argument("--total-time-limit", type=float, default=DEFAULT_TOTAL_TIME_LIMIT,
+    p.add_argument("--total-time-limit", type=budget, default=DEFAULT_TOTAL_TIME_LIMIT,
                    help="seconds for the whole fit of the linear block (the exact method's "
                         "stage 2, or a one-record fit with any method), shared by every "
                         "interval end and job; ends it stops report their certified bound "
-                        f"with status 'limit' (default {DEFAULT_TOTAL_TIME_LIMIT:g}; inf for "
-                        "none)")
+                        f"with status 'limit' (default {DEFAULT_TOTAL_TIME_LIMIT:g}; inf or "
+                        "none for no limit)")
     p.add_argument("--max-nodes", type=int, default=20000,
                    help="exact method: nodes per interval end (default 20000)")
     p.add_argument("--progress", action="store_true",

@@ -1,0 +1,108 @@
+"""First-hour findings of new-user trial 11 (one ordinary record from the command line and
+from Python): time limits that are not seconds, an option that one record ignored, JSON
+without the warnings, advice naming limits the LP method does not have, and a
+reverse-acting record fitted under a time limit without a word."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+from oracles import one_record
+
+import hammerbound as hb
+from hammerbound.app.cli import main
+from hammerbound.exceptions import DataWarning, ParameterValidationError, SearchLimitWarning
+
+
+def _csv(tmp_path, y_sign=1.0):
+    u, y, _ = one_record(40, 0.02, "uniform", 2)
+    path = tmp_path / "r.csv"
+    path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(y_sign * b)!r}\n"
+                                      for a, b in zip(u, y, strict=True)))
+    return path
+
+
+def _identify(path, *extra):
+    try:
+        return main(["identify", "--record", str(path), "--output-bound", "0.02", "--na",
+                     "2", "--nb", "2", "--method", "lp", *extra])
+    except SystemExit as stop:  # argparse's own errors
+        return stop.code
+
+
+@pytest.mark.parametrize("value", ["-5", "nan", "soon"])
+def test_a_total_time_limit_that_is_not_seconds_is_refused(tmp_path, capsys, value):
+    rc = _identify(_csv(tmp_path), "--total-time-limit", value)
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert ("argument --total-time-limit: must be a number of seconds >= 0, or inf (or "
+            f"none) for no limit; got '{value}'") in err
+
+
+def test_none_lifts_the_budget_like_inf():
+    from hammerbound.app.cli.options import budget, total_budget
+
+    for word in ("none", "None", "inf"):
+        assert total_budget(type("A", (), {"total_time_limit": budget(word)})) is None
+    assert budget("12.5") == 12.5
+
+
+def test_a_negative_budget_is_refused_in_python_too():
+    u, y, _ = one_record(40, 0.02, "uniform", 2)
+    lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
+                                   total_time_limit=-5)
+    with pytest.raises(ParameterValidationError, match="total_time_limit must be None or a "
+                                                       "number of seconds >= 0; got -5"):
+        hb.HammersteinBacklashIdentifier(linear=lin).fit(u, y)
+
+
+def test_inner_signal_is_refused_with_one_record(tmp_path, capsys):
+    rc = _identify(_csv(tmp_path), "--inner-signal", "two-level")
+    err = capsys.readouterr().err
+    assert rc == 2 and "--inner-signal belongs to the PRBS experiment (--prbs)" in err
+
+
+def test_json_carries_the_warnings(tmp_path, capsys):
+    rc = _identify(_csv(tmp_path), "--total-time-limit", "0.5", "--json")
+    out, err = capsys.readouterr()
+    assert rc == 0
+    got = json.loads(out)["warnings"]
+    assert got and all(set(w) == {"category", "message"} for w in got)
+    # the same warnings as on stderr, in command-line terms
+    for w in got:
+        assert f"warning: {w['category']}: {w['message']}" in err
+    assert any(w["category"] == "NotIdentifiedWarning" for w in got)
+    assert not any("total_time_limit" in w["message"] for w in got)
+
+
+def test_the_lp_method_is_not_told_to_raise_per_end_limits():
+    u, y, _ = one_record(40, 0.02, "uniform", 2)
+    lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
+                                   total_time_limit=0.5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hb.HammersteinBacklashIdentifier(linear=lin).fit(u, y)
+    limit = [str(w.message) for w in caught if w.category is SearchLimitWarning]
+    assert limit and all("raise total_time_limit for tighter" in m for m in limit)
+    assert not any("max_nodes" in m for m in limit)
+
+
+def test_a_reverse_acting_record_stopped_by_time_is_told_so():
+    """fit(u, -y) under a short budget returns (nothing certified it empty): a DataWarning
+    names the negative least-squares gain; the record as recorded gets none."""
+    u, y, _ = one_record(60, 0.02, "uniform", 2)
+    for sign, expect in ((-1.0, True), (1.0, False)):
+        # no time at all: nothing is certified (0.5 s certify this -y empty, with the hint)
+        lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
+                                       total_time_limit=0.0)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            hb.HammersteinBacklashIdentifier(linear=lin).fit(u, sign * y)
+        said = [str(w.message) for w in caught if w.category is DataWarning
+                and "least-squares gain is negative" in str(w.message)]
+        assert bool(said) == expect, said
+        if expect:
+            assert "fit the negated output (-y)" in said[0]

@@ -189,10 +189,30 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
     warnings.warn(f"{_lead(stopped_by_time)} {names}: {causes}. Those ends are {what}. "
+                  + _scale_hint(problem, bounds, {n for n, _ in found})
                   + _advice(stopped_by_time, lps_stopped, prior.user_given),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
     return gb, tuple(found)
+
+
+def _scale_hint(problem, bounds, names) -> str:
+    """A sentence when backlash slopes are not bounded and the a_i intervals let
+    ``A(1) = 1 + sum a_i`` reach 0: the unit-gain normalisation (22.8) then leaves the scale
+    between the slopes and ``B`` free (new-user trial 11: a plant with A(1) = 0.15 bounded
+    nothing; with the a_i boxed so that A(1) >= 0.05 its backlash was bounded in 34 s)."""
+    if not names & {"ml", "mr"} or problem.na == 0:
+        return ""
+    a = bounds[: problem.na]
+    low = 1.0 + float(np.sum(a[:, 0]))
+    if not low <= 0.0:
+        return ""
+    return (f"The a_i intervals found let A(1) = 1 + a_1 + ... + a_na reach 0 (down to "
+            f"{low:.3g}), so the unit-gain normalisation (22.8) does not fix the scale "
+            "between the backlash slopes and B: a likely reason the slopes are not bounded "
+            "(a plant whose A(1) is small, e.g. slow or lightly damped). A theta_box on "
+            "the a_i from what you know of the plant (keeping A(1) > 0) or a gamma_box "
+            "bounding m_l, m_r fixes it. ")
 
 
 def _not_identified_infos(infos, theta_bounds, gamma_bounds) -> tuple:

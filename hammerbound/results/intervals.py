@@ -306,10 +306,15 @@ class IntervalSet(Result):
         return out
 
     def records(self) -> list:
-        """One dict per parameter: ``parameter, lower, centre, upper, half_width, status``."""
+        """One dict per parameter: ``parameter, lower, centre, upper, half_width, status``
+        (the table's words) and ``lower_status``, ``upper_status`` (each end's status, one
+        of :data:`hammerbound.status.STATUSES`, for programs)."""
         from ..tables import interval_records
 
-        return interval_records(self.param_names, self.bounds, self.status_text())
+        recs = interval_records(self.param_names, self.bounds, self.status_text())
+        for rec, (lo, hi) in zip(recs, self.status, strict=True):
+            rec["lower_status"], rec["upper_status"] = str(lo), str(hi)
+        return recs
 
     def to_frame(self):
         """The table ``parameter, lower, centre, upper, half_width, status``: a pandas

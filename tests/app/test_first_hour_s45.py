@@ -106,3 +106,37 @@ def test_a_reverse_acting_record_stopped_by_time_is_told_so():
         assert bool(said) == expect, said
         if expect:
             assert "fit the negated output (-y)" in said[0]
+
+
+def test_json_intervals_carry_each_end_status_as_a_code(tmp_path, capsys):
+    """Besides the table's words ("lower relaxation; upper not identified"), each interval
+    record gives both ends' status codes (trial 11: a program had to parse the words)."""
+    from hammerbound.status import STATUSES
+
+    rc = _identify(_csv(tmp_path), "--total-time-limit", "0.5", "--json")
+    doc = json.loads(capsys.readouterr().out)
+    assert rc == 0
+    for rec, lo, hi in zip(doc["intervals"], doc["lower"], doc["upper"], strict=True):
+        assert rec["lower_status"] in STATUSES and rec["upper_status"] in STATUSES
+        assert (lo is None) == (rec["lower_status"] == "not identified")
+        assert (hi is None) == (rec["upper_status"] == "not identified")
+
+
+def test_unbounded_slopes_name_a_free_scale_when_a1_can_reach_zero():
+    """Slopes not identified while the a_i intervals let A(1) = 1 + sum a_i reach 0: the
+    warning names the free scale of the unit-gain normalisation (trial 11); with the a_i
+    boxed so that A(1) > 0 it does not."""
+    from hammerbound.exceptions import NotIdentifiedWarning
+
+    u, y, _ = one_record(60, 0.02, "uniform", 2)
+    for box, expect in ((None, True), ({"a1": (-0.8, -0.7), "a2": (0.8, 0.85)}, False)):
+        lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
+                                       total_time_limit=0.0, theta_box=box)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            hb.HammersteinBacklashIdentifier(linear=lin).fit(u, y)
+        said = [str(w.message) for w in caught if w.category is NotIdentifiedWarning
+                and "ml" in str(w.message)]
+        assert said
+        hint = "let A(1) = 1 + a_1 + ... + a_na reach 0 (down to -2)"
+        assert (hint in said[0]) == expect, said[0]

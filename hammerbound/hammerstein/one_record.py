@@ -114,7 +114,8 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
         names = theta_names(problem.na, problem.nb, problem.nk)
         rest = [n for n, g in zip(names, given, strict=True) if n[0] == "b" and not g]
         which = "" if given[problem.na:].sum() == 0 else f" for {', '.join(rest)}"
-        out.append(f"|b_j| <= 1e4{which} (default theta box; pass theta_box to change)")
+        out.append(f"|b_j| <= 1e4{which} (default theta box; pass theta_box to "
+                   "LinearEIVSetEstimator to change)")
     if steady is not None:
         out.append("steady-state points: u > 0 on the right line, u < 0 on the left (the "
                    "last move before each hold went the same way), settled: a transient left "

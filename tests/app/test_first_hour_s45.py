@@ -140,3 +140,19 @@ def test_unbounded_slopes_name_a_free_scale_when_a1_can_reach_zero():
         assert said
         hint = "let A(1) = 1 + a_1 + ... + a_na reach 0 (down to -2)"
         assert (hint in said[0]) == expect, said[0]
+
+
+def test_progress_is_on_by_default_on_a_terminal_only(monkeypatch):
+    """A long fit was silent for minutes without --progress (trial 11): on a terminal the
+    progress is on unless --no-progress; into a pipe or file it stays off unless asked."""
+    import hammerbound.terminal as terminal
+    from hammerbound.app.cli.main import build_parser
+    from hammerbound.app.cli.options import progress_wanted
+
+    parser = build_parser()
+    base = ["identify", "--record", "r.csv", "--output-bound", "0.05"]
+    for tty in (True, False):
+        monkeypatch.setattr(terminal, "is_terminal", lambda file=None, tty=tty: tty)
+        assert progress_wanted(parser.parse_args(base)) is tty
+        assert progress_wanted(parser.parse_args([*base, "--progress"])) is True
+        assert progress_wanted(parser.parse_args([*base, "--no-progress"])) is False

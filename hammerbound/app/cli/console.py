@@ -23,7 +23,7 @@ _TERMS = [
     (r"\brelaxation_order\b", "--order"),
     (r"\btotal_time_limit\b", "--total-time-limit"),
     (r"(?<![-\w])gamma_box\b", "--gamma-box"),
-    (r"pass theta_box to change", "--theta-box changes it"),
+    (r"pass theta_box to LinearEIVSetEstimator to change", "--theta-box changes it"),
     (r"theta_box=\{('\w+': \([-+\d.e]+, [-+\d.e]+\)(, )?)+\}", lambda m: _box_flags(m[0])),
     (r"(?<![-\w])theta_box\b", "--theta-box"),
     (r"(?<![-\w])time_limit\b", "--time-limit"),

@@ -74,7 +74,7 @@ def run(args) -> int:
         records = run_demo(args.stage1, tuple(args.N), levels, seeds, args.method,
                            inner_signal=args.inner_signal, relaxation_order=args.order,
                            solver=args.solver, n_jobs=args.n_jobs, progress=progress,
-                           linear_options={"progress": args.progress,
+                           linear_options={"progress": bool(args.progress),
                                            "time_limit": args.time_limit,
                                            "total_time_limit": total_budget(args),
                                            "max_nodes": args.max_nodes},

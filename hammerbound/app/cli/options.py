@@ -180,9 +180,10 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
                         "none for no limit)")
     p.add_argument("--max-nodes", type=int, default=20000,
                    help="exact method: nodes per interval end (default 20000)")
-    p.add_argument("--progress", action="store_true",
-                   help="progress on stderr (exact method: bars on a terminal, plain lines "
-                        "otherwise; moment method: a line per solved bound)")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress on stderr (default: on when stderr is a terminal; exact "
+                        "method and one record: bars on a terminal, plain lines otherwise; "
+                        "moment method: a line per solved bound)")
     if theta_box:
         p.add_argument("--theta-box", type=theta_box_row, action="append", default=None,
                        metavar="NAME=LO:HI",
@@ -208,12 +209,22 @@ def total_budget(args) -> float | None:
     return None if t is not None and t == np.inf else t
 
 
+def progress_wanted(args) -> bool:
+    """``--progress`` / ``--no-progress``, else on when stderr is a terminal: a long fit
+    was silent for minutes unless ``--progress`` was given (new-user trial 11)."""
+    from ...terminal import is_terminal
+
+    given = getattr(args, "progress", None)
+    return is_terminal() if given is None else bool(given)
+
+
 def stage2_kwargs(args) -> dict:
     """Keyword arguments of LinearEIVSetEstimator from the stage-2 options."""
     rows = getattr(args, "theta_box", None)
     if rows and len({n for n, _ in rows}) < len(rows):
         raise UsageError("--theta-box names a parameter twice: give each one once")
     return {"method": args.method, "relaxation_order": args.order, "solver": args.solver,
-            "n_jobs": args.n_jobs, "progress": args.progress, "time_limit": args.time_limit,
+            "n_jobs": args.n_jobs, "progress": progress_wanted(args),
+            "time_limit": args.time_limit,
             "total_time_limit": total_budget(args), "max_nodes": args.max_nodes,
             "theta_box": dict(rows) if rows else None}

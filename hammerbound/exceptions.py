@@ -83,7 +83,9 @@ class ResultOneViolationError(HammerboundError, ValueError):
 
 
 class UnboundedSetError(HammerboundError, ValueError):
-    """The data do not bound a parameter inside the a priori box; supply more data or a box."""
+    """A parameter's interval reaches the a priori box: the data do not bound it there
+    (supply more data or a box), or a search stopped there before it could tell (the
+    message says which; give it more time)."""
 
 
 class SolverError(HammerboundError, RuntimeError):

@@ -190,21 +190,26 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
     warnings.warn(f"{_lead(stopped_by_time)} {names}: {causes}. Those ends are {what}. "
-                  + _scale_hint(problem, bounds, {n for n, _ in found})
+                  + _scale_hint(problem, bounds, {n for n, _ in found}, stopped_by_time)
                   + _advice(stopped_by_time, lps_stopped, prior.user_given),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
     return gb, tuple(found)
 
 
-def _scale_hint(problem, bounds, names) -> str:
-    """A sentence when backlash slopes are not bounded and the a_i intervals let
+def _scale_hint(problem, bounds, names, stopped_by_time=False) -> str:
+    """A sentence when backlash slopes are not bounded and the a_i intervals *found* let
     ``A(1) = 1 + sum a_i`` reach 0: the unit-gain normalisation (22.8) then leaves the scale
     between the slopes and ``B`` free (new-user trial 11: a plant with A(1) = 0.15 bounded
-    nothing; with the a_i boxed so that A(1) >= 0.05 its backlash was bounded in 34 s)."""
-    if not names & {"ml", "mr"} or problem.na == 0:
+    nothing; with the a_i boxed so that A(1) >= 0.05 its backlash was bounded in 34 s).
+    Not when the time limit stopped the search or an a_i end is still at its a priori
+    limit: those intervals say nothing of the plant (review)."""
+    if not names & {"ml", "mr"} or problem.na == 0 or stopped_by_time:
         return ""
     a = bounds[: problem.na]
+    if any(at_prior_limit(a[i, j], problem.box, i, j) for i in range(problem.na)
+           for j in (0, 1)):
+        return ""
     low = 1.0 + float(np.sum(a[:, 0]))
     if not low <= 0.0:
         return ""
@@ -277,9 +282,10 @@ def _advice(stopped_by_time, lps_stopped, box_given=False) -> str:
 
 
 def _at_assumed_limit(problem, prior):
-    """Skip the search of a backlash end already at a default (assumed) a priori limit
-    after OBBT: no search inside the box can move it off, and it is reported as not
-    identified (infinite) anyway. With a box the user gave, every end is searched."""
+    """Skip the search of a backlash end already at (within :data:`ASSUMED_LIMIT_RTOL`
+    of) a default (assumed) a priori limit after OBBT: a search could only move it within
+    that band, and such an end is reported as not identified (infinite) anyway. With a box
+    the user gave, every end is searched."""
     if prior.user_given:
         return None
     p, assumed = problem.p, prior.assumed()
@@ -305,19 +311,28 @@ def _with_gain_sign(exc, problem):
                                  relaxation=exc.relaxation)
 
 
-def _warn_gain_sign(problem):
-    """A DataWarning when a fit that returned (e.g. stopped by its time limit before it
-    could certify the set empty) has a record whose least-squares gain is negative: a
-    reverse-acting plant is outside the model (trial 11: ``fit(u, -y)`` under a 30 s limit
-    returned intervals without a word about it)."""
+def _warn_gain_sign(problem, res):
+    """A DataWarning when the time limit stopped a fit before it could certify the set
+    empty, no point of the set was verified, and the record's least-squares gain is
+    negative: the plant *may* be reverse-acting, which the model cannot explain (trial 11:
+    ``fit(u, -y)`` under a 30 s limit returned intervals without a word). A fit that ran to
+    the end, or verified a point, found the set non-empty: no warning then (a noisy record
+    of a plant with a small A(1) can have a negative least-squares gain, review)."""
+    d = res.details
+    if d is None or not d.stopped_by_time or any(i.witness is not None for i in res.infos):
+        return
     gain = record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
                        b_lags_of(problem.nb, problem.nk))
-    hint = negative_gain_hint(gain)
-    if hint:
-        warnings.warn(f"{hint} The intervals hold for the model as it is; if the plant is "
-                      "reverse-acting they describe no part of it.", DataWarning,
-                      # warn -> here -> fit_one_record -> _fit_one_record -> fit -> caller
-                      stacklevel=5)
+    if gain < 0:
+        warnings.warn(
+            f"the time limit stopped the search before it found a point of the set or "
+            f"certified it empty, and the record's least-squares gain is negative "
+            f"({gain:.3g}): the plant may be reverse-acting (its output falls as its input "
+            "rises), which no parameters of the model explain (positive backlash slopes, "
+            "unit-gain linear block (22.8)). If it is, fit the negated output (-y); else "
+            "give the search more time (total_time_limit).", DataWarning,
+            # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
+            stacklevel=5)
 
 
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
@@ -345,7 +360,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                             progress=bool(lin.progress))
     except EmptyFeasibleSetError as exc:
         raise _with_gain_sign(exc, problem) from exc
-    _warn_gain_sign(problem)
+    _warn_gain_sign(problem, res)
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,

@@ -258,12 +258,22 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
     return out
 
 
-def _leaf_outcome(result, deadline) -> str:
-    """What a leaf's progress line says: a leaf that returns after the deadline was cut
+def _leaf_obbt(problem, box, deadline):
+    """A leaf's OBBT (:func:`_part_obbt`, the search of each end does the rest: its rounds
+    stop once they pay little) and whether the deadline had passed when it returned,
+    judged in the worker (a leaf delivered late, behind a slower one, was still tightened
+    in time)."""
+    out = _part_obbt(problem, box, None, deadline, max_rounds=LEAF_ROUNDS,
+                     shrink=LEAF_SHRINK, window_rounds=LEAF_ROUNDS)
+    return (*out, past(deadline))
+
+
+def _leaf_outcome(result) -> str:
+    """What a leaf's progress line says: a leaf that returned after the deadline was cut
     short by it (trial 11: leaves skipped at the deadline were said to be "tightened")."""
     if result[0] is None:
         return "certified empty"
-    if past(deadline):
+    if result[3]:
         return "time limit reached (kept as far as it was tightened)"
     return "tightened"
 
@@ -292,19 +302,15 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     prior = problem.box if box is None else np.asarray(box, dtype=float)
     if reversal_summary(problem.u)["monotone"]:
         parts = 1  # one line only is ever active: nothing can tell the dead bands apart
-    # the search of each end does the rest: OBBT rounds stop once they pay little
-    leaf = partial(_part_obbt, max_rounds=LEAF_ROUNDS, shrink=LEAF_SHRINK,
-                   window_rounds=LEAF_ROUNDS)
     todo = _partition(problem, prior, parts, deadline, n_jobs, on_stop, progress)
     if progress is not None:
         progress.start("leaf", len(todo))
-    done = map_jobs(leaf, [(problem, b, None, deadline) for b in todo], n_jobs,
-                each=None if progress is None else
-                lambda r: progress.done(_leaf_outcome(r, deadline)))
+    done = map_jobs(_leaf_obbt, [(problem, b, deadline) for b in todo], n_jobs,
+                each=None if progress is None else lambda r: progress.done(_leaf_outcome(r)))
     if progress is not None:
         progress.close()
     out = []
-    for b, points, n_stopped in done:
+    for b, points, n_stopped, _late in done:
         if n_stopped and on_stop is not None:
             on_stop(n_stopped)
         if on_point is not None:

@@ -219,8 +219,9 @@ def raise_if_box_limited(bounds, box, names, stopped=()) -> None:
                      "theta_box; supply more (or more exciting) data or a tighter theta_box")
     if cut:
         parts.append("no bound on " + ", ".join(cut) + " inside the a priori theta_box: "
-                     "the search stopped (time or node limit) there, so whether the data "
-                     "bound it is not known; give the search more time (total_time_limit, "
+                     "the search stopped there (a time or node limit, or a crash that a "
+                     "warning names), so whether the data bound it is not known; if a "
+                     "limit stopped it, give the search more time (total_time_limit, "
                      "time_limit, max_nodes)")
     raise UnboundedSetError("; ".join(parts) + ".")
 

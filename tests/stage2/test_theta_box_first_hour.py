@@ -198,7 +198,8 @@ def test_no_box_hint_when_the_lp_set_itself_is_not_empty():
     (["--na", "1", "--nb", "1", "--total-time-limit", "nan"],
      "argument --total-time-limit: must be a number of seconds >= 0"),
     (["--na", "1", "--nb", "1", "--time-limit", "-1"],
-     "argument --time-limit: must be a number of seconds >= 0; got '-1'"),
+     "argument --time-limit: must be a number of seconds >= 0, or inf (or none) for no "
+     "limit; got '-1'"),
 ])
 def test_cli_names_its_flags(tmp_path, capsys, extra, said):
     path = _csv(tmp_path)

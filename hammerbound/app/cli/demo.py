@@ -7,7 +7,7 @@ import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir, check_output_file
 from .console import Progress
-from .options import add_stage2_options, deprecated, total_budget
+from .options import add_stage2_options, deprecated, progress_wanted, total_budget
 
 __all__ = ["add_parser", "run"]
 
@@ -74,7 +74,7 @@ def run(args) -> int:
         records = run_demo(args.stage1, tuple(args.N), levels, seeds, args.method,
                            inner_signal=args.inner_signal, relaxation_order=args.order,
                            solver=args.solver, n_jobs=args.n_jobs, progress=progress,
-                           linear_options={"progress": bool(args.progress),
+                           linear_options={"progress": progress_wanted(args) and not args.quiet,
                                            "time_limit": args.time_limit,
                                            "total_time_limit": total_budget(args),
                                            "max_nodes": args.max_nodes},

@@ -11,7 +11,14 @@ import numpy as np
 from ...exceptions import HammerboundError, ParameterValidationError
 from ..paths import add_force_option, check_output_file
 from .console import cli_terms, cli_warnings, print_error
-from .options import CLI_NAMES, UsageError, add_csv_options, deprecated, require
+from .options import (
+    CLI_NAMES,
+    UsageError,
+    add_csv_options,
+    deprecated,
+    progress_wanted,
+    require,
+)
 from .printing import json_text
 
 __all__ = ["add_arguments", "add_parser", "diagnose_cli_main", "run"]
@@ -47,9 +54,9 @@ def add_arguments(p):
     p.add_argument("--plot", default=None, help="save the diagnosis figure to this PNG "
                                                 "(checked before the work)")
     p.add_argument("--json", action="store_true", help="print a JSON report")
-    p.add_argument("--progress", action="store_true",
-                   help="show the search's progress on stderr (bars on a terminal, plain "
-                        "lines otherwise)")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="show the search's progress on stderr (default: on when stderr is a "
+                        "terminal; bars on a terminal, plain lines otherwise)")
     add_force_option(p, "--plot files")
     p.set_defaults(func=run)
 
@@ -139,7 +146,7 @@ def run(args) -> int:
         [c.strip() for c in args.candidates.split(",") if c.strip()])
     rep = diagnose(G, data, output_bound=bound, candidates=cands, refit=args.refit,
                    skip=args.skip, max_delay=args.max_delay, max_effects=args.max_effects,
-                   progress=args.progress)
+                   progress=progress_wanted(args))
     if args.plot:
         _plot(rep, args.plot)
     print(json_text(rep.to_dict()) if args.json else cli_terms(rep.summary()))

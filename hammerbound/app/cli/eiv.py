@@ -60,12 +60,12 @@ def run(args) -> int:
     input_bound, given, assumed = input_bound_assumption(args.input_bound)
     box_lines, box_json = theta_box_given(args)
     given = [f"output error bound {output_bound:g} (--output-bound)"] + given + box_lines
-    data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
-                           dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
     est = LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
                                 steady_state_gain=args.steady_state_gain,
                                 **stage2_kwargs(args))
-    with recorded_warnings() as seen:
+    with recorded_warnings() as seen:  # the data's warnings too (JSON)
+        data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
+                               dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         est.fit(data, input_bound=input_bound)
     tf_text, tf = transfer_function(est, data.dt)
     if args.json:

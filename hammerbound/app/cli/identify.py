@@ -110,17 +110,17 @@ def _two_records(args) -> int:
     given = given + box_lines
     report_dir = (check_output_dir(args.report, REPORT_FILES, force=args.force,
                                    option="--report") if args.report else None)
-    ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
-                      argument_names=CLI_NAMES)
-    data = IOData.from_csv(args.prbs, u=args.u_col, y=args.y_col, t=args.t_col or None,
-                           dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
     ident = HammersteinBacklashIdentifier(
         BacklashSetEstimator(steady_bound),
         LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
                               **stage2_kwargs(args)),
         inner_signal=args.inner_signal, procedure="two-stage")
-    steady = (ss[args.u_col], ss[args.y_col])
-    with recorded_warnings() as seen:
+    with recorded_warnings() as seen:  # the data's warnings too (JSON)
+        ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
+                          argument_names=CLI_NAMES)
+        data = IOData.from_csv(args.prbs, u=args.u_col, y=args.y_col, t=args.t_col or None,
+                               dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
+        steady = (ss[args.u_col], ss[args.y_col])
         ident.fit(data, steady_state=steady)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:

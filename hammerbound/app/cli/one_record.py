@@ -20,7 +20,6 @@ def _gamma_box(args):
 
 
 def run_one_record(args) -> int:
-    from ...data.iodata import IOData
     from ...hammerstein.identifier import HammersteinBacklashIdentifier
     from ...stage2.estimator import LinearEIVSetEstimator
 
@@ -37,20 +36,12 @@ def run_one_record(args) -> int:
     if args.steady_output_bound is not None:
         raise UsageError("--steady-output-bound belongs to --steady; one record has one "
                          "output error bound (--output-bound)")
-    data = IOData.from_csv(args.record, u=args.u_col, y=args.y_col, t=args.t_col or None,
-                           dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
-    steady = None
-    if args.steady is not None:
-        from ...data.csv_reader import read_columns
-
-        ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
-                          argument_names=CLI_NAMES)
-        steady = (ss[args.u_col], ss[args.y_col])
-    ident = HammersteinBacklashIdentifier(
-        linear=LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk,
-                                     output_bound=output_bound, **stage2_kwargs(args)),
-        procedure="one-record", gamma_box=_gamma_box(args))
-    with recorded_warnings() as seen:
+    with recorded_warnings() as seen:  # the data's warnings too (JSON)
+        data, steady = _read(args)
+        ident = HammersteinBacklashIdentifier(
+            linear=LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk,
+                                         output_bound=output_bound, **stage2_kwargs(args)),
+            procedure="one-record", gamma_box=_gamma_box(args))
         ident.fit(data, steady_state=steady)
     given = [f"output error bound {output_bound:g} (--output-bound)"]
     # the linear block's central model needs only its own intervals finite (a backlash end
@@ -69,6 +60,20 @@ def run_one_record(args) -> int:
     print(cli_terms(ident.summary()))
     print(tf_text)
     return 0
+
+
+def _read(args):
+    """The record (an IOData) and the optional steady-state points ``(u, y)``."""
+    from ...data.csv_reader import read_columns
+    from ...data.iodata import IOData
+
+    data = IOData.from_csv(args.record, u=args.u_col, y=args.y_col, t=args.t_col or None,
+                           dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
+    if args.steady is None:
+        return data, None
+    ss = read_columns(args.steady, [args.u_col, args.y_col], delimiter=args.delimiter,
+                      argument_names=CLI_NAMES)
+    return data, (ss[args.u_col], ss[args.y_col])
 
 
 def _finite(v):

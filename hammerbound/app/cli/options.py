@@ -136,7 +136,8 @@ def theta_box_row(text):
 
 def seconds(text, *, none=False):
     """A number of seconds >= 0 (``inf`` allowed; with ``none``, ``none`` means ``inf``):
-    a negative or NaN limit was accepted and the fit returned the a priori box (trial 11)."""
+    a negative or NaN limit was accepted and the fit returned the a priori box (trial 11).
+    The limits of the command line take :func:`budget`."""
     word = str(text).strip().lower()
     if none and word == "none":
         return np.inf
@@ -152,7 +153,8 @@ def seconds(text, *, none=False):
 
 
 def budget(text):
-    """``--total-time-limit``: :func:`seconds`, ``none`` or ``inf`` for no budget."""
+    """``--total-time-limit``, ``--time-limit``: :func:`seconds`, ``none`` or ``inf`` for
+    no limit."""
     return seconds(text, none=True)
 
 
@@ -170,7 +172,7 @@ def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True)
                             "errors per sample (default) or the two unknown levels of "
                             "Result 1 (two experiments only)")
     p.add_argument("--n-jobs", type=int, default=1, help="parallel bound problems")
-    p.add_argument("--time-limit", type=seconds, default=600.0,
+    p.add_argument("--time-limit", type=budget, default=600.0,
                    help="exact method: seconds per interval end (default 600)")
     p.add_argument("--total-time-limit", type=budget, default=DEFAULT_TOTAL_TIME_LIMIT,
                    help="seconds for the whole fit of the linear block (the exact method's "

@@ -3,7 +3,9 @@ errors are bounded (errors in variables)."""
 
 from __future__ import annotations
 
+from ..paths import add_force_option
 from .console import cli_terms, recorded_warnings
+from .model_set import add_model_set_option, check_model_set, write_model_set
 from .options import (
     CLI_NAMES,
     add_bound_options,
@@ -38,6 +40,8 @@ def add_parser(sub):
     add_stage2_options(p)
     p.add_argument("--json", action="store_true",
                    help="write the result as JSON to stdout (and nothing else)")
+    add_model_set_option(p)
+    add_force_option(p, "--model-set file")
     p.set_defaults(func=run)
     return p
 
@@ -58,6 +62,7 @@ def run(args) -> int:
                            "the bound on the output errors that the intervals rest on, "
                            "e.g. --output-bound 0.05")
     input_bound, given, assumed = input_bound_assumption(args.input_bound)
+    model_set = check_model_set(args)
     box_lines, box_json = theta_box_given(args)
     given = [f"output error bound {output_bound:g} (--output-bound)"] + given + box_lines
     est = LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
@@ -67,6 +72,7 @@ def run(args) -> int:
         data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         est.fit(data, input_bound=input_bound)
+        written = model_set is None or write_model_set(model_set, est)
     tf_text, tf = transfer_function(est, data.dt)
     if args.json:
         out = {
@@ -80,12 +86,13 @@ def run(args) -> int:
                      "input_bound": input_bound, "output_bound": output_bound},
             "assumed": assumed,
             "transfer_function": tf,
+            "model_set": str(model_set) if model_set is not None and written else None,
             "warnings": seen,
         }
         print(json_text(out))
-        return 0
+        return 0 if written else 1
     print(record_line(args.data, data))
     print("\n".join(assumption_lines(given, assumed)))
     print(cli_terms(est.summary()))
     print(tf_text)
-    return 0
+    return 0 if written else 1

@@ -7,6 +7,7 @@ import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir
 from .console import cli_terms, recorded_warnings
+from .model_set import add_model_set_option, check_model_set, write_model_set
 from .options import (
     CLI_NAMES,
     UsageError,
@@ -55,7 +56,8 @@ def add_parser(sub):
                    help=f"the two experiments (--steady, --prbs) only: write report.md + "
                         f"figures into DIR (its parent must exist; an existing report there "
                         f"is kept unless {FORCE_FLAG} is given)")
-    add_force_option(p, "report files")
+    add_model_set_option(p)
+    add_force_option(p, "report files and the --model-set file")
     p.set_defaults(func=run)
     return p
 
@@ -110,6 +112,7 @@ def _two_records(args) -> int:
     given = given + box_lines
     report_dir = (check_output_dir(args.report, REPORT_FILES, force=args.force,
                                    option="--report") if args.report else None)
+    model_set = check_model_set(args)
     ident = HammersteinBacklashIdentifier(
         BacklashSetEstimator(steady_bound),
         LinearEIVSetEstimator(na=args.na, nb=args.nb, nk=args.nk, output_bound=output_bound,
@@ -122,10 +125,12 @@ def _two_records(args) -> int:
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         steady = (ss[args.u_col], ss[args.y_col])
         ident.fit(data, steady_state=steady)
+        written = model_set is None or write_model_set(model_set, ident.linear_)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:
         out = _record(args, ident, data, output_bound, steady_bound, assumed, tf)
         out["model"]["theta_box"] = box_json
+        out["model_set"] = str(model_set) if model_set is not None and written else None
         out["warnings"] = seen
         print(json_text(out))
     else:
@@ -139,7 +144,7 @@ def _two_records(args) -> int:
 
         path = write_report(ident, *steady, data.u, data.y, report_dir, overwrite=args.force)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
-    return 0
+    return 0 if written else 1
 
 
 def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:

@@ -158,8 +158,10 @@ class FrequencyEnvelope(Result):
 
         ``response`` may also be a discrete SISO python-control model (``TransferFunction``
         or ``StateSpace``): its response at ``z = e^{j omega dt}`` is tested. The phase is
-        compared relative to the central model (``angle(G / G0)``), so no unwrapping
-        ambiguity enters the test.
+        compared relative to the central model (``angle(G / G0)``) and modulo ``2 pi``: it
+        is inside when one of its values ``angle(G / G0) + 2 pi k`` lies in the bounds (a
+        range relative to ``G0`` can reach past ``+-pi``; the test compared the principal
+        value only and rejected models inside the envelope, new-user trial 12).
         """
         r = np.asarray(self._response_of(response), dtype=complex)
         mag = np.abs(r)
@@ -169,7 +171,12 @@ class FrequencyEnvelope(Result):
         lo = self.phase_lower - ph0
         hi = self.phase_upper - ph0
         pad = rtol * np.maximum(hi - lo, 1e-300)
-        ph_ok = np.where(self.phase_bounded, (rel >= lo - pad) & (rel <= hi + pad), True)
+        with np.errstate(invalid="ignore"):  # NaN bounds where the phase is not bounded
+            # the smallest value rel + 2 pi k at or above the lower bound
+            turns = np.ceil((lo - pad - rel) / (2 * np.pi))
+            first = rel + 2 * np.pi * np.nan_to_num(turns)
+            inside = first <= hi + pad
+        ph_ok = np.where(self.phase_bounded, inside, True)
         return ok & ph_ok
 
     def _response_of(self, model):

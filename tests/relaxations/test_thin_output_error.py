@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from oracles import eiv_data, explains
 from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound.relaxations import exact_bounds
-from hammerbound.relaxations.exact.points import _Pool, b_for_a
+from hammerbound.relaxations.exact.points import _Pool, a_margin, b_for_a, seek_a
 from hammerbound.relaxations.problem import check_theta
 
 THETA = np.array([-0.5, 0.06, 1.0, 0.5])  # A = 1 - 0.5 q^-1 + 0.06 q^-2, B = q^-2 (1 + 0.5 q^-1)
@@ -68,3 +69,41 @@ def test_b_for_a_completes_a_feasible_a_and_refuses_an_infeasible_one(problem):
     noisy = hb.EIVProblem(problem.y, problem.x, input_bound=0.01, output_bound=D, na=2, nb=2,
                           nk=2)
     assert _Pool(noisy).complete(THETA, 0, 1.0) is None
+
+
+def _long_record(seed=1, n=1200, d=0.02):
+    """A long, lightly noisy output-error record of a resonant plant (the kind of new-user
+    trial 9, N = 2000, on which no search found a first verified point in 240 s)."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, n // 8 + 1), 8)[:n]
+    y = lfilter([0, 0, 0.2, 0.1], [1.0, -1.2, 0.5], u) + rng.uniform(-d, d, n)
+    data = eiv_data(y, u, 0.0, d, 2, 2, nk=2)
+    return hb.EIVProblem(**data), data
+
+
+def test_a_margin_is_nonnegative_exactly_on_the_set():
+    """s(a) >= 0 with its b explaining the record (the tests' own LP says so) at the true
+    a; s < 0 at an a off the set."""
+    pr, data = _long_record()
+    s, b = a_margin(pr, [-1.2, 0.5])
+    assert s >= 0 and explains(data, np.r_[-1.2, 0.5, b])
+    s_off, _ = a_margin(pr, [-1.15, 0.5])
+    assert s_off < 0
+
+
+def test_seek_a_finds_a_first_point_of_a_long_output_error_record():
+    """From the centre of the LP box (not in the set), the search over a alone finds a
+    point that check_theta verifies and the tests' own LP confirms."""
+    from hammerbound.relaxations import lp_bounds
+
+    pr, data = _long_record()
+    box = lp_bounds(pr).bounds
+    centre = box.mean(axis=1)
+    assert not check_theta(pr, centre).feasible
+
+    def verify(theta):
+        return theta if check_theta(pr, theta).feasible else None
+
+    theta = seek_a(pr, centre, box, verify)
+    assert theta is not None and explains(data, theta)
+    assert np.all((box[:, 0] <= theta) & (theta <= box[:, 1]))

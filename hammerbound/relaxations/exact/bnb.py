@@ -87,7 +87,7 @@ from .limits import check_limits
 from .local import polish, restore
 from .mccormick import shared_groups
 from .obbt import _obbt
-from .points import _on_gain_plane, _Pool
+from .points import _on_gain_plane, _Pool, seek_a
 from .search import EndResult, SearchOptions, Workspace, _not_searched, search_end
 from .working_set import AUTO_MIN_EQUATIONS, initial_equations
 
@@ -103,8 +103,10 @@ def verified_points(problem, box, roots, thetas, ws=None, deadline=None) -> list
     """The first verified-feasible points of (22.34) inside the OBBT ``box``: the OBBT LP
     points ``thetas`` (and their mean and the box centre, on the gain plane) that pass
     :func:`.problem.check_theta`; when none does (a thin set), Gauss-Newton steps from the
-    OBBT points (a single-point set, e.g. noise exactly at its bound), then a Nelder-Mead
-    search on the screening violation. Stops at ``deadline`` (:func:`time.time`)."""
+    OBBT points (a single-point set, e.g. noise exactly at its bound), then (without
+    input errors) a Nelder-Mead search over ``a`` alone with ``b`` chosen by an LP
+    (:func:`.points.seek_a`), then one on the screening violation. Stops at ``deadline``
+    (:func:`time.time`)."""
     p = problem.p
 
     def time_left():
@@ -121,6 +123,8 @@ def verified_points(problem, box, roots, thetas, ws=None, deadline=None) -> list
         xs = [r[1] for r in roots.values() if r[1] is not None][:2]
         restore(pool, [(x[:p], x[p : p + n], x[p + n : p + n + kg]) for x in xs], box,
                 stop_at=_perf_deadline(deadline))
+    if not pool.points and time_left() and not problem.has_input_errors:
+        seek_a(problem, starts[-1], box, pool.verify, deadline=deadline)
     if not pool.points and time_left():
         pool.seek(starts, box, deadline=deadline)
     return pool.points

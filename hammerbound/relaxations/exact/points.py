@@ -168,25 +168,20 @@ class _Pool:
 B_FOR_A_MARGIN = 1e-7
 
 
-def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | None:
-    """The ``b`` (inside the a priori box) that, with ``theta``'s ``a`` fixed, explains the
-    data with errors inside their bounds, or None (unverified: the caller checks it).
-
-    Without input errors the equations (22.34) at fixed ``a`` are linear in ``b`` and the
-    output errors ``eta``, so this is one LP: for an end of a ``b_j`` (``k >= na``) the
-    ``b`` that minimises ``sense * b_k`` with the errors ``B_FOR_A_MARGIN`` inside their
-    bounds; for an end of an ``a_i``, the ``b`` with the errors deepest inside.
-    """
+def _fixed_a_lp(problem: EIVProblem, a, cost_b, cost_s, s_range):
+    """The LP at fixed ``a`` (no input errors): variables ``[b (nb), eta (N), s]`` with
+    ``M(a) eta - phi_b b = yt + phi_a a`` (and the gain row), ``|eta| <= deta (1 - s)``,
+    ``b`` in the a priori box, ``s`` in ``s_range``; minimises ``cost_b . b + cost_s s``.
+    Returns scipy's result."""
     from scipy.optimize import linprog
 
     pr = problem
     na, p, n = pr.na, pr.p, pr.N
-    theta = np.asarray(theta, dtype=float)
+    theta = np.r_[np.asarray(a, dtype=float)[:na], np.zeros(p - na)]
     phi, yt = pr.regressors()
     m_eta = fixed_theta_matrix(pr, theta).tocsc()[:, :n]
     nb = p - na
     deta = np.asarray(pr.deta, dtype=float)
-    # variables [b (nb), eta (n), s]: M eta - phi_b b = yt + phi_a a, |eta| <= deta (1 - s)
     a_eq = sp.hstack([sp.csc_matrix(-phi[:, na:]), m_eta, sp.csc_matrix((m_eta.shape[0], 1))])
     b_eq = yt + phi[:, :na] @ theta[:na]
     g = pr.gain_row()
@@ -197,14 +192,84 @@ def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | No
     a_ub = sp.vstack([sp.hstack([sp.csc_matrix((n, nb)), eye, sp.csc_matrix(deta[:, None])]),
                       sp.hstack([sp.csc_matrix((n, nb)), -eye, sp.csc_matrix(deta[:, None])])])
     b_ub = np.r_[deta, deta]
-    c = np.zeros(nb + n + 1)
+    c = np.r_[np.asarray(cost_b, dtype=float), np.zeros(n), cost_s]
+    bounds = [tuple(r) for r in pr.theta_box[na:]] + [(None, None)] * n + [tuple(s_range)]
+    return linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq.tocsr(), b_eq=b_eq, bounds=bounds,
+                   method="highs")
+
+
+def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | None:
+    """The ``b`` (inside the a priori box) that, with ``theta``'s ``a`` fixed, explains the
+    data with errors inside their bounds, or None (unverified: the caller checks it).
+
+    Without input errors the equations (22.34) at fixed ``a`` are linear in ``b`` and the
+    output errors ``eta``, so this is one LP: for an end of a ``b_j`` (``k >= na``) the
+    ``b`` that minimises ``sense * b_k`` with the errors ``B_FOR_A_MARGIN`` inside their
+    bounds; for an end of an ``a_i``, the ``b`` with the errors deepest inside.
+    """
+    na, nb = problem.na, problem.p - problem.na
+    cost_b = np.zeros(nb)
     if k >= na:
-        c[k - na] = sense
-        s_range = (B_FOR_A_MARGIN, B_FOR_A_MARGIN)
+        cost_b[k - na] = sense
+        res = _fixed_a_lp(problem, theta, cost_b, 0.0, (B_FOR_A_MARGIN, B_FOR_A_MARGIN))
     else:
-        c[-1] = -1.0
-        s_range = (B_FOR_A_MARGIN, 0.5)
-    bounds = [tuple(r) for r in pr.theta_box[na:]] + [(None, None)] * n + [s_range]
-    res = linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq.tocsr(), b_eq=b_eq, bounds=bounds,
-                  method="highs")
+        res = _fixed_a_lp(problem, theta, cost_b, -1.0, (B_FOR_A_MARGIN, 0.5))
     return res.x[:nb].copy() if res.status == 0 else None
+
+
+def a_margin(problem: EIVProblem, a) -> tuple[float, np.ndarray | None]:
+    """``(s, b)``: the largest ``s`` such that, with ``A`` fixed to ``a``, some ``b`` in the
+    a priori box explains the data with every output error within ``(1 - s)`` of its bound
+    (no input errors; one LP). ``s >= 0`` exactly when ``a`` is the ``a`` of a point of
+    the set; ``(-inf, None)`` if the LP fails."""
+    nb = problem.p - problem.na
+    res = _fixed_a_lp(problem, a, np.zeros(nb), -1.0, (None, 0.5))
+    if res.status != 0:
+        return -np.inf, None
+    return float(res.x[-1]), res.x[:nb].copy()
+
+
+#: evaluations (LPs) of :func:`seek_a`'s search; measured on a new-user trial's
+#: output-error record (N = 2000, Delta eta = 0.02, na = 2): 45 LPs, 8 s, where the other
+#: searches found no point in 240 s
+SEEK_A_EVALS = 200
+
+
+def seek_a(problem: EIVProblem, start, box, verify, max_evals=SEEK_A_EVALS, deadline=None):
+    """A first verified point of an output-error problem (no input errors): Nelder-Mead
+    maximises :func:`a_margin` over ``a`` (inside ``box``'s rows of ``a``) from ``start``;
+    the first ``a`` whose margin reaches :data:`B_FOR_A_MARGIN` is completed with its
+    ``b`` and passed to ``verify`` (e.g. :meth:`_Pool.verify`), whose result is returned.
+    None at ``max_evals`` or ``deadline`` (:func:`time.time`). The ``b`` eliminated, the
+    search runs in ``na`` dimensions, where the set is a sliver that the fixed-theta
+    searches in all ``p`` do not hit."""
+    from scipy.optimize import minimize
+
+    na = problem.na
+    lo, hi = box[:na, 0], box[:na, 1]
+    found = []
+
+    class _Done(Exception):
+        pass
+
+    def neg_margin(a):
+        if deadline is not None and time.time() > deadline:
+            raise _Done
+        a = np.clip(a, lo, hi)
+        s, b = a_margin(problem, a)
+        if s >= B_FOR_A_MARGIN:
+            pt = verify(np.r_[a, b])
+            if pt is not None:
+                found.append(pt)
+                raise _Done
+        return -s
+
+    a0 = np.clip(np.asarray(start, dtype=float)[:na], lo, hi)
+    simplex = np.vstack([a0, a0 + np.diag(0.25 * (hi - lo))])
+    try:
+        minimize(neg_margin, a0, method="Nelder-Mead",
+                 options={"maxfev": int(max_evals), "initial_simplex": simplex,
+                          "xatol": 0.0, "fatol": 0.0})
+    except _Done:
+        pass
+    return found[0] if found else None

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from oracles import one_record
 from scipy.signal import freqz, lfilter
 
@@ -100,3 +101,71 @@ def test_identify_two_experiments_writes_the_model_set(tmp_path, capsys):
     _, g = freqz([0.0, b1, b2], [1.0, a1, a2], worN=np.array(env["omega"]))
     assert np.all(np.array(env["mag_lower"]) <= np.abs(g) * (1 + 1e-12))
     assert np.all(np.abs(g) <= np.array(env["mag_upper"]) * (1 + 1e-12))
+
+
+def _wide_csv(tmp_path):
+    """A short noisy record whose a1 interval reaches the stability limit -1: every
+    interval finite, but some A of the box vanishes on the unit circle (no finite
+    weight)."""
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 10), 3)
+    y = lfilter([0, 0.5], [1, -0.9], u) + 0.3 * rng.uniform(-1, 1, u.size)
+    path = tmp_path / "wide.csv"
+    path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(u, y,
+                                                                                   strict=True)))
+    return path
+
+
+def test_finite_intervals_without_a_finite_weight_still_give_the_set(tmp_path, capsys):
+    """The intervals and the envelope are written, the weights are null with the reason
+    (the whole file was dropped, exit status 1, review)."""
+    out = tmp_path / "set.json"
+    rc = _run("eiv", str(_wide_csv(tmp_path)), "--na", "1", "--nb", "1", "--output-bound",
+              "0.3", "--method", "lp", "--model-set", str(out))
+    capsys.readouterr()
+    assert rc == 0
+    ms = json.loads(out.read_text())
+    assert ms["lower"][0] == pytest.approx(-1.0)
+    assert ms["box"]["uncertainty_weights"] == {"multiplicative": None, "additive": None}
+    assert "vanishes on the unit circle" in ms["box"]["no_weight"]
+    assert any("output error bound" in a for a in ms["assumptions"])
+
+
+def test_a_failure_while_writing_keeps_the_results(tmp_path, capsys, monkeypatch):
+    """Any error of the model set (here a solver error of the weight) leaves the
+    identification's results printed, with a warning and exit status 1 (it ended the
+    command with exit status 2 and nothing on stdout, review)."""
+    from hammerbound.exceptions import SolverError
+    from hammerbound.stage2.estimator import LinearEIVSetEstimator
+
+    def broken(self, *a, **kw):
+        raise SolverError("the weight's LP failed")
+
+    monkeypatch.setattr(LinearEIVSetEstimator, "uncertainty_weight", broken)
+    out = tmp_path / "set.json"
+    rc = _run("eiv", str(_eiv_csv(tmp_path)), "--na", "1", "--nb", "1", "--output-bound",
+              "0.02", "--method", "lp", "--model-set", str(out), "--json")
+    cap = capsys.readouterr()
+    doc = json.loads(cap.out)
+    assert rc == 1 and not out.exists() and doc["model_set"] is None
+    assert doc["intervals"] and any("SolverError: the weight's LP failed" in w["message"]
+                                    for w in doc["warnings"])
+
+
+def test_a_file_made_while_the_fit_ran_is_kept(tmp_path, capsys, monkeypatch):
+    from hammerbound.stage2.estimator import LinearEIVSetEstimator
+
+    out = tmp_path / "set.json"
+    fit = LinearEIVSetEstimator.fit
+
+    def fit_then_someone_writes(self, *a, **kw):
+        res = fit(self, *a, **kw)
+        out.write_text("theirs")
+        return res
+
+    monkeypatch.setattr(LinearEIVSetEstimator, "fit", fit_then_someone_writes)
+    rc = _run("eiv", str(_eiv_csv(tmp_path)), "--na", "1", "--nb", "1", "--output-bound",
+              "0.02", "--method", "lp", "--model-set", str(out))
+    err = capsys.readouterr().err
+    assert rc == 1 and out.read_text() == "theirs"
+    assert "appeared while the fit ran; pass --force" in err

@@ -127,6 +127,7 @@ def test_workers_are_the_processes_map_jobs_runs_on():
     assert workers(2, 16) == 2
 
 
+@pytest.mark.deep  # 11 s (quick tier budget)
 def test_every_end_gets_a_share_of_the_deadline(monkeypatch):
     """With a fit deadline, each interval end's search is limited to its share of the
     time left (before, the first ends took it all and the rest were never searched)."""

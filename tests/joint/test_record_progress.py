@@ -8,6 +8,7 @@ import re
 import warnings
 
 import numpy as np
+import pytest
 from oracles import one_record
 
 import hammerbound as hb
@@ -38,6 +39,7 @@ def test_lp_fit_shows_partition_and_leaves_on_stderr_only(capsys):
     assert capsys.readouterr() == ("", "")  # default: silent
 
 
+@pytest.mark.deep  # 19 s (quick tier budget)
 def test_exact_fit_counts_every_interval_end(capsys):
     u, y, _ = one_record(40, 0.02, "uniform", 2)
     idf = _fit(u, y, "exact", True, total_time_limit=30)

@@ -107,3 +107,15 @@ def test_seek_a_finds_a_first_point_of_a_long_output_error_record():
     theta = seek_a(pr, centre, box, verify)
     assert theta is not None and explains(data, theta)
     assert np.all((box[:, 0] <= theta) & (theta <= box[:, 1]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_margin_of_first_order_plants_is_not_lost_to_presolve(seed):
+    """HiGHS's presolve ended "not set" on most of these LPs (s = -inf at the true a, so
+    the search had no signal, review); the LP is solved again without it."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, 51), 4)[:200]
+    y = lfilter([0, 1.0], [1, -0.7], u) + rng.uniform(-0.02, 0.02, 200)
+    data = eiv_data(y, u, 0.0, 0.02, 1, 1)
+    s, b = a_margin(hb.EIVProblem(**data), [-0.7])
+    assert s >= 0 and explains(data, np.r_[-0.7, b])

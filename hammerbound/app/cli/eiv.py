@@ -57,6 +57,7 @@ def input_bound_assumption(value):
 def run(args) -> int:
     from ...data.iodata import IOData
     from ...stage2.estimator import LinearEIVSetEstimator
+    from ...stage2.fitting import assumption_list
 
     output_bound = require(args.output_bound, "--output-bound",
                            "the bound on the output errors that the intervals rest on, "
@@ -72,7 +73,9 @@ def run(args) -> int:
         data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         est.fit(data, input_bound=input_bound)
-        written = model_set is None or write_model_set(model_set, est)
+        written = model_set is None or write_model_set(
+            model_set, est, [cli_terms(a) for a in assumption_list(est, est.problem_)],
+            args.force)
     tf_text, tf = transfer_function(est, data.dt)
     if args.json:
         out = {

@@ -125,7 +125,8 @@ def _two_records(args) -> int:
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         steady = (ss[args.u_col], ss[args.y_col])
         ident.fit(data, steady_state=steady)
-        written = model_set is None or write_model_set(model_set, ident.linear_)
+        written = model_set is None or write_model_set(
+            model_set, ident.linear_, [cli_terms(a) for a in ident.assumptions_], args.force)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:
         out = _record(args, ident, data, output_bound, steady_bound, assumed, tf)

@@ -2,28 +2,34 @@
 linear block for a robust-control design, written as one JSON file (the command line's
 route to :mod:`hammerbound.modelset`; ``docs/robust-control.md`` shows the same in Python).
 
-The file holds the parameter intervals, the Bode envelope of every model in them
-(:meth:`~hammerbound.LinearEIVSetEstimator.frequency_response_bounds`) and certified
-multiplicative and additive uncertainty weights around the central model
-(:meth:`~hammerbound.LinearEIVSetEstimator.uncertainty_weight`); with a gain constraint
-(the Hammerstein identifier's unit gain (22.8), or ``eiv --steady-state-gain``) the same
-again on the gain plane, which every feasible model satisfies and the box alone does not
-express. The path is checked before any work; an existing file is kept unless
-``--force``.
+The file holds the parameter intervals and the assumptions they rest on, the Bode envelope
+of every model in them
+(:meth:`~hammerbound.LinearEIVSetEstimator.frequency_response_bounds`, at its listed
+frequencies) and certified multiplicative and additive uncertainty weights around the
+central model (:meth:`~hammerbound.LinearEIVSetEstimator.uncertainty_weight`, at every
+frequency; ``null`` with the reason where none exists); with a gain constraint (the
+Hammerstein identifier's unit gain (22.8), or ``eiv --steady-state-gain``) the same again
+on the gain plane, which every feasible model satisfies and the box alone does not
+express. The path is checked before any work; an existing file is kept unless ``--force``
+(also one made while the fit ran).
 """
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
 
-from ...exceptions import UnboundedSetError
+from ...exceptions import HammerboundError, UnboundedSetError
 from ..paths import check_output_file
 
 __all__ = ["add_model_set_option", "check_model_set", "write_model_set"]
 
 OPTION = "--model-set"
+WHAT = ("every model B(q^-1)/A(q^-1) whose parameters lie in the intervals below, under the "
+        "assumptions listed: the envelope bounds hold at its listed frequencies, the weights "
+        "at every frequency")
 
 
 def add_model_set_option(p) -> None:
@@ -31,8 +37,8 @@ def add_model_set_option(p) -> None:
                    help="also write the guaranteed model set of the linear block (Bode "
                         "envelope, certified multiplicative and additive uncertainty "
                         "weights; on the gain plane too when there is a gain constraint) "
-                        "to this JSON file (exit status 1 if an interval is infinite: no "
-                        "model set then)")
+                        "to this JSON file (exit status 1 if no file could be written, "
+                        "e.g. an interval is infinite)")
 
 
 def check_model_set(args):
@@ -43,32 +49,59 @@ def check_model_set(args):
     return check_output_file(path, force=args.force, option=OPTION)
 
 
+def _weight(lin, kind, on_gain_plane):
+    try:
+        return lin.uncertainty_weight(kind, on_gain_plane=on_gain_plane).to_dict()
+    except UnboundedSetError:
+        return None
+
+
 def _sets(lin, on_gain_plane) -> dict:
     env = lin.frequency_response_bounds(on_gain_plane=on_gain_plane)
-    weights = {kind: lin.uncertainty_weight(kind, on_gain_plane=on_gain_plane).to_dict()
+    weights = {kind: _weight(lin, kind, on_gain_plane)
                for kind in ("multiplicative", "additive")}
-    return {"frequency_envelope": env.to_dict(), "uncertainty_weights": weights}
+    out = {"frequency_envelope": env.to_dict(), "uncertainty_weights": weights}
+    if None in weights.values():
+        out["no_weight"] = ("no finite weight exists: some A in the parameter box vanishes "
+                            "on the unit circle (an interval of the a_i reaches the "
+                            "stability limit)")
+    return out
 
 
-def write_model_set(path, lin) -> bool:
+def _document(lin, assumptions) -> dict:
+    doc = {"what": WHAT, "parameters": list(lin.param_names_), "lower": lin.bounds_[:, 0],
+           "upper": lin.bounds_[:, 1], "assumptions": list(assumptions),
+           "box": _sets(lin, False)}
+    if lin.steady_state_gain is not None:
+        doc["gain_plane"] = {"steady_state_gain": float(lin.steady_state_gain),
+                             **_sets(lin, True)}
+    return doc
+
+
+def write_model_set(path, lin, assumptions, force=False) -> bool:
     """Write the model set of the fitted linear block ``lin`` to ``path``; False, with a
-    warning (and no file), when an interval is infinite or no finite weight exists."""
+    warning and no file, when an interval is infinite or the set cannot be computed or
+    written (the identification's results are printed either way). Without ``force`` a file
+    that appeared since the check is kept; with it the file is replaced in one step."""
     from .printing import json_text
 
+    def fail(why):
+        warnings.warn(f"no model set written to {path}: {why}", UserWarning, stacklevel=3)
+        return False
+
     if not np.all(np.isfinite(lin.bounds_)):
-        warnings.warn(f"no model set written to {path}: an interval of the linear block is "
-                      "infinite (see the warnings before).", UserWarning, stacklevel=2)
-        return False
+        return fail("an interval of the linear block is infinite (see the warnings before).")
     try:
-        doc = {"what": "every model B(q^-1)/A(q^-1) whose parameters lie in the intervals "
-                       "below; the envelope and the weights hold for all of them",
-               "parameters": list(lin.param_names_), "lower": lin.bounds_[:, 0],
-               "upper": lin.bounds_[:, 1], "box": _sets(lin, False)}
-        if lin.steady_state_gain is not None:
-            doc["gain_plane"] = {"steady_state_gain": float(lin.steady_state_gain),
-                                 **_sets(lin, True)}
-    except UnboundedSetError as exc:
-        warnings.warn(f"no model set written to {path}: {exc}", UserWarning, stacklevel=2)
-        return False
-    path.write_text(json_text(doc) + "\n")
+        text = json_text(_document(lin, assumptions)) + "\n"
+        if force:
+            tmp = path.with_name(path.name + ".part")
+            tmp.write_text(text)
+            os.replace(tmp, path)
+        else:
+            with open(path, "x") as f:
+                f.write(text)
+    except FileExistsError:
+        return fail("the file appeared while the fit ran; pass --force to replace it.")
+    except (HammerboundError, OSError) as exc:
+        return fail(f"{type(exc).__name__}: {exc}")
     return True

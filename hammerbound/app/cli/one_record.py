@@ -45,7 +45,8 @@ def run_one_record(args) -> int:
                                          output_bound=output_bound, **stage2_kwargs(args)),
             procedure="one-record", gamma_box=_gamma_box(args))
         ident.fit(data, steady_state=steady)
-        written = model_set is None or write_model_set(model_set, ident.linear_)
+        written = model_set is None or write_model_set(
+            model_set, ident.linear_, [cli_terms(a) for a in ident.assumptions_], args.force)
     given = [f"output error bound {output_bound:g} (--output-bound)"]
     # the linear block's central model needs only its own intervals finite (a backlash end
     # the record does not bound leaves the linear block's model as it is)

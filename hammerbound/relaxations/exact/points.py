@@ -194,8 +194,12 @@ def _fixed_a_lp(problem: EIVProblem, a, cost_b, cost_s, s_range):
     b_ub = np.r_[deta, deta]
     c = np.r_[np.asarray(cost_b, dtype=float), np.zeros(n), cost_s]
     bounds = [tuple(r) for r in pr.theta_box[na:]] + [(None, None)] * n + [tuple(s_range)]
-    return linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq.tocsr(), b_eq=b_eq, bounds=bounds,
-                   method="highs")
+    kw = dict(A_ub=a_ub, b_ub=b_ub, A_eq=a_eq.tocsr(), b_eq=b_eq, bounds=bounds,
+              method="highs")
+    res = linprog(c, **kw)
+    if res.status == 4:  # HiGHS's presolve often ends "not set" on these LPs (review)
+        res = linprog(c, **kw, options={"presolve": False})
+    return res
 
 
 def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | None:
@@ -233,6 +237,9 @@ def a_margin(problem: EIVProblem, a) -> tuple[float, np.ndarray | None]:
 #: output-error record (N = 2000, Delta eta = 0.02, na = 2): 45 LPs, 8 s, where the other
 #: searches found no point in 240 s
 SEEK_A_EVALS = 200
+#: the value :func:`seek_a` minimises where an LP fails (an inf in Nelder-Mead's simplex
+#: makes scipy warn and stall)
+FAILED_LP_PENALTY = 1e6
 
 
 def seek_a(problem: EIVProblem, start, box, verify, max_evals=SEEK_A_EVALS, deadline=None):
@@ -262,7 +269,7 @@ def seek_a(problem: EIVProblem, start, box, verify, max_evals=SEEK_A_EVALS, dead
             if pt is not None:
                 found.append(pt)
                 raise _Done
-        return -s
+        return -s if np.isfinite(s) else FAILED_LP_PENALTY  # no inf in the simplex
 
     a0 = np.clip(np.asarray(start, dtype=float)[:na], lo, hi)
     simplex = np.vstack([a0, a0 + np.diag(0.25 * (hi - lo))])

@@ -163,6 +163,14 @@ class FrequencyEnvelope(Result):
         range relative to ``G0`` can reach past ``+-pi``; the test compared the principal
         value only and rejected models inside the envelope, new-user trial 12).
         """
+        from ..data.validation import as_real
+
+        rtol = as_real("rtol", rtol, lo=None, want="rtol must be a finite number >= 0 (it "
+                       "widens the bounds; a negative one would narrow them)")
+        if rtol < 0:
+            raise ParameterValidationError(
+                f"rtol must be a finite number >= 0 (it widens the bounds; a negative one "
+                f"would narrow them); got {rtol!r}.")
         r = np.asarray(self._response_of(response), dtype=complex)
         mag = np.abs(r)
         ok = (mag >= self.mag_lower * (1 - rtol)) & (mag <= self.mag_upper * (1 + rtol))

@@ -46,3 +46,17 @@ def test_a_model_outside_in_phase_or_magnitude_is_rejected():
     assert narrow.any()
     flipped = env.contains(-g0)  # same magnitude, phase turned by pi
     assert not flipped[narrow].any()
+
+
+def test_a_negative_rtol_is_refused():
+    """rtol widens the bounds; a negative one narrowed them without a word (review)."""
+    import pytest
+
+    from hammerbound.exceptions import ParameterValidationError
+
+    est, omega, env = _wide_set(0.05)
+    g0 = _response(est.center_, omega)
+    for bad in (-1e-3, float("nan"), "0.1"):
+        with pytest.raises(ParameterValidationError, match="rtol must be"):
+            env.contains(g0, rtol=bad)
+    assert env.contains(g0, rtol=1e-3).all()

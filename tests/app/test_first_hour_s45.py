@@ -87,13 +87,20 @@ def test_json_carries_the_warnings(tmp_path, capsys):
     assert not any("total_time_limit" in w["message"] for w in got)
 
 
-def test_the_lp_method_is_not_told_to_raise_per_end_limits():
-    u, y, _ = one_record(40, 0.02, "uniform", 2)
+def _fit_warnings(n, budget, sign=1.0):
+    """The warnings of an lp one-record fit of a record of ``n`` samples (output times
+    ``sign``) with ``total_time_limit=budget``."""
+    u, y, _ = one_record(n, 0.02, "uniform", 2)
     lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
-                                   total_time_limit=0.5)
+                                   total_time_limit=budget)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        hb.HammersteinBacklashIdentifier(linear=lin).fit(u, y)
+        hb.HammersteinBacklashIdentifier(linear=lin).fit(u, sign * y)
+    return caught
+
+
+def test_the_lp_method_is_not_told_to_raise_per_end_limits():
+    caught = _fit_warnings(40, 0.5)
     limit = [str(w.message) for w in caught if w.category is SearchLimitWarning]
     assert limit and all("raise total_time_limit for tighter" in m for m in limit)
     assert not any("max_nodes" in m for m in limit)
@@ -102,14 +109,9 @@ def test_the_lp_method_is_not_told_to_raise_per_end_limits():
 def test_a_reverse_acting_record_stopped_by_time_is_told_so():
     """fit(u, -y) under a short budget returns (nothing certified it empty): a DataWarning
     names the negative least-squares gain; the record as recorded gets none."""
-    u, y, _ = one_record(60, 0.02, "uniform", 2)
     for sign, expect in ((-1.0, True), (1.0, False)):
         # no time at all: nothing is certified (0.5 s certify this -y empty, with the hint)
-        lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
-                                       total_time_limit=0.0)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            hb.HammersteinBacklashIdentifier(linear=lin).fit(u, sign * y)
+        caught = _fit_warnings(60, 0.0, sign)
         said = [str(w.message) for w in caught if w.category is DataWarning
                 and "least-squares gain is negative" in str(w.message)]
         assert bool(said) == expect, said
@@ -157,12 +159,7 @@ def test_unbounded_slopes_name_a_free_scale_when_a1_can_reach_zero():
 def test_a_fit_stopped_by_time_does_not_blame_the_plant_scale():
     from hammerbound.exceptions import NotIdentifiedWarning
 
-    u, y, _ = one_record(60, 0.02, "uniform", 2)
-    lin = hb.LinearEIVSetEstimator(output_bound=0.02, na=2, nb=2, method="lp",
-                                   total_time_limit=0.0)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        hb.HammersteinBacklashIdentifier(linear=lin).fit(u, y)
+    caught = _fit_warnings(60, 0.0)
     said = [str(w.message) for w in caught if w.category is NotIdentifiedWarning]
     assert any("ml" in m for m in said) and not any("A(1)" in m for m in said)
 

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bound_text", "dt_text", "interval_frame", "interval_records", "interval_text"]
+__all__ = ["bound_text", "dt_text", "interval_frame", "interval_records", "interval_text",
+           "poly_z"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
@@ -25,6 +26,26 @@ def dt_text(dt, unit: str = "") -> str:
     """A sampling time as the summaries print it: ``0.1 ms``, ``0.1`` (no unit known) or
     ``not given``."""
     return "not given" if dt is None else f"{dt:g} {unit}".strip()
+
+
+def poly_z(coefs) -> str:
+    """``[0.75, -0.28]`` -> ``"0.75 z - 0.28"`` (descending powers of z)."""
+    c = np.trim_zeros(np.asarray(coefs, dtype=float), "f")
+    if c.size == 0:
+        return "0"
+    terms = []
+    for k, v in enumerate(c):
+        p = c.size - 1 - k
+        if v == 0:
+            continue
+        mag = abs(v)
+        num = "" if (mag == 1 and p > 0) else f"{mag:.4g}"
+        zp = "" if p == 0 else ("z" if p == 1 else f"z^{p}")
+        term = " ".join(t for t in (num, zp) if t)
+        sign = "-" if v < 0 else "+"
+        terms.append(term if not terms and v > 0 else f"{sign} {term}" if terms
+                     else f"-{term}")
+    return " ".join(terms)
 
 
 def interval_records(names, bounds, status=None) -> list[dict]:

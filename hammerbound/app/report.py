@@ -123,10 +123,24 @@ class IdentificationReport(Result):
             f"band; the first {int((~b).sum())} start the recursion).",
             "", "![envelope](envelope.png)", ""]
 
+    def _assumptions(self) -> list:
+        """What every interval rests on, and the central model with its sampling time (the
+        report had neither; the text and JSON outputs do, trial 13)."""
+        from ..tables import dt_text, poly_z
+
+        ident = self.ident
+        lines = ["## Assumptions", "", *[f"- {a}" for a in ident.assumptions_], ""]
+        tf = ident.linear_.to_transfer_function()
+        num, den = np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])
+        unit = getattr(ident.linear_, "time_unit_", "")
+        return lines + [f"Central model (the centre of the intervals): G(z) = "
+                        f"({poly_z(num)}) / ({poly_z(den)}), sampling time "
+                        f"{dt_text(getattr(ident, 'dt_', None), unit)}.", ""]
+
     def summary(self) -> str:
         """The Markdown text of ``report.md`` (figures referenced by file name)."""
-        return "\n".join([f"# {self.title}", "", *self._experiment(), *self._stage1(),
-                          *self._stage2()])
+        return "\n".join([f"# {self.title}", "", *self._experiment(), *self._assumptions(),
+                          *self._stage1(), *self._stage2()])
 
     def to_dict(self) -> dict:
         """JSON-serialisable: the intervals of both blocks, ``u_star``, the inner-signal

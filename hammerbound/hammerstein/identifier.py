@@ -47,6 +47,20 @@ def _theta_box_text(lin) -> str:
     return assumption_list(lin, lin.problem_)[3]
 
 
+def _inner_text(inner_signal, x, bound) -> str:
+    """The stage-2 assumption on the inner signal ``x`` (its centre values): an error per
+    sample, or (two-level, Result 1) one unknown value per PRBS level (trial 13: "(per
+    sample)" was said of both)."""
+    from ..tables import bound_text
+
+    if inner_signal != "two-level":
+        return f"inner signal within the stage-1 bounds |dx_t| <= {bound_text(bound)}"
+    x, bound = np.asarray(x, dtype=float), np.broadcast_to(bound, np.shape(x))
+    up, down = float(np.max(bound[x > 0], initial=0)), float(np.max(bound[x < 0], initial=0))
+    return ("inner signal at two unknown levels (Result 1), one per PRBS level, within "
+            f"their stage-1 bounds |dx| <= {up:.4g} (u = +u*) and {down:.4g} (u = -u*)")
+
+
 def _central_system(backlash, A, B, dt=None):
     """The central model; its A need not be stable (the centre of intervals that contain
     stable A's may lie outside the stability region): warn instead of failing the fit."""
@@ -217,8 +231,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             "u > 0 steady states on the right line, u < 0 on the left (square waves), "
             "settled: a transient left counts against the steady-state output bound",
             f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",
-            f"inner signal within the stage-1 bounds |dx_t| <= "
-            f"{bound_text(lin.problem_.input_bound)}",
+            _inner_text(self.inner_signal, self.xc_, lin.problem_.input_bound),
             "linear block of unit steady-state gain (22.8)",
             _theta_box_text(lin),
         )

@@ -111,13 +111,17 @@ class UncertaintyWeight(Result):
                 f"mean over-bound on the fit grid: {self.excess_db:.3g} dB")
 
     def to_dict(self) -> dict:
-        """JSON-serialisable: kind, order, ``W``'s numerator/denominator and ``dt``, poles
-        and zeros as ``[re, im]``, the fit grid, deviation and ``|W|``, the proof."""
+        """JSON-serialisable: kind, order, ``W``'s numerator/denominator and ``dt``, the
+        central model ``G0`` the bound holds around (``central``: numerator, denominator;
+        on the gain plane it is not the box centre), poles and zeros as ``[re, im]``, the
+        fit grid, deviation and ``|W|``, the proof."""
         c = self.certificate
         num = np.ravel(np.asarray(self.W.num[0][0], dtype=float))
         den = np.ravel(np.asarray(self.W.den[0][0], dtype=float))
+        g0 = {"num": np.ravel(np.asarray(self.central.num[0][0], dtype=float)),
+              "den": np.ravel(np.asarray(self.central.den[0][0], dtype=float))}
         return jsonable({
-            "kind": self.kind, "order": self.order, "num": num, "den": den,
+            "kind": self.kind, "order": self.order, "num": num, "den": den, "central": g0,
             "dt": None if self.W.dt is True else self.W.dt,
             "poles": [[z.real, z.imag] for z in self.poles],
             "zeros": [[z.real, z.imag] for z in self.zeros],

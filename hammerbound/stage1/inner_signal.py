@@ -52,7 +52,9 @@ def read_prbs_level(u, prbs_level=None) -> float:
                             "the input), e.g. prbs_level=1.0")
     levels = np.unique(np.asarray(u, dtype=float))
     if levels.size != 2 or not np.isclose(levels[0], -levels[1], rtol=1e-9, atol=0):
-        shown = np.array2string(levels[:5], precision=4)
+        # as many digits as tell them apart (4 digits showed 2 + 1e-9 and 2 as "2. 2.",
+        # trial 13)
+        shown = "[" + " ".join(_distinct_text(levels[:5])) + "]"
         more = " ..." if levels.size > 5 else ""
         hint = ("Pass prbs_level=u* for a two-level signal with rounding noise." if levels.size == 2
                 else "The two-stage method needs a PRBS +-u* for stage 2; for an ordinary "
@@ -63,6 +65,16 @@ def read_prbs_level(u, prbs_level=None) -> float:
             f"the PRBS input must take exactly two values +-u*; got {levels.size} distinct "
             f"value(s) {shown}{more}. {hint}")
     return float(levels[1])
+
+
+def _distinct_text(values) -> list[str]:
+    """``values`` (sorted, distinct) with the fewest significant digits (4 to 17) that
+    print them all differently."""
+    for digits in range(4, 18):
+        text = [f"{v:.{digits}g}" for v in values]
+        if len(set(text)) == len(text):
+            return text
+    return [repr(float(v)) for v in values]
 
 
 @dataclass(frozen=True)

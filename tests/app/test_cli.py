@@ -51,6 +51,9 @@ def test_identify_json_and_report(csv_files, tmp_path, capsys):
     assert np.all((lo <= true) & (true <= hi))
     rep = (tmp_path / "rep" / "report.md").read_text()
     assert "Stage 1" in rep and "Stage 2" in rep
+    # what the intervals rest on, and the central model with its sampling time (trial 13)
+    assert "## Assumptions" in rep and "- PRBS output errors" in rep.split("## Assumptions")[1]
+    assert "Central model (the centre of the intervals): G(z) = (" in rep
     for fig in ("backlash_sets.png", "intervals.png", "envelope.png"):
         assert (tmp_path / "rep" / fig).stat().st_size > 1000
 

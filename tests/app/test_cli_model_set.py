@@ -26,6 +26,13 @@ def _eiv_csv(tmp_path, bound=0.02, seed=0):
     return path
 
 
+def _z_response(num, den, omega):
+    """The response of ``num(z) / den(z)`` (python-control's coefficients, in powers of
+    ``z``) at ``z = e^{j omega}``."""
+    z = np.exp(1j * np.asarray(omega))
+    return np.polyval(num, z) / np.polyval(den, z)
+
+
 def _run(*argv):
     try:
         return main(list(argv))
@@ -101,6 +108,16 @@ def test_identify_two_experiments_writes_the_model_set(tmp_path, capsys):
     _, g = freqz([0.0, b1, b2], [1.0, a1, a2], worN=np.array(env["omega"]))
     assert np.all(np.array(env["mag_lower"]) <= np.abs(g) * (1 + 1e-12))
     assert np.all(np.abs(g) <= np.array(env["mag_upper"]) * (1 + 1e-12))
+    # each weight names the G0 it bounds around (on the gain plane not the box centre;
+    # the file had none, trial 13): |G/G0 - 1| <= |W| for the true G
+    for kind in ("multiplicative", "additive"):
+        wt = ms["gain_plane"]["uncertainty_weights"][kind]
+        omega = np.linspace(0.0, np.pi, 2001)
+        _, g = freqz([0.0, b1, b2], [1.0, a1, a2], worN=omega)
+        g0 = _z_response(wt["central"]["num"], wt["central"]["den"], omega)
+        w = _z_response(wt["num"], wt["den"], omega)
+        dev = np.abs(g / g0 - 1) if kind == "multiplicative" else np.abs(g - g0)
+        assert np.all(dev <= np.abs(w) * (1 + 1e-9)), kind
 
 
 def _wide_csv(tmp_path):

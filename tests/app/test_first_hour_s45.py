@@ -202,3 +202,44 @@ def test_the_reverse_acting_warning_needs_a_fit_that_found_nothing():
     assert len(said(True, None)) == 1
     assert not said(False, None)
     assert not said(True, np.zeros(4))
+
+
+def test_a_stage_one_empty_set_names_the_steady_output_bound(tmp_path, capsys):
+    """New-user trial 13: the message said "--output-bound (too small?)" for the
+    steady-state record, whose bound is --steady-output-bound."""
+    ex = hb.chapter_example(0.02, N=80)
+    ss, pr = tmp_path / "steady.csv", tmp_path / "prbs.csv"
+    for path, (u, y) in ((ss, (ex.steady.u, ex.steady.y)), (pr, (ex.prbs.u, ex.prbs.y))):
+        path.write_text("u,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n"
+                                          for a, b in zip(u, y, strict=True)))
+    rc = main(["identify", "--steady", str(ss), "--prbs", str(pr), "--output-bound", "0.02",
+               "--steady-output-bound", "1e-5", "--method", "lp"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "EmptyFeasibleSetError" in err
+    assert "--steady-output-bound (too small?)" in err and "--output-bound (too" not in err
+
+
+def test_the_prbs_levels_are_shown_with_the_digits_that_tell_them_apart():
+    """Trial 13: a level 2 + 1e-9 showed as "[-2. 2. 2.]"."""
+    from hammerbound.exceptions import DataValidationError
+    from hammerbound.stage1.inner_signal import read_prbs_level
+
+    u = np.r_[np.tile([2.0, -2.0], 20), 2.0 + 1e-9]
+    with pytest.raises(DataValidationError, match=r"3 distinct value\(s\) \[-2 2 2\.000000001\]"):
+        read_prbs_level(u)
+
+
+def test_the_two_level_assumption_names_the_levels_not_samples():
+    """Trial 13: the two-level fit's assumptions said "(per sample)" of its inner-signal
+    bound, which is one unknown value per PRBS level."""
+    ex = hb.chapter_example(0.02, N=80)
+    said = {}
+    for inner in ("independent", "two-level"):
+        idf = hb.HammersteinBacklashIdentifier(
+            hb.BacklashSetEstimator(0.02),
+            hb.LinearEIVSetEstimator(output_bound=0.02, method="lp"),
+            inner_signal=inner).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+        said[inner] = next(a for a in idf.assumptions_ if a.startswith("inner signal"))
+    assert "two unknown levels" in said["two-level"] and "per sample" not in said["two-level"]
+    assert "(u = +u*)" in said["two-level"] and "(u = -u*)" in said["two-level"]
+    assert said["independent"].startswith("inner signal within the stage-1 bounds |dx_t|")

@@ -124,7 +124,7 @@ def _two_records(args) -> int:
         data = IOData.from_csv(args.prbs, u=args.u_col, y=args.y_col, t=args.t_col or None,
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         steady = (ss[args.u_col], ss[args.y_col])
-        ident.fit(data, steady_state=steady)
+        _fit_two(ident, data, steady)
         written = model_set is None or write_model_set(
             model_set, ident.linear_, [cli_terms(a) for a in ident.assumptions_], args.force)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
@@ -146,6 +146,22 @@ def _two_records(args) -> int:
         path = write_report(ident, *steady, data.u, data.y, report_dir, overwrite=args.force)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
     return 0 if written else 1
+
+
+def _fit_two(ident, data, steady):
+    """``ident.fit``; a stage-1 empty set names ``--steady-output-bound``, the bound of the
+    steady-state record (its message said ``output_bound``, which the command line read as
+    ``--output-bound``, the PRBS record's; trial 13)."""
+    from ...exceptions import EmptyFeasibleSetError
+
+    try:
+        ident.fit(data, steady_state=steady)
+    except EmptyFeasibleSetError as exc:
+        if exc.side is None:
+            raise
+        raise EmptyFeasibleSetError(
+            str(exc).replace("output_bound", "--steady-output-bound"), side=exc.side,
+            first_index=exc.first_index, relaxation=exc.relaxation) from exc
 
 
 def _record(args, ident, data, output_bound, steady_bound, assumed, tf) -> dict:

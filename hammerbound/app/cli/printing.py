@@ -7,30 +7,10 @@ import json
 
 import numpy as np
 
-from ...tables import dt_text
+from ...tables import dt_text, poly_z
 
 __all__ = ["assumption_lines", "data_fields", "dt_text", "poly_z", "record_line",
            "transfer_function"]
-
-
-def poly_z(coefs) -> str:
-    """``[0.75, -0.28]`` -> ``"0.75 z - 0.28"`` (descending powers of z)."""
-    c = np.trim_zeros(np.asarray(coefs, dtype=float), "f")
-    if c.size == 0:
-        return "0"
-    terms = []
-    for k, v in enumerate(c):
-        p = c.size - 1 - k
-        if v == 0:
-            continue
-        mag = abs(v)
-        num = "" if (mag == 1 and p > 0) else f"{mag:.4g}"
-        zp = "" if p == 0 else ("z" if p == 1 else f"z^{p}")
-        term = " ".join(t for t in (num, zp) if t)
-        sign = "-" if v < 0 else "+"
-        terms.append(term if not terms and v > 0 else f"{sign} {term}" if terms
-                     else f"-{term}")
-    return " ".join(terms)
 
 
 def transfer_function(linear, dt):

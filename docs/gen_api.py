@@ -31,7 +31,8 @@ PUBLIC_METHODS = ("fit", "predict", "score", "contains", "transform", "inner_sig
                   "output_envelope", "simulate", "plot", "linear_range", "boundary_mc",
                   "summary", "to_dict", "to_frame", "save", "write", "to_transfer_functions",
                   "frequency_response_bounds", "uncertainty_weight", "sample",
-                  "denominators_stable", "theta_of", "method_label", "from_csv", "to_csv")
+                  "denominators_stable", "theta_of", "method_label", "from_csv", "to_csv",
+                  "inverse", "compensate", "compensator", "error_bounds", "step", "refine")
 
 
 def _own_method(cls, name):

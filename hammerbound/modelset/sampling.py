@@ -41,6 +41,7 @@ import numpy as np
 from ..exceptions import ParameterValidationError, SolverError
 from ..relaxations.problem import check_theta
 from ..relaxations.witness import WitnessLP, seek_feasible
+from ..systems.models import GAMMA_NAMES
 
 __all__ = ["BacklashSamples", "CertifiedSamples", "sample_backlash", "sample_eiv"]
 
@@ -289,7 +290,7 @@ class BacklashSamples:
 
     gamma: np.ndarray
     max_violation: np.ndarray
-    param_names: tuple = ("m_l", "c_l", "m_r", "c_r")
+    param_names: tuple = GAMMA_NAMES  # the intervals' names (one name per concept)
 
     def __len__(self) -> int:
         return self.gamma.shape[0]

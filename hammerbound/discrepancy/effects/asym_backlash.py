@@ -26,6 +26,7 @@ is only well defined on a narrow input range.
 
 import numpy as np
 
+from ...systems.models import GAMMA_NAMES
 from .base import Effect, Param
 
 
@@ -68,4 +69,4 @@ class AsymBacklash(Effect):
         return (k * (1.0 + s), cl, k * (1.0 - s), cr)
 
     def param_label(self):
-        return "m_l,c_l,m_r,c_r"
+        return ",".join(GAMMA_NAMES)  # the identifier's names (one name per concept)

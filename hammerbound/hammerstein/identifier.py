@@ -231,7 +231,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             "u > 0 steady states on the right line, u < 0 on the left (square waves), "
             "settled: a transient left counts against the steady-state output bound",
             f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",
-            _inner_text(self.inner_signal, self.xc_, lin.problem_.input_bound),
+            _inner_text(self._inner_used(), self.xc_, lin.problem_.input_bound),
             "linear block of unit steady-state gain (22.8)",
             _theta_box_text(lin),
         )
@@ -282,6 +282,11 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "bounds_")
         return self.intervals_.to_frame()
 
+    def _inner_used(self) -> str:
+        """The inner-signal model the stage-2 bounds rest on: the LP method bounds each
+        equation's errors on their own, so its bounds rest on the per-sample bounds only."""
+        return "independent" if self.linear_.method == "lp" else self.inner_signal
+
     def summary(self) -> str:
         """Text summary: the procedure and its settings, the interval table (and, for one
         record, the assumptions the bounds rest on)."""
@@ -305,9 +310,9 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                 f"{inner}, N = {pr.N}, dt = {dt}\n"
                 f"assumptions: output error bounds |eta| <= "
                 f"{bound_text(self.backlash_.output_bound_)} (settled steady states), "
-                f"{bound_text(pr.output_bound)} (PRBS); inner signal within the stage-1 "
-                f"bounds |dx_t| <= {bound_text(pr.input_bound)}; unit steady-state gain of "
-                f"the linear block (22.8); {_theta_box_text(lin)}")
+                f"{bound_text(pr.output_bound)} (PRBS); "
+                f"{_inner_text(self._inner_used(), self.xc_, pr.input_bound)}; unit "
+                f"steady-state gain of the linear block (22.8); {_theta_box_text(lin)}")
         return self.intervals_.summary(title=head)
 
     @property

@@ -234,12 +234,20 @@ def test_the_two_level_assumption_names_the_levels_not_samples():
     bound, which is one unknown value per PRBS level."""
     ex = hb.chapter_example(0.02, N=80)
     said = {}
-    for inner in ("independent", "two-level"):
+    for inner, method in (("independent", "exact"), ("two-level", "exact"),
+                          ("two-level", "lp")):
         idf = hb.HammersteinBacklashIdentifier(
             hb.BacklashSetEstimator(0.02),
-            hb.LinearEIVSetEstimator(output_bound=0.02, method="lp"),
+            hb.LinearEIVSetEstimator(output_bound=0.02, method=method),
             inner_signal=inner).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
-        said[inner] = next(a for a in idf.assumptions_ if a.startswith("inner signal"))
-    assert "two unknown levels" in said["two-level"] and "per sample" not in said["two-level"]
-    assert "(u = +u*)" in said["two-level"] and "(u = -u*)" in said["two-level"]
-    assert said["independent"].startswith("inner signal within the stage-1 bounds |dx_t|")
+        said[inner, method] = next(a for a in idf.assumptions_
+                                   if a.startswith("inner signal"))
+        assert said[inner, method] in idf.summary()  # the summary says the same
+    two = said["two-level", "exact"]
+    assert "two unknown levels" in two and "per sample" not in two
+    assert "(u = +u*)" in two and "(u = -u*)" in two
+    per_sample = "inner signal within the stage-1 bounds |dx_t|"
+    assert said["independent", "exact"].startswith(per_sample)
+    # the LP method bounds each equation's errors on their own: its bounds rest on the
+    # per-sample bounds only
+    assert said["two-level", "lp"].startswith(per_sample)

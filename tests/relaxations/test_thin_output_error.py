@@ -119,3 +119,17 @@ def test_a_margin_of_first_order_plants_is_not_lost_to_presolve(seed):
     data = eiv_data(y, u, 0.0, 0.02, 1, 1)
     s, b = a_margin(hb.EIVProblem(**data), [-0.7])
     assert s >= 0 and explains(data, np.r_[-0.7, b])
+
+
+def test_seek_a_gets_a_share_of_the_time_left():
+    """seek_a's LPs are of the full record; a search that finds nothing may take only a
+    part of the time left (SEEK_A_SHARE), not the ends' time."""
+    import time
+
+    from hammerbound.relaxations.exact.bnb import SEEK_A_SHARE, _share
+
+    now = time.time()
+    got = _share(now + 100.0, SEEK_A_SHARE)
+    assert now + 100.0 * SEEK_A_SHARE - 1.0 <= got <= now + 100.0 * SEEK_A_SHARE + 1.0
+    assert _share(None, SEEK_A_SHARE) is None
+    assert _share(now - 5.0, SEEK_A_SHARE) <= time.time()

@@ -99,6 +99,21 @@ def _perf_deadline(deadline):
     return None if deadline is None else time.perf_counter() + (deadline - time.time())
 
 
+#: the part of the time left that :func:`.points.seek_a` may take (each of its LPs is one
+#: of the full record: 0.2 s at N = 2000, so a search that finds nothing could otherwise
+#: take the ends' time)
+SEEK_A_SHARE = 0.25
+
+
+def _share(deadline, part):
+    """A :func:`time.time` deadline ``part`` of the way from now to ``deadline`` (None:
+    None)."""
+    if deadline is None:
+        return None
+    now = time.time()
+    return now + part * max(0.0, deadline - now)
+
+
 def verified_points(problem, box, roots, thetas, ws=None, deadline=None) -> list:
     """The first verified-feasible points of (22.34) inside the OBBT ``box``: the OBBT LP
     points ``thetas`` (and their mean and the box centre, on the gain plane) that pass
@@ -124,7 +139,7 @@ def verified_points(problem, box, roots, thetas, ws=None, deadline=None) -> list
         restore(pool, [(x[:p], x[p : p + n], x[p + n : p + n + kg]) for x in xs], box,
                 stop_at=_perf_deadline(deadline))
     if not pool.points and time_left() and not problem.has_input_errors:
-        seek_a(problem, starts[-1], box, pool.verify, deadline=deadline)
+        seek_a(problem, starts[-1], box, pool.verify, deadline=_share(deadline, SEEK_A_SHARE))
     if not pool.points and time_left():
         pool.seek(starts, box, deadline=deadline)
     return pool.points

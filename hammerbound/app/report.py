@@ -130,6 +130,9 @@ class IdentificationReport(Result):
 
         ident = self.ident
         lines = ["## Assumptions", "", *[f"- {a}" for a in ident.assumptions_], ""]
+        if not np.all(np.isfinite(ident.linear_.bounds_)):
+            return lines + ["Central model: not given (a linear-block interval is "
+                            "infinite).", ""]
         tf = ident.linear_.to_transfer_function()
         num, den = np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])
         unit = getattr(ident.linear_, "time_unit_", "")

@@ -7,7 +7,8 @@ of every model in them
 (:meth:`~hammerbound.LinearEIVSetEstimator.frequency_response_bounds`, at its listed
 frequencies) and certified multiplicative and additive uncertainty weights around the
 central model (:meth:`~hammerbound.LinearEIVSetEstimator.uncertainty_weight`, at every
-frequency; ``null`` with the reason where none exists); with a gain constraint (the
+frequency; ``null``, with its own reason in ``no_weight``, where none exists); with a
+gain constraint (the
 Hammerstein identifier's unit gain (22.8), or ``eiv --steady-state-gain``) the same again
 on the gain plane, which every feasible model satisfies and the box alone does not
 express. The path is checked before any work; an existing file is kept unless ``--force``
@@ -16,7 +17,6 @@ express. The path is checked before any work; an existing file is kept unless ``
 
 from __future__ import annotations
 
-import os
 import warnings
 
 import numpy as np
@@ -49,22 +49,17 @@ def check_model_set(args):
     return check_output_file(path, force=args.force, option=OPTION)
 
 
-def _weight(lin, kind, on_gain_plane):
-    try:
-        return lin.uncertainty_weight(kind, on_gain_plane=on_gain_plane).to_dict()
-    except UnboundedSetError:
-        return None
-
-
 def _sets(lin, on_gain_plane) -> dict:
     env = lin.frequency_response_bounds(on_gain_plane=on_gain_plane)
-    weights = {kind: _weight(lin, kind, on_gain_plane)
-               for kind in ("multiplicative", "additive")}
+    weights, why = {}, {}
+    for kind in ("multiplicative", "additive"):
+        try:
+            weights[kind] = lin.uncertainty_weight(kind, on_gain_plane=on_gain_plane).to_dict()
+        except UnboundedSetError as exc:  # no finite weight of this kind: its own reason
+            weights[kind], why[kind] = None, str(exc)
     out = {"frequency_envelope": env.to_dict(), "uncertainty_weights": weights}
-    if None in weights.values():
-        out["no_weight"] = ("no finite weight exists: some A in the parameter box vanishes "
-                            "on the unit circle (an interval of the a_i reaches the "
-                            "stability limit)")
+    if why:
+        out["no_weight"] = why
     return out
 
 
@@ -82,7 +77,7 @@ def write_model_set(path, lin, assumptions, force=False) -> bool:
     """Write the model set of the fitted linear block ``lin`` to ``path``; False, with a
     warning and no file, when an interval is infinite or the set cannot be computed or
     written (the identification's results are printed either way). Without ``force`` a file
-    that appeared since the check is kept; with it the file is replaced in one step."""
+    that appeared since the check is kept."""
     from .printing import json_text
 
     def fail(why):
@@ -93,13 +88,8 @@ def write_model_set(path, lin, assumptions, force=False) -> bool:
         return fail("an interval of the linear block is infinite (see the warnings before).")
     try:
         text = json_text(_document(lin, assumptions)) + "\n"
-        if force:
-            tmp = path.with_name(path.name + ".part")
-            tmp.write_text(text)
-            os.replace(tmp, path)
-        else:
-            with open(path, "x") as f:
-                f.write(text)
+        with open(path, "w" if force else "x") as f:  # "w": through a link, mode kept
+            f.write(text)
     except FileExistsError:
         return fail("the file appeared while the fit ran; pass --force to replace it.")
     except (HammerboundError, OSError) as exc:

@@ -119,7 +119,8 @@ class UncertaintyWeight(Result):
         num = np.ravel(np.asarray(self.W.num[0][0], dtype=float))
         den = np.ravel(np.asarray(self.W.den[0][0], dtype=float))
         g0 = {"num": np.ravel(np.asarray(self.central.num[0][0], dtype=float)),
-              "den": np.ravel(np.asarray(self.central.den[0][0], dtype=float))}
+              "den": np.ravel(np.asarray(self.central.den[0][0], dtype=float)),
+              "variable": "z"}
         return jsonable({
             "kind": self.kind, "order": self.order, "num": num, "den": den, "central": g0,
             "dt": None if self.W.dt is True else self.W.dt,

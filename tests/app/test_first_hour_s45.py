@@ -243,9 +243,10 @@ def test_the_two_level_assumption_names_the_levels_not_samples():
         said[inner, method] = next(a for a in idf.assumptions_
                                    if a.startswith("inner signal"))
         assert said[inner, method] in idf.summary()  # the summary says the same
+        up, down = (float(np.max(idf.dx_ * (sign * ex.prbs.u > 0))) for sign in (1, -1))
     two = said["two-level", "exact"]
     assert "two unknown levels" in two and "per sample" not in two
-    assert "(u = +u*)" in two and "(u = -u*)" in two
+    assert f"|dx| <= {up:.4g} (u = +u*) and {down:.4g} (u = -u*)" in two  # which is which
     per_sample = "inner signal within the stage-1 bounds |dx_t|"
     assert said["independent", "exact"].startswith(per_sample)
     # the LP method bounds each equation's errors on their own: its bounds rest on the

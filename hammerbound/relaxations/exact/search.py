@@ -133,7 +133,7 @@ def search_end(problem, box0, k, sense, points, root, tol, max_nodes, time_limit
     if progress:
         s.bar = _GapBar(f"{problem.param_names[k]} {'min' if sense > 0 else 'max'}",
                         position, min(s.ub, s.top) - s.end0, stop_at,
-                        1.0 if to_data is None else float(to_data[k]))
+                        1.0 if to_data is None else float(to_data[k]), t0=t0)
     s.run()
     return s.result(t0, by_budget)
 

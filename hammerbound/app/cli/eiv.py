@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..paths import add_force_option
 from .console import cli_terms, recorded_warnings
-from .model_set import add_model_set_option, check_model_set, write_model_set
+from .model_set import add_model_set_option, check_model_set, exit_status, write_model_set
 from .options import (
     CLI_NAMES,
     add_bound_options,
@@ -73,7 +73,7 @@ def run(args) -> int:
         data = IOData.from_csv(args.data, u=args.u_col, y=args.y_col, t=args.t_col or None,
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         est.fit(data, input_bound=input_bound)
-        written = model_set is None or write_model_set(
+        written = write_model_set(
             model_set, est, [cli_terms(a) for a in assumption_list(est, est.problem_)],
             args.force)
     tf_text, tf = transfer_function(est, data.dt)
@@ -89,13 +89,13 @@ def run(args) -> int:
                      "input_bound": input_bound, "output_bound": output_bound},
             "assumed": assumed,
             "transfer_function": tf,
-            "model_set": str(model_set) if model_set is not None and written else None,
+            "model_set": written,
             "warnings": seen,
         }
         print(json_text(out))
-        return 0 if written else 1
+        return exit_status(model_set, written)
     print(record_line(args.data, data))
     print("\n".join(assumption_lines(given, assumed)))
     print(cli_terms(est.summary()))
     print(tf_text)
-    return 0 if written else 1
+    return exit_status(model_set, written)

@@ -7,7 +7,7 @@ import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir
 from .console import cli_terms, recorded_warnings
-from .model_set import add_model_set_option, check_model_set, write_model_set
+from .model_set import add_model_set_option, check_model_set, exit_status, write_model_set
 from .options import (
     CLI_NAMES,
     UsageError,
@@ -125,13 +125,13 @@ def _two_records(args) -> int:
                                dt=args.dt, delimiter=args.delimiter, argument_names=CLI_NAMES)
         steady = (ss[args.u_col], ss[args.y_col])
         _fit_two(ident, data, steady)
-        written = model_set is None or write_model_set(
+        written = write_model_set(
             model_set, ident.linear_, [cli_terms(a) for a in ident.assumptions_], args.force)
     tf_text, tf = transfer_function(ident.linear_, ident.dt_)
     if args.json:
         out = _record(args, ident, data, output_bound, steady_bound, assumed, tf)
         out["model"]["theta_box"] = box_json
-        out["model_set"] = str(model_set) if model_set is not None and written else None
+        out["model_set"] = written
         out["warnings"] = seen
         print(json_text(out))
     else:
@@ -145,7 +145,7 @@ def _two_records(args) -> int:
 
         path = write_report(ident, *steady, data.u, data.y, report_dir, overwrite=args.force)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
-    return 0 if written else 1
+    return exit_status(model_set, written)
 
 
 def _fit_two(ident, data, steady):

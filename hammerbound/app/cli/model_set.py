@@ -24,7 +24,7 @@ import numpy as np
 from ...exceptions import HammerboundError, UnboundedSetError
 from ..paths import check_output_file
 
-__all__ = ["add_model_set_option", "check_model_set", "write_model_set"]
+__all__ = ["add_model_set_option", "check_model_set", "exit_status", "write_model_set"]
 
 OPTION = "--model-set"
 WHAT = ("every model B(q^-1)/A(q^-1) whose parameters lie in the intervals below, under the "
@@ -73,16 +73,25 @@ def _document(lin, assumptions) -> dict:
     return doc
 
 
-def write_model_set(path, lin, assumptions, force=False) -> bool:
-    """Write the model set of the fitted linear block ``lin`` to ``path``; False, with a
-    warning and no file, when an interval is infinite or the set cannot be computed or
-    written (the identification's results are printed either way). Without ``force`` a file
-    that appeared since the check is kept."""
+def exit_status(path, written) -> int:
+    """The command's exit status: 1 when ``--model-set`` was asked for (``path``) and no
+    file was written, else 0."""
+    return 1 if path is not None and written is None else 0
+
+
+def write_model_set(path, lin, assumptions, force=False) -> str | None:
+    """Write the model set of the fitted linear block ``lin`` to ``path`` (the checked
+    ``--model-set`` path, or None: nothing to write) and return it as text (the JSON
+    output's ``"model_set"``); None, with a warning and no file, when an interval is
+    infinite or the set cannot be computed or written (the identification's results are
+    printed either way). Without ``force`` a file that appeared since the check is kept."""
     from .printing import json_text
 
     def fail(why):
         warnings.warn(f"no model set written to {path}: {why}", UserWarning, stacklevel=3)
-        return False
+
+    if path is None:
+        return None
 
     if not np.all(np.isfinite(lin.bounds_)):
         return fail("an interval of the linear block is infinite (see the warnings before).")
@@ -94,4 +103,4 @@ def write_model_set(path, lin, assumptions, force=False) -> bool:
         return fail("the file appeared while the fit ran; pass --force to replace it.")
     except (HammerboundError, OSError) as exc:
         return fail(f"{type(exc).__name__}: {exc}")
-    return True
+    return str(path)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .console import cli_terms, recorded_warnings
-from .model_set import check_model_set, write_model_set
+from .model_set import check_model_set, exit_status, write_model_set
 from .options import CLI_NAMES, UsageError, require, stage2_kwargs
 from .printing import assumption_lines, data_fields, json_text, record_line, transfer_function
 
@@ -45,7 +45,7 @@ def run_one_record(args) -> int:
                                          output_bound=output_bound, **stage2_kwargs(args)),
             procedure="one-record", gamma_box=_gamma_box(args))
         ident.fit(data, steady_state=steady)
-        written = model_set is None or write_model_set(
+        written = write_model_set(
             model_set, ident.linear_, [cli_terms(a) for a in ident.assumptions_], args.force)
     given = [f"output error bound {output_bound:g} (--output-bound)"]
     # the linear block's central model needs only its own intervals finite (a backlash end
@@ -56,16 +56,15 @@ def run_one_record(args) -> int:
                          None))
     if args.json:
         print(json_text({**_record(args, ident, data, output_bound, tf),
-                         "model_set": str(model_set) if model_set is not None and written
-                         else None, "warnings": seen}))
-        return 0 if written else 1
+                         "model_set": written, "warnings": seen}))
+        return exit_status(model_set, written)
     print("record " + record_line(args.record, data))
     if steady is not None:
         print(f"steady-state points {args.steady}: {steady[0].size}, used jointly")
     print("\n".join(assumption_lines(given, [])))
     print(cli_terms(ident.summary()))
     print(tf_text)
-    return 0 if written else 1
+    return exit_status(model_set, written)
 
 
 def _read(args):

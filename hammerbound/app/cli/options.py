@@ -134,12 +134,12 @@ def theta_box_row(text):
     return name.strip(), row
 
 
-def seconds(text, *, none=False):
-    """A number of seconds >= 0 (``inf`` allowed; with ``none``, ``none`` means ``inf``):
-    a negative or NaN limit was accepted and the fit returned the a priori box (trial 11).
-    The limits of the command line take :func:`budget`."""
+def budget(text):
+    """``--total-time-limit``, ``--time-limit``: a number of seconds >= 0, ``inf`` or
+    ``none`` for no limit (a negative or NaN limit was accepted and the fit returned the a
+    priori box, trial 11)."""
     word = str(text).strip().lower()
-    if none and word == "none":
+    if word == "none":
         return np.inf
     try:
         value = float(word)
@@ -147,15 +147,9 @@ def seconds(text, *, none=False):
         value = np.nan
     if not value >= 0:  # also NaN
         raise argparse.ArgumentTypeError(
-            "must be a number of seconds >= 0" + (", or inf (or none) for no limit"
-                                                  if none else "") + f"; got {text!r}")
+            "must be a number of seconds >= 0, or inf (or none) for no limit; "
+            f"got {text!r}")
     return value
-
-
-def budget(text):
-    """``--total-time-limit``, ``--time-limit``: :func:`seconds`, ``none`` or ``inf`` for
-    no limit."""
-    return seconds(text, none=True)
 
 
 def add_stage2_options(p, method="exact", *, inner_signal=False, theta_box=True):

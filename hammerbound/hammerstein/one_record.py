@@ -30,6 +30,7 @@ from ..exceptions import (
 from ..joint import (
     ASSUMED_LIMIT_RTOL,
     GAMMA_NAMES,
+    LIMIT_RTOL,
     GammaPrior,
     RecordProblem,
     at_prior_limit,
@@ -178,7 +179,7 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     found = unidentified(problem.u, GAMMA_NAMES, gb, prior.box, prior.assumed(),
                          stopped_by_time=stopped_by_time, lps_stopped=lps_stopped,
                          method=method,
-                         rtol=1e-6 if prior.user_given else ASSUMED_LIMIT_RTOL)
+                         rtol=LIMIT_RTOL if prior.user_given else ASSUMED_LIMIT_RTOL)
     if not found:
         return gb, ()
     for name, _cause in found:
@@ -299,12 +300,16 @@ def _at_assumed_limit(problem, prior):
     return skip
 
 
+def _record_gain(problem) -> float:
+    """The record's least-squares gain (input -> output, the model's orders)."""
+    return record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
+                       b_lags_of(problem.nb, problem.nk))
+
+
 def _with_gain_sign(exc, problem):
     """``exc`` again, with the hint of a reverse-acting plant when the record's
     least-squares gain (input -> output, the model's orders) is negative."""
-    gain = record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
-                       b_lags_of(problem.nb, problem.nk))
-    hint = negative_gain_hint(gain)
+    hint = negative_gain_hint(_record_gain(problem))
     if not hint:
         return exc
     return EmptyFeasibleSetError(f"{exc} {hint}", side=exc.side, first_index=exc.first_index,
@@ -321,8 +326,7 @@ def _warn_gain_sign(problem, res):
     d = res.details
     if d is None or not d.stopped_by_time or any(i.witness is not None for i in res.infos):
         return
-    gain = record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
-                       b_lags_of(problem.nb, problem.nk))
+    gain = _record_gain(problem)
     if gain < 0:
         warnings.warn(
             f"the time limit stopped the search before it found a point of the set or "

@@ -21,6 +21,7 @@ steady-state data).
 from .bounds import record_bounds
 from .prior import (
     ASSUMED_LIMIT_RTOL,
+    LIMIT_RTOL,
     GammaPrior,
     at_prior_limit,
     default_gamma_box,
@@ -34,6 +35,7 @@ __all__ = [
     "ASSUMED_LIMIT_RTOL",
     "GAMMA_NAMES",
     "GammaPrior",
+    "LIMIT_RTOL",
     "RecordProblem",
     "Witness",
     "at_prior_limit",

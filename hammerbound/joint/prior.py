@@ -27,8 +27,8 @@ import numpy as np
 from ..exceptions import DataValidationError
 from .modes import band_range
 
-__all__ = ["ASSUMED_LIMIT_RTOL", "GammaPrior", "at_prior_limit", "default_gamma_box", "record_box",
-           "reversal_summary", "unidentified"]
+__all__ = ["ASSUMED_LIMIT_RTOL", "LIMIT_RTOL", "GammaPrior", "at_prior_limit",
+           "default_gamma_box", "record_box", "reversal_summary", "unidentified"]
 
 DEFAULT_B_BOUND = 1.0e4
 M_FACTOR = 1.0e2
@@ -78,9 +78,11 @@ def reversal_summary(u) -> dict:
 #: finite bound of the relaxation, though it came from ``b2 <= 1e4`` through the gain
 #: equality, and the warning said b1 was not bounded.
 ASSUMED_LIMIT_RTOL = 1e-3
+#: ... and of any other a priori limit (one the user gave, or the model's own)
+LIMIT_RTOL = 1e-6
 
 
-def at_prior_limit(bound, prior, i, j, rtol=1e-6) -> bool:
+def at_prior_limit(bound, prior, i, j, rtol=LIMIT_RTOL) -> bool:
     """Whether ``bound`` sits at the a priori limit ``prior[i, j]``: within ``rtol`` of
     the limit's magnitude or of the row's width, whichever is larger (relative, so the
     units of the record do not matter: an absolute ``1e-6`` took every identified end of a
@@ -91,7 +93,7 @@ def at_prior_limit(bound, prior, i, j, rtol=1e-6) -> bool:
 
 
 def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps_stopped=0,
-                 method="exact", rtol=1e-6) -> list[tuple[str, str]]:
+                 method="exact", rtol=LIMIT_RTOL) -> list[tuple[str, str]]:
     """``(name, cause)`` of every interval end stuck at an *assumed* a priori limit.
 
     ``bounds`` and ``prior`` have rows ``names``; ``assumed`` is a boolean (rows, 2)

@@ -165,12 +165,11 @@ class FrequencyEnvelope(Result):
         """
         from ..data.validation import as_real
 
-        rtol = as_real("rtol", rtol, lo=None, want="rtol must be a finite number >= 0 (it "
-                       "widens the bounds; a negative one would narrow them)")
+        want = ("rtol must be a finite number >= 0 (it widens the bounds; a negative one "
+                "would narrow them)")
+        rtol = as_real("rtol", rtol, want=want)
         if rtol < 0:
-            raise ParameterValidationError(
-                f"rtol must be a finite number >= 0 (it widens the bounds; a negative one "
-                f"would narrow them); got {rtol!r}.")
+            raise ParameterValidationError(f"{want}; got {rtol!r}.")
         r = np.asarray(self._response_of(response), dtype=complex)
         mag = np.abs(r)
         ok = (mag >= self.mag_lower * (1 - rtol)) & (mag <= self.mag_upper * (1 + rtol))

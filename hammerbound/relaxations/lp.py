@@ -211,8 +211,9 @@ def raise_if_box_limited(bounds, box, names, stopped=()) -> None:
     ends = [lab for _, lab in box_limited_ends(bounds, box, names)]
     if not ends:
         return
-    cut = [lab for lab in ends if lab in set(stopped)]
-    data = [lab for lab in ends if lab not in set(stopped)]
+    stopped = set(stopped)
+    cut = [lab for lab in ends if lab in stopped]
+    data = [lab for lab in ends if lab not in stopped]
     parts = []
     if data:
         parts.append("the data do not bound " + ", ".join(data) + " inside the a priori "

@@ -91,6 +91,18 @@ def test_a_margin_is_nonnegative_exactly_on_the_set():
     assert s_off < 0
 
 
+def test_a_margin_stops_at_its_deadline():
+    """seek_a checks its deadline between LPs; each LP also stops at it (a record's LP
+    could overrun the fit's time by its own length): a passed deadline gives no margin
+    (-inf, never a wrong one) where the same LP without it finds the true a's."""
+    import time
+
+    pr, _ = _long_record()
+    assert a_margin(pr, [-1.2, 0.5])[0] >= 0
+    s, b = a_margin(pr, [-1.2, 0.5], deadline=time.time() - 1.0)
+    assert s == -np.inf and b is None
+
+
 def test_seek_a_finds_a_first_point_of_a_long_output_error_record():
     """From the centre of the LP box (not in the set), the search over a alone finds a
     point that check_theta verifies and the tests' own LP confirms."""

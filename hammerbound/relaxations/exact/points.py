@@ -168,11 +168,12 @@ class _Pool:
 B_FOR_A_MARGIN = 1e-7
 
 
-def _fixed_a_lp(problem: EIVProblem, a, cost_b, cost_s, s_range):
+def _fixed_a_lp(problem: EIVProblem, a, cost_b, cost_s, s_range, deadline=None):
     """The LP at fixed ``a`` (no input errors): variables ``[b (nb), eta (N), s]`` with
     ``M(a) eta - phi_b b = yt + phi_a a`` (and the gain row), ``|eta| <= deta (1 - s)``,
     ``b`` in the a priori box, ``s`` in ``s_range``; minimises ``cost_b . b + cost_s s``.
-    Returns scipy's result."""
+    Returns scipy's result; an LP that reaches ``deadline`` (:func:`time.time`) stops
+    with a nonzero status."""
     from scipy.optimize import linprog
 
     pr = problem
@@ -196,10 +197,17 @@ def _fixed_a_lp(problem: EIVProblem, a, cost_b, cost_s, s_range):
     bounds = [tuple(r) for r in pr.theta_box[na:]] + [(None, None)] * n + [tuple(s_range)]
     kw = dict(A_ub=a_ub, b_ub=b_ub, A_eq=a_eq.tocsr(), b_eq=b_eq, bounds=bounds,
               method="highs")
-    res = linprog(c, **kw)
+    res = linprog(c, **kw, options=_time_option(deadline))
     if res.status == 4:  # HiGHS's presolve often ends "not set" on these LPs (review)
-        res = linprog(c, **kw, options={"presolve": False})
+        res = linprog(c, **kw, options={"presolve": False, **_time_option(deadline)})
     return res
+
+
+def _time_option(deadline):
+    """linprog's ``time_limit`` for an LP that must end by ``deadline`` (none: {})."""
+    if deadline is None:
+        return {}
+    return {"time_limit": max(deadline - time.time(), 1e-3)}
 
 
 def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | None:
@@ -221,13 +229,13 @@ def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | No
     return res.x[:nb].copy() if res.status == 0 else None
 
 
-def a_margin(problem: EIVProblem, a) -> tuple[float, np.ndarray | None]:
+def a_margin(problem: EIVProblem, a, deadline=None) -> tuple[float, np.ndarray | None]:
     """``(s, b)``: the largest ``s`` such that, with ``A`` fixed to ``a``, some ``b`` in the
     a priori box explains the data with every output error within ``(1 - s)`` of its bound
     (no input errors; one LP). ``s >= 0`` exactly when ``a`` is the ``a`` of a point of
-    the set; ``(-inf, None)`` if the LP fails."""
+    the set; ``(-inf, None)`` if the LP fails or reaches ``deadline``."""
     nb = problem.p - problem.na
-    res = _fixed_a_lp(problem, a, np.zeros(nb), -1.0, (None, 0.5))
+    res = _fixed_a_lp(problem, a, np.zeros(nb), -1.0, (None, 0.5), deadline)
     if res.status != 0:
         return -np.inf, None
     return float(res.x[-1]), res.x[:nb].copy()
@@ -263,7 +271,7 @@ def seek_a(problem: EIVProblem, start, box, verify, max_evals=SEEK_A_EVALS, dead
         if deadline is not None and time.time() > deadline:
             raise _Done
         a = np.clip(a, lo, hi)
-        s, b = a_margin(problem, a)
+        s, b = a_margin(problem, a, deadline)
         if s >= B_FOR_A_MARGIN:
             pt = verify(np.r_[a, b])
             if pt is not None:

@@ -209,22 +209,30 @@ def raise_if_box_limited(bounds, box, names, stopped=()) -> None:
     ``stopped``: labels (``"name lower"``) of ends that a time or node limit stopped; at
     the box those are not the data's answer, and the message says so."""
     ends = [lab for _, lab in box_limited_ends(bounds, box, names)]
-    if not ends:
-        return
+    if ends:
+        raise UnboundedSetError(box_limit_message(ends, stopped))
+
+
+def box_limit_message(ends, stopped=(), where="inside the a priori theta_box",
+                      advice="a tighter theta_box") -> str:
+    """Why the interval ends ``ends`` (labels ``"name lower"``) sit at their a priori box
+    (``where``): the data's answer, or, for the labels in ``stopped``, a search that a
+    limit stopped, whose answer is not known. ``advice`` completes "supply more (or more
+    exciting) data or ...". One text for :func:`raise_if_box_limited` and the estimator's
+    check of the default ``b_j`` box (:func:`hammerbound.stage2.fitting.check_box`)."""
     stopped = set(stopped)
     cut = [lab for lab in ends if lab in stopped]
     data = [lab for lab in ends if lab not in stopped]
     parts = []
     if data:
-        parts.append("the data do not bound " + ", ".join(data) + " inside the a priori "
-                     "theta_box; supply more (or more exciting) data or a tighter theta_box")
+        parts.append(f"the data do not bound {', '.join(data)} {where}; supply more (or "
+                     f"more exciting) data or {advice}")
     if cut:
-        parts.append("no bound on " + ", ".join(cut) + " inside the a priori theta_box: "
-                     "the search stopped there (a time or node limit, or a crash that a "
-                     "warning names), so whether the data bound it is not known; if a "
-                     "limit stopped it, give the search more time (total_time_limit, "
-                     "time_limit, max_nodes)")
-    raise UnboundedSetError("; ".join(parts) + ".")
+        parts.append(f"no bound on {', '.join(cut)} {where}: the search stopped there (a "
+                     "time or node limit, or a crash that a warning names), so whether the "
+                     "data bound it is not known; if a limit stopped it, give the search "
+                     "more time (total_time_limit, time_limit, max_nodes)")
+    return "; ".join(parts) + "."
 
 
 def lp_bounds(problem: EIVProblem, n_jobs: int = 1, *, check_box: bool = True) -> IntervalResult:

@@ -235,27 +235,18 @@ def check_box(est, problem, res):
     (the user's prior). The default box on ``b`` (``|b_j| <= 1e4``) is arbitrary:
     touching it means the data do not bound that coefficient, which is an error.
     """
-    from ..relaxations.lp import box_limited_ends
+    from ..relaxations.lp import box_limit_message, box_limited_ends
 
     ends = box_limited_ends(res.bounds, problem.theta_box, problem.param_names)
     given = given_rows(est.theta_box, problem.na, problem.nb, problem.nk)
-    if not given[problem.na:].all():
-        bad = [lab for k, lab in ends if k >= problem.na and not given[k]]
-        stopped = {f"{i.param} {i.end}" for i in res.infos if i.status == "limit"}
-        if bad and stopped.issuperset(bad):
-            # a limit stopped those ends at their LP bound: the data may bound them
-            raise UnboundedSetError(
-                "no bound on " + ", ".join(bad) + " below the default box |b_j| <= 1e4: "
-                "the search stopped (time or node limit) at the polytopic LP's bound "
-                "there, so whether the data bound it is not known. Give the fit more time "
-                "(total_time_limit, time_limit, max_nodes); if it still reaches the box, "
-                "supply more (or more exciting) data or a theta_box with prior knowledge.")
-        if bad:
-            raise UnboundedSetError(
-                "the data do not bound " + ", ".join(bad) + ": the bound reached the "
-                "default box |b_j| <= 1e4. Supply more (or more exciting) data, a "
-                "smaller output_bound if justified, or a theta_box with prior knowledge."
-            )
+    bad = [lab for k, lab in ends if k >= problem.na and not given[k]]
+    if bad:
+        stopped = [f"{i.param} {i.end}" for i in res.infos if i.status == "limit"]
+        raise UnboundedSetError(box_limit_message(
+            bad, stopped, where="below the default box |b_j| <= 1e4",
+            advice="a smaller output_bound if justified, or a theta_box with prior "
+                   "knowledge"))
+
 
 def warn_limits(res, stacklevel=4):
     """Warn, naming the interval ends, when a search stopped at a node/time limit."""

@@ -315,7 +315,8 @@ def test_a_b_end_a_limit_left_at_the_box_is_not_blamed_on_the_data():
     x = rng.uniform(-1, 1, 30)
     y = lfilter([0.0, 0.5], [1.0, -0.5], x) + 0.3 * rng.uniform(-1, 1, 30)
     kw = dict(na=1, nb=1, output_bound=0.3, theta_box={"a1": (-0.99, 0.99)})
-    with pytest.raises(UnboundedSetError, match=r"the search stopped \(time or node limit\)"
+    with pytest.raises(UnboundedSetError, match=r"b1 lower, b1 upper below the default box"
+                                                r".*the search stopped there"
                                                 r".*whether the data bound it is not known"):
         hb.LinearEIVSetEstimator(method="exact", total_time_limit=0.0, **kw).fit(
             x, y, input_bound=1.0)
@@ -336,3 +337,26 @@ def test_exact_bounds_check_box_does_not_blame_the_data_for_a_stopped_end():
     with pytest.raises(UnboundedSetError, match=r"no bound on .*b1 upper.*the search stopped"
                                                 r".*whether the data bound it is not known"):
         exact_bounds(pr, total_time_limit=0.0)
+
+
+def test_the_default_b_box_check_blames_the_data_only_for_ends_not_stopped():
+    """Of two b ends at the default box, one stopped by a limit and one that the search
+    finished, only the finished one is said to be unbounded by the data (the estimator's
+    check said "the data do not bound" both as soon as one end was not stopped)."""
+    from types import SimpleNamespace
+
+    from hammerbound.stage2.fitting import check_box
+
+    box = np.array([[-0.99, 0.99], [-1e4, 1e4]])
+    problem = SimpleNamespace(theta_box=box, param_names=["a1", "b1"], na=1, nb=1, nk=1)
+    infos = [SimpleNamespace(param="b1", end="lower", status="limit"),
+             SimpleNamespace(param="b1", end="upper", status="optimal")]
+    res = SimpleNamespace(bounds=np.array([[-0.5, 0.5], [-1e4, 1e4]]), infos=infos)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.3)
+    with pytest.raises(UnboundedSetError) as exc:
+        check_box(est, problem, res)
+    text = str(exc.value)
+    assert re.search(r"the data do not bound b1 upper below the default box", text)
+    assert re.search(r"no bound on b1 lower below the default box.*the search stopped",
+                     text)
+    assert "b1 lower, b1 upper" not in text

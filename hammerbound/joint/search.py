@@ -231,8 +231,13 @@ class _EndSearch:
             self.pruned = min(self.pruned, node_bound)
             return None
         r = None if res.reduced is None else res.reduced[rel.box_cols]
-        box = _rc_tighten(box, r, res.bound, self.inc.value - self.gap_tol())
-        return node_bound, x, nb, box, decisions, rel.structure
+        target = self.inc.value - self.gap_tol()
+        kept = _rc_tighten(box, r, res.bound, target)
+        if not np.array_equal(kept, box):
+            # the parts cut off are certified >= target only (not >= the incumbent): the
+            # minimum may lie there, below the incumbent (review; as stage 2's closed_lb)
+            self.pruned = min(self.pruned, target)
+        return node_bound, x, nb, kept, decisions, rel.structure
 
     def local_search(self, x):
         """A verified point from a node LP point. The searches back off geometrically

@@ -215,7 +215,7 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
             for i, (k, s) in enumerate(todo)]
     bar.start("interval end", len(args))
     labels = iter(f"{names[k]} {'min' if s > 0 else 'max'}" for k, s in todo)
-    found = iter(map_jobs(_end_job, args, n_jobs, each=lambda r: bar.done(
+    found = iter(map_jobs(_end_job, args, n_jobs, deadline=deadline, each=lambda r: bar.done(
         _end_outcome(next(labels), r, deadline))))
     bar.close()
     results = [_not_searched(box, k, s) if (k, s) in skipped else next(found)

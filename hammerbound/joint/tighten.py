@@ -11,6 +11,7 @@ record is tightened over its windows first (:mod:`.windows`).
 
 from __future__ import annotations
 
+import time
 from functools import partial
 
 import numpy as np
@@ -152,10 +153,19 @@ def workers(n_jobs, n) -> int:
     return max(1, min(effective_n_jobs(n_jobs), n))
 
 
-def map_jobs(fn, items, n_jobs, each=None):
+#: the least time left before the deadline for which :func:`map_jobs` starts worker
+#: processes (loky's took 1-3 s to start on a loaded 2-core machine)
+POOL_MIN_SECONDS = 5.0
+
+
+def map_jobs(fn, items, n_jobs, each=None, deadline=None):
     """``[fn(*a) for a in items]``, over :func:`workers` processes (joblib) when that
-    pays; ``each(result)`` is called in this process as each result arrives (in order)."""
-    procs = workers(n_jobs, len(items))
+    pays; ``each(result)`` is called in this process as each result arrives (in order).
+    With less than :data:`POOL_MIN_SECONDS` left before ``deadline`` the items run here
+    (each stops at the deadline), where starting the workers can take longer than that
+    (a fit with ``total_time_limit=0.5`` and ``n_jobs=2`` took 5 s, review)."""
+    short = deadline is not None and deadline - time.time() < POOL_MIN_SECONDS
+    procs = 1 if short else workers(n_jobs, len(items))
     if procs == 1:
         results = (fn(*a) for a in items)
     else:
@@ -233,7 +243,8 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
                 progress.line(f"partition stopped by the time limit, {len(out + queue)} "
                               "part(s) kept as they are")
             return out + queue
-        done = map_jobs(part, [(problem, b, rows, deadline) for b in queue], n_jobs)
+        done = map_jobs(part, [(problem, b, rows, deadline) for b in queue], n_jobs,
+                        deadline=deadline)
         generation += 1
         n_tightened, n_done = len(done), len(out)
         queue = []
@@ -306,7 +317,9 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
     if progress is not None:
         progress.start("leaf", len(todo))
     done = map_jobs(_leaf_obbt, [(problem, b, deadline) for b in todo], n_jobs,
-                each=None if progress is None else lambda r: progress.done(_leaf_outcome(r)))
+                    deadline=deadline,
+                    each=None if progress is None
+                    else lambda r: progress.done(_leaf_outcome(r)))
     if progress is not None:
         progress.close()
     out = []

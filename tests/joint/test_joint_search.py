@@ -31,3 +31,17 @@ def test_a_box_cut_by_reduced_costs_keeps_its_certified_bound(monkeypatch):
     assert srch.solve(kept, out[0], None, {}) is None
     assert not srch.heap
     assert srch.outer() <= target
+
+
+def test_work_near_the_deadline_starts_no_worker_processes():
+    """With less time left than starting workers takes, the items run in this process
+    (each stops at the deadline): a fit with total_time_limit=0.5 and n_jobs=2 took 5 s
+    while loky started its workers (review)."""
+    import os
+    import time
+
+    from hammerbound.joint.tighten import POOL_MIN_SECONDS, map_jobs
+
+    soon = time.time() + 0.5 * POOL_MIN_SECONDS
+    assert map_jobs(os.getpid, [(), ()], 2, deadline=soon) == [os.getpid()] * 2
+    assert map_jobs(os.getpid, [(), ()], 2, deadline=time.time() - 1.0) == [os.getpid()] * 2

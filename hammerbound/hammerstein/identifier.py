@@ -240,10 +240,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
 
     def _fit_one_record(self, bl, lin, data, steady_state, output_bound):
         from .one_record import fit_one_record, in_param_order
-        from .two_stage import steady_pair
+        from .setup import checked_steady
         from .views import BacklashBoxView, LinearBlockView, joint_samples
 
-        steady = None if steady_state is None else steady_pair(steady_state)
+        steady = checked_steady(bl, steady_state)
         f = fit_one_record(lin, data, gamma_box=self.gamma_box, steady=steady,
                            steady_bound=None if steady is None else steady_bound(bl),
                            output_bound=output_bound)

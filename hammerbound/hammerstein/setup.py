@@ -55,6 +55,19 @@ def check_bounds(bl, lin, output_bound, steady):
             "fit(..., output_bound=...)).")
 
 
+def checked_steady(bl, steady_state):
+    """The steady-state points ``(u_ss, y_ss)`` of a one-record fit, checked as stage 1
+    checks them (finite, equal lengths, no ``u = 0``, whose line is not known), or None.
+    Unchecked, a NaN gave every backlash end ``[0, inf]`` without a word and unequal
+    lengths an untyped error (review)."""
+    if steady_state is None:
+        return None
+    from .two_stage import steady_pair
+
+    us, ys, _ = bl._validate(*steady_pair(steady_state))
+    return us, ys
+
+
 def steady_bound(bl):
     """The stage-1 estimator's output bound (under its old name too, with a warning)."""
     from .._compat import renamed_value

@@ -267,3 +267,31 @@ def test_a_stopped_lp_fit_names_the_linear_ends_it_left_at_a_limit():
     assert all(p in notid for p in infinite)
     assert stopped[0].filename == __file__
     assert est.contains((1.5, 0.15, 1.4, 0.2), [-1.2, 0.5, 0.18, 0.12])
+
+
+@pytest.mark.parametrize("case", ["u=0", "lengths", "nan u", "inf y"])
+def test_steady_points_of_a_record_are_checked_as_stage_one_checks_them(case):
+    """Review: on the one-record path a steady point at u = 0 (its line unknown) was put on
+    the left line and made consistent data "empty", unequal lengths raised an untyped
+    error, and a NaN gave every backlash end [0, inf] without a word."""
+    u = np.array([0.0, 1.0, 2.0, 1.0, 0.0, -1.0, -2.0, 0.5])
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.5, 0.1, 0.5, 0.1))
+    us = np.array([1.0, -1.0, 0.0 if case == "u=0" else 2.0])
+    ys = np.where(us > 0, 0.5 * (us - 0.1), 0.5 * (us + 0.1))
+    if case == "u=0":
+        ys[2] = -0.05  # the right line's value: reached rising, consistent
+    elif case == "lengths":
+        ys = ys[:2]
+    elif case == "nan u":
+        us[0] = np.nan
+    else:
+        ys[1] = np.inf
+    ident = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(0.01), procedure="one-record",
+        linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.01, method="lp"))
+    words = {"u=0": r"= 0: steady-state inputs must be non-zero",
+             "lengths": "inconsistent numbers of samples",
+             "nan u": r"X \(steady-state inputs\) contains NaN",
+             "inf y": r"y \(steady-state outputs\) contains NaN or infinity"}[case]
+    with pytest.raises(DataValidationError, match=words):
+        ident.fit(u, y, steady_state=(us, ys))

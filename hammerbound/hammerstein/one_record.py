@@ -11,6 +11,7 @@ assumption).
 
 from __future__ import annotations
 
+import sys
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -31,6 +32,7 @@ from ..joint import (
     ASSUMED_LIMIT_RTOL,
     GAMMA_NAMES,
     LIMIT_RTOL,
+    WIDEN_FACTOR,
     GammaPrior,
     RecordProblem,
     at_prior_limit,
@@ -190,8 +192,12 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     causes = "; ".join(sorted({c for _, c in found}))
     what = ("reported as infinite (not identified)" if not prior.user_given
             else "limited only by the gamma_box you gave")
+    rests = ("" if prior.user_given else
+             "The other intervals rest on the default backlash box (in assumptions_): a "
+             "slope or dead band beyond it (e.g. a state that starts on a line far from "
+             "the record's inputs) could lie outside them. ")
     warnings.warn(f"{_lead(stopped_by_time)} {names}: {causes}. Those ends are {what}. "
-                  + _scale_hint(problem, bounds, {n for n, _ in found}, stopped_by_time)
+                  + rests + _scale_hint(problem, bounds, {n for n, _ in found}, stopped_by_time)
                   + _advice(stopped_by_time, lps_stopped, prior.user_given),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
@@ -354,16 +360,17 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     _check_length(lin, data.N, prior, steady)
     warn_bound_covers_output("HammersteinBacklashIdentifier.fit", data.output_name or "y",
                              data.y, ob, stacklevel=5)
-    problem = _problem(lin, data, prior, steady, steady_bound, ob)
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
-    try:
-        res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
-                            max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
-                            deadline=deadline, n_jobs=lin.n_jobs,
-                            skip=_at_assumed_limit(problem, prior),
-                            progress=bool(lin.progress))
-    except EmptyFeasibleSetError as exc:
-        raise _with_gain_sign(exc, problem) from exc
+    problem, res = _search(lin, data, prior, steady, steady_bound, ob, deadline)
+    rows = _limits_reached(res.bounds, problem.p, prior)
+    if rows and (deadline is None or time.time() < deadline):
+        # a default limit reached may hold up other ends (see joint.prior): once wider
+        prior = prior.widened(rows)
+        if lin.progress:
+            print(f"one-record: {', '.join(GAMMA_NAMES[i] for i in rows)} reached the "
+                  f"default backlash box; fitting again with it {WIDEN_FACTOR:g}x wider",
+                  file=sys.stderr, flush=True)
+        problem, res = _search(lin, data, prior, steady, steady_bound, ob, deadline)
     _warn_gain_sign(problem, res)
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
@@ -377,6 +384,28 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     return OneRecordFit(problem, res, prior, tb, gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,
                         time.perf_counter() - t0)
+
+
+def _search(lin, data, prior, steady, steady_bound, ob, deadline):
+    """The problem under ``prior`` and its :func:`~hammerbound.joint.record_bounds`."""
+    problem = _problem(lin, data, prior, steady, steady_bound, ob)
+    try:
+        res = record_bounds(problem, method=lin.method, tol=float(lin.tol),
+                            max_nodes=int(lin.max_nodes), time_limit=lin.time_limit,
+                            deadline=deadline, n_jobs=lin.n_jobs,
+                            skip=_at_assumed_limit(problem, prior),
+                            progress=bool(lin.progress))
+    except EmptyFeasibleSetError as exc:
+        raise _with_gain_sign(exc, problem) from exc
+    return problem, res
+
+
+def _limits_reached(bounds, p, prior) -> list:
+    """Rows of the backlash whose upper end is at a default (assumed) limit."""
+    if prior.user_given:
+        return []
+    return [i for i in range(4)
+            if at_prior_limit(bounds[p + i, 1], prior.box, i, 1, ASSUMED_LIMIT_RTOL)]
 
 
 def in_param_order(infos, p):

@@ -22,6 +22,7 @@ from .bounds import record_bounds
 from .prior import (
     ASSUMED_LIMIT_RTOL,
     LIMIT_RTOL,
+    WIDEN_FACTOR,
     GammaPrior,
     at_prior_limit,
     default_gamma_box,
@@ -37,6 +38,7 @@ __all__ = [
     "GammaPrior",
     "LIMIT_RTOL",
     "RecordProblem",
+    "WIDEN_FACTOR",
     "Witness",
     "at_prior_limit",
     "default_gamma_box",

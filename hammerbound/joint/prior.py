@@ -9,7 +9,15 @@ with every result and can be replaced by the user:
 * ``m_l, m_r <= m_max`` (default ``100`` times the slope ``range(y) / range(u)`` the record
   shows; with the unit gain (22.8) the backlash slopes carry the gain of the system);
 * ``c_l, c_r <= c_max`` (default the input's range: a dead band wider than every input
-  move is never crossed, and nothing in the record can say how wide it is).
+  move is never crossed after the first line the record touches).
+
+A default limit is a guess, and a wrong one can hold up other ends: a state that starts
+on the left line far from the record's inputs identifies ``m_l c_l`` with ``c_l`` above the
+input's range, and ``c_l <= c_max`` then pushed ``m_l`` above its true value (review).
+So the fit is run again with every default limit that an end reaches
+:data:`WIDEN_FACTOR` times wider (:meth:`GammaPrior.widened`), once, and that fit is
+reported; a limit reached again is named in the warning, with the other ends resting on
+it.
 
 ``z0``, the first inner value, needs no assumption: it lies in the band ``[R_0, L_0]``.
 
@@ -27,11 +35,13 @@ import numpy as np
 from ..exceptions import DataValidationError
 from .modes import band_range
 
-__all__ = ["ASSUMED_LIMIT_RTOL", "LIMIT_RTOL", "GammaPrior", "at_prior_limit",
+__all__ = ["ASSUMED_LIMIT_RTOL", "LIMIT_RTOL", "WIDEN_FACTOR", "GammaPrior", "at_prior_limit",
            "default_gamma_box", "record_box", "reversal_summary", "unidentified"]
 
 DEFAULT_B_BOUND = 1.0e4
 M_FACTOR = 1.0e2
+#: how much wider a default backlash limit gets when an end reaches it (see the module)
+WIDEN_FACTOR = 8.0
 
 
 def default_gamma_box(u, y, deta) -> np.ndarray:
@@ -154,6 +164,16 @@ class GammaPrior:
         if self.user_given:
             a[:, 0] = self.box[:, 0] > 0
         return a
+
+    def widened(self, rows) -> GammaPrior:
+        """The default box with the upper limits of ``rows`` (indices into ``m_l, c_l,
+        m_r, c_r``) :data:`WIDEN_FACTOR` times wider; a box the user gave stays."""
+        if self.user_given:
+            return self
+        box = self.box.copy()
+        for i in rows:
+            box[i, 1] = box[i, 0] + WIDEN_FACTOR * (box[i, 1] - box[i, 0])
+        return GammaPrior(box, user_given=False)
 
     def describe(self) -> str:
         g = self.box

@@ -295,3 +295,25 @@ def test_steady_points_of_a_record_are_checked_as_stage_one_checks_them(case):
              "inf y": r"y \(steady-state outputs\) contains NaN or infinity"}[case]
     with pytest.raises(DataValidationError, match=words):
         ident.fit(u, y, steady_state=(us, ys))
+
+
+@pytest.mark.deep  # 30-40 s: two lp fits
+def test_a_dead_band_beyond_the_default_box_does_not_push_the_slope_out():
+    """Review: the state starts on the left line (a large move down before the record),
+    then the input moves within +-0.3, so c_l = 1 lies above the default limit (the
+    input's range, 0.54); that limit pushed m_l's lower end to 2.5, above the true 1.
+    A default limit that an end reaches is widened and the fit run again."""
+    rng = np.random.default_rng(4)
+    u = np.concatenate([np.full(int(rng.integers(3, 15)), rng.uniform(-0.3, 0.3))
+                        for _ in range(20)])[:40]
+    ml, cl, mr, cr = 1.0, 1.0, 1.0, 0.2
+    x = _play(u, ml, cl, mr, cr, x0=100.0)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], x, zi=[x[0]])[0]  # at rest at x[0]
+    y = y + np.random.default_rng(0).uniform(-0.01, 0.01, u.size)
+    assert np.ptp(u) < cl
+    ident = hb.HammersteinBacklashIdentifier(linear=_lin(0.01, total_time_limit=120),
+                                             procedure="one-record")
+    with pytest.warns(NotIdentifiedWarning, match="rest on the default backlash box"):
+        ident.fit(u, y)
+    assert ident.contains((ml, cl, mr, cr), [-0.5, 0.5])
+    assert ident.gamma_bounds_[0, 0] <= ml

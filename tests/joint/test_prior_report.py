@@ -66,3 +66,17 @@ def test_a_b_end_the_default_box_sets_through_the_gain_is_not_identified():
     with pytest.warns(NotIdentifiedWarning):
         out, _ = _unbounded_b(problem, inside, lin)
     assert np.array_equal(out[2:, 0], [-9900.0, -9900.0])
+
+
+def test_a_default_limit_reached_is_widened_and_a_given_box_is_kept():
+    """The fit is run again with the default limits an end reached WIDEN_FACTOR times
+    wider (a default limit can hold up other ends); a box the user gave is theirs."""
+    from hammerbound.joint.prior import WIDEN_FACTOR, GammaPrior
+
+    default = GammaPrior(PRIOR, user_given=False)
+    wide = default.widened([1])
+    assert wide.box[1, 1] == pytest.approx(WIDEN_FACTOR * 2.0)
+    np.testing.assert_array_equal(np.delete(wide.box, 1, axis=0), np.delete(PRIOR, 1, axis=0))
+    assert not wide.user_given
+    given = GammaPrior(PRIOR, user_given=True)
+    np.testing.assert_array_equal(given.widened([0, 1]).box, PRIOR)

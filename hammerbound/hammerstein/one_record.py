@@ -49,6 +49,7 @@ from ..relaxations.problem import (
     theta_names,
 )
 from ..status import NOT_IDENTIFIED
+from ..tolerances import FEASIBILITY_RTOL
 
 __all__ = ["OneRecordFit", "fit_one_record"]
 
@@ -238,8 +239,38 @@ def _not_identified_infos(infos, theta_bounds, gamma_bounds) -> tuple:
         k, e = divmod(i, 2)
         if np.isinf(b[k, e]):
             info = replace(info, bound=float(b[k, e]), status=NOT_IDENTIFIED)
+        elif b[k, e] != info.bound:  # tightened by the gain equality (gain_tightened)
+            info = replace(info, bound=float(b[k, e]))
         out.append(info)
     return tuple(out)
+
+
+def gain_tightened(problem, theta_bounds) -> np.ndarray:
+    """``theta_bounds`` intersected with what the gain equality (22.8)
+    ``sum_j b_j = g (1 + sum_i a_i)`` gives each ``b_j`` from the other intervals (interval
+    arithmetic, widened by the relaxation's outward tolerance of that row). A search that
+    a limit stopped can leave a ``b_j`` at its default box while the ``a_i`` are bounded:
+    with one ``b`` it is then ``g (1 + sum_i a_i)`` itself (new-user trial 14: ``b1`` was
+    reported infinite beside a bounded ``a1``)."""
+    tb = np.array(theta_bounds, dtype=float)
+    na, p, g = problem.na, problem.p, float(problem.gain)
+    if g <= 0 or not np.all(np.isfinite(tb[:na])):
+        return tb
+    box = problem.box[:p]
+    tol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box), axis=1))) * max(1, g))
+    lo = g * (1.0 + tb[:na, 0].sum())
+    hi = g * (1.0 + tb[:na, 1].sum())
+    for j in range(na, p):
+        others = np.delete(tb[na:], j - na, axis=0)
+        if not np.all(np.isfinite(others)):
+            continue
+        jlo = lo - others[:, 1].sum() - tol
+        jhi = hi - others[:, 0].sum() + tol
+        jlo, jhi = np.nextafter(jlo, -np.inf), np.nextafter(jhi, np.inf)
+        new = [max(tb[j, 0], jlo), min(tb[j, 1], jhi)]
+        if new[0] <= new[1]:  # (an empty meet would be rounding: keep the search's)
+            tb[j] = new
+    return tb
 
 
 def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
@@ -376,7 +407,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
                                      0 if d is None else d.lps_stopped, lin.method)
-    tb, b_found = _unbounded_b(problem, res.bounds[: problem.p], lin,
+    tb, b_found = _unbounded_b(problem, gain_tightened(problem, res.bounds[: problem.p]), lin,
                                d is not None and d.stopped_by_time)
     _warn_stopped(res.infos, {name for name, _ in found} | set(b_found), lin.method)
     res = replace(res, infos=_not_identified_infos(res.infos, tb, gb))

@@ -45,3 +45,32 @@ def test_work_near_the_deadline_starts_no_worker_processes():
     soon = time.time() + 0.5 * POOL_MIN_SECONDS
     assert map_jobs(os.getpid, [(), ()], 2, deadline=soon) == [os.getpid()] * 2
     assert map_jobs(os.getpid, [(), ()], 2, deadline=time.time() - 1.0) == [os.getpid()] * 2
+
+
+def test_the_gain_equality_bounds_a_b_left_at_its_default_box():
+    """A stopped search left b_j at the default box |b_j| <= 1e4 beside bounded a_i (new-
+    user trial 14: b1 infinite, a1 bounded, na = nb = 1). The gain equality
+    sum b = g (1 + sum a) bounds it; every point that satisfies the equality with the
+    other parameters in their intervals lies inside (sampled here)."""
+    from hammerbound.hammerstein.one_record import gain_tightened
+
+    rng = np.random.default_rng(0)
+    for g in (1.0, 2.5):
+        box = np.array([[-2.0, 2.0], [-1.0, 1.0], [-1e4, 1e4], [-1e4, 1e4]])
+        pr = SimpleNamespace(na=2, p=4, gain=g, box=box)
+        tb = np.array([[-1.3, -1.2], [0.4, 0.5], [0.1, 0.3], [-1e4, 1e4]])
+        out = gain_tightened(pr, tb)
+        np.testing.assert_array_equal(out[:3], tb[:3])
+        assert out[3, 1] - out[3, 0] < 1.0
+        a = rng.uniform(tb[:2, 0], tb[:2, 1], (2000, 2))
+        b1 = rng.uniform(tb[2, 0], tb[2, 1], 2000)
+        b2 = g * (1.0 + a.sum(axis=1)) - b1
+        assert np.all((out[3, 0] <= b2) & (b2 <= out[3, 1]))
+        # and at the vertices, where the interval's ends are
+        for s in (0, 1):
+            b2v = g * (1.0 + tb[:2, s].sum()) - tb[2, 1 - s]
+            assert out[3, 0] <= b2v <= out[3, 1]
+            assert abs(b2v - out[3, s]) < 1e-4
+    # the other b at its box too: each stays at its box (and so is not identified)
+    tb = np.array([[-1.3, -1.2], [0.4, 0.5], [-1e4, 1e4], [-1e4, 1e4]])
+    np.testing.assert_allclose(gain_tightened(pr, tb), tb, atol=1.0)

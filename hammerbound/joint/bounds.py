@@ -25,7 +25,7 @@ import numpy as np
 from ..relaxations.exact.limits import end_share
 from ..relaxations.result import BoundInfo, IntervalResult
 from ..solvers.highs_process import past
-from ..status import BOX, LIMIT, RELAXATION
+from ..status import BOX, INACCURATE, LIMIT, RELAXATION
 from .local import restore
 from .problem import RecordProblem
 from .progress import RecordProgress
@@ -91,10 +91,13 @@ def _info(name, sense, res, bound):
                      witness=None if w is None else w.vector, nodes=res.nodes, point=w)
 
 
-def _lp_infos(names, box, stopped):
-    """The relaxation's ends: status LIMIT when a time limit stopped the tightening (the
-    fit's deadline, or relaxation LPs' own limit), RELAXATION otherwise."""
-    st = LIMIT if stopped else RELAXATION
+def _lp_infos(names, box, stopped, lps_stopped=0):
+    """The relaxation's ends: status LIMIT when the fit's deadline stopped the tightening,
+    INACCURATE when only some of its LPs ended before optimality (their own time limit, or
+    HiGHS could not solve them; their bounds come from their duals), RELAXATION
+    otherwise. (Failed LPs were reported as "at time/node limit" in a fit that ended long
+    before its limit, review.)"""
+    st = LIMIT if stopped else INACCURATE if lps_stopped else RELAXATION
     return tuple(BoundInfo(n, s, float(box[i, j]), status=st, certified=True)
                  for i, n in enumerate(names) for j, s in ((0, "min"), (1, "max")))
 
@@ -197,9 +200,9 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
                            np.max([b[:, 1] for b in leaves], axis=0)])
     names = problem.names[: problem.p + 4]
     if method == "lp":
-        stopped = past(deadline) or lps_stopped > 0
+        infos = _lp_infos(names, box, past(deadline), lps_stopped)
         return IntervalResult(tuple(names), box[: problem.p + 4].copy(),
-                              infos=_at_prior(_lp_infos(names, box, stopped), problem.box),
+                              infos=_at_prior(infos, problem.box),
                               method="lp",
                               time=time.perf_counter() - t0, root_box=box,
                               details=RecordDetails(len(leaves), past(deadline),

@@ -149,3 +149,18 @@ def test_every_end_gets_a_share_of_the_deadline(monkeypatch):
     for i, (t, limit) in enumerate(seen):
         share = (deadline - t) / (len(seen) - i)
         assert 0.0 < limit <= share + 1.0, (i, limit, share)
+
+
+def test_lp_ends_whose_lps_failed_are_not_said_to_be_at_a_time_limit():
+    """Review: some relaxation LPs ended "unknown" in a fit that finished in 30 s of its
+    120 s, and every end read "at time/node limit". Only the fit's deadline gives LIMIT;
+    LPs that ended before optimality on their own give INACCURATE (bounds from duals)."""
+    from hammerbound.joint.bounds import _lp_infos
+    from hammerbound.status import INACCURATE, LIMIT, RELAXATION, describe
+
+    box = np.array([[0.0, 1.0], [2.0, 3.0]])
+    for stopped, failed, want in ((False, 3, INACCURATE), (True, 3, LIMIT),
+                                  (True, 0, LIMIT), (False, 0, RELAXATION)):
+        infos = _lp_infos(["a1", "b1"], box, stopped, failed)
+        assert {i.status for i in infos} == {want}
+    assert "limit" not in describe(INACCURATE)

@@ -226,12 +226,14 @@ class _Diagnosis:
             self.pb = replace(self.pb, refine_to_bound=False)
         old, have = self.old, self.have
         self.bar.stage("single candidates", sum(name not in have for name in names))
-        for name in names:
+        for name in _seeded_last(names):
             if name not in have:
                 e = _effects.get(name)
                 starts = [(*self.old_thetas, g) for g in e.initial_grid(self.ctx, 6)] \
-                    if old else None
-                self.single_fits[name] = self.fit((*old, e), starts=starts)
+                    if old else []
+                fitted = {n: f.thetas[-1] for n, f in self.single_fits.items()}
+                starts += [(*self.old_thetas, g) for g in e.seeds(fitted)]
+                self.single_fits[name] = self.fit((*old, e), starts=starts or None)
         return tuple(_candidate_fit(cf, self.gap_before, self.ok(cf),
                                     self.frac(cf.prediction), self.removed(cf.error))
                      for cf in self.single_fits.values())
@@ -480,3 +482,10 @@ def _message(bound, gap_before, consistent_before, chosen, added, fits, combos, 
             "black box's output gain) and the candidates' parameters, while A and the "
             "backlash stay as given (for an identifier, those of its central model).")
     return msg
+
+
+def _seeded_last(names):
+    """``names`` with every candidate after those it is seeded by (:attr:`Effect.seeded_by`)."""
+    names = list(names)
+    first = [n for n in names if not set(_effects.get(n).seeded_by) & set(names)]
+    return first + [n for n in names if n not in first]

@@ -184,6 +184,11 @@ class _Slice:
         return [k[0] for k in self._keys]
 
 
+#: Nelder-Mead restarts from the best point of a several-parameter search while it is above
+#: the output bound (a fresh simplex leaves the kinks the old one collapsed on)
+RESTARTS = 2
+
+
 def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False):
     """Joint search of several continuous parameters (coarse grid, then Nelder-Mead)."""
     k = len(cidx)
@@ -210,12 +215,19 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False)
         return np.where(logs, np.exp(np.where(logs, v, 0.0)), v)
 
     order = np.argsort(vals)
+    opts = {"maxfev": (8 if coarse else 30) * k, "xatol": 1e-4,
+            "fatol": 1e-12 * (1 + (target or 0.0))}
     for j in order[: 1 if coarse else 2]:
         minimize(lambda w: f(from_unit(w)), to_unit(np.array(pts[j])), method="Nelder-Mead",
-                 options={"maxfev": (8 if coarse else 30) * k, "xatol": 1e-4,
-                          "fatol": 1e-12 * (1 + (target or 0.0))})
+                 options=opts)
     if coarse:
         return
+    for _ in range(RESTARTS):  # Nelder-Mead stalls on the minimax error's kinks: restart
+        best = np.array(min(list(f.keys), key=f))
+        if target is not None and f(best) <= target:
+            break
+        minimize(lambda w: f(from_unit(w)), to_unit(best), method="Nelder-Mead",
+                 options=opts)
     best = np.array(min(list(f.keys), key=f))
     if target is not None and target < f(best) <= 1.01 * target:
         _pattern(f, best, lo, hi, target)

@@ -90,6 +90,25 @@ def test_asym_backlash_found(tml, tcl, tmr, tcr):
     assert hs.B[1:3] == pytest.approx(B[1:3], rel=0.05)
 
 
+@pytest.mark.parametrize("seed", [1, 3])
+@pytest.mark.parametrize("gamma", [(0.58, 0.855, 0.62, 1.123), (0.9, 0.3, 1.1, 0.6)])
+def test_a_wide_asymmetric_backlash_is_found_beside_the_symmetric_one(seed, gamma):
+    """New-user trial 14: a dead band of about a third of the input's swing; with both
+    backlash candidates, asym_backlash stopped at 3x the error of the symmetric backlash it
+    contains (its coarse grid then Nelder-Mead). It now starts from the symmetric one too
+    and restarts Nelder-Mead while above the bound (these four cases all failed before)."""
+    u = np.repeat(np.random.default_rng(seed).uniform(-3.0, 3.0, N // 6 + 1), 6)[:N]
+    y = hammerstein(u, gamma, B, A) + _noise(seed)
+    rep = diagnose(G, u, y, NB, candidates=["asym_backlash", "backlash"], grid_size=8)
+    assert rep.effect == "asym_backlash", rep.message
+    assert rep.consistent_after and rep.gap_after <= NB * (1 + 1e-9)
+    assert np.max(np.abs(y - rep.refined_model.predict(u))) == pytest.approx(rep.gap_after,
+                                                                               rel=1e-9)
+    (ml, cl, mr, cr) = next(c.value for c in rep.candidates if c.name == "asym_backlash")
+    assert cl == pytest.approx(gamma[1], abs=0.05) and cr == pytest.approx(gamma[3], abs=0.05)
+    assert ml == pytest.approx(gamma[0], rel=0.05) and mr == pytest.approx(gamma[2], rel=0.05)
+
+
 @pytest.mark.parametrize("off, on, h", [(0.2, 1.2, 0.3), (0.1, 0.5, 0.15)])
 def test_relay_found(off, on, h):
     u = _input(3)

@@ -101,6 +101,9 @@ class Effect:
     acts_on_input: bool = False
     #: Tried when ``diagnose(candidates=None)``; False: only when named (or ``"all"``).
     default: bool = True
+    #: Candidates whose fitted parameters give this one starting points (:meth:`seeds`);
+    #: a diagnosis fits those first when both are tried.
+    seeded_by: tuple = ()
     #: True for a delay: after the fit the leading refitted coefficients of the numerator
     #: are pinned to zero one by one while the data stay consistent (the delay the data need).
     pins_leading: bool = False
@@ -114,6 +117,11 @@ class Effect:
     def search_space(self, ctx: Context) -> tuple:
         """Search ranges of the searched parameters: a tuple of :class:`Param`."""
         return ()
+
+    def seeds(self, fitted: dict) -> list:
+        """Starting points (parameter tuples) from ``fitted``: the parameters found for
+        the candidates of :attr:`seeded_by` that were fitted (name -> tuple)."""
+        return []
 
     def initial_grid(self, ctx: Context, size: int) -> list:
         """Starting points of the search: a list of parameter tuples (default: the

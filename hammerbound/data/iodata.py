@@ -136,7 +136,9 @@ class IOData:
     @classmethod
     def from_frame(cls, frame, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
         """Build from a pandas DataFrame (or any mapping of columns): columns ``u``, ``y``
-        and a time column ``t`` (same rules as :meth:`from_csv`)."""
+        and a time column ``t`` (same rules as :meth:`from_csv`). Without a time column
+        or ``dt``, a datetime (or timedelta) index of the frame is the time base, in
+        seconds."""
         cols = [str(c) for c in frame]
         t = cls._time_column(cols, t, (str(u), str(y)), "the frame", dt, PYTHON_NAMES)
         try:
@@ -145,6 +147,9 @@ class IOData:
         except KeyError as exc:
             raise DataValidationError(
                 f"column {exc} not found; the frame has {list(frame)}.") from None
+        if t is None and tt is None and dt is None:
+            tt = _index_seconds(frame)  # a DatetimeIndex was ignored (dt None, trial 14)
+            t = None if tt is None else "time [s]"
         return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names)
 
     @staticmethod
@@ -348,3 +353,17 @@ def _columns_hint(X, func) -> str:
             "For a table holding both: IOData.from_frame(frame, u='<input column>', "
             f"y='<output column>'), or {func}(frame['<input column>'], "
             "frame['<output column>']).")
+
+
+def _index_seconds(frame):
+    """The frame's datetime or timedelta index as seconds from its first entry, or None
+    (no such index: a plain row number says nothing of the time)."""
+    index = getattr(frame, "index", None)
+    kind = getattr(getattr(index, "dtype", None), "kind", "")
+    if kind not in "mM" or kind == "" or len(index) == 0:
+        return None
+    stamps = np.asarray(index)
+    if stamps.dtype.kind not in "mM":  # e.g. a timezone-aware index: its UTC stamps
+        stamps = np.asarray(index.tz_convert(None) if hasattr(index, "tz_convert") else index,
+                            dtype="datetime64[ns]")
+    return ((stamps - stamps[0]) / np.timedelta64(1, "s")).astype(float)

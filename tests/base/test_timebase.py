@@ -115,3 +115,23 @@ def test_cli_eiv_reads_a_time_column_named_time(tmp_path, capsys):
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["data"]["dt"] == 0.01 and out["transfer_function"]["dt"] == 0.01
+
+
+def test_a_frames_datetime_index_is_its_time_base():
+    """New-user trial 14: a frame indexed by time stamps (a historian's export) gave dt =
+    None without a word. The index is the time base (seconds) when no time column or dt
+    is given; a plain row index says nothing of the time; an uneven one is refused."""
+    pd = pytest.importorskip("pandas")
+    u, y = record()
+    n = u.size
+    stamps = pd.date_range("2026-01-01 08:00", periods=n, freq="10s", name="time")
+    d = hb.IOData.from_frame(pd.DataFrame({"OP": u, "PV": y}, index=stamps), u="OP", y="PV")
+    assert d.dt == 10.0 and d.time_unit == "s"
+    lag = pd.to_timedelta(0.5 * np.arange(n), unit="s")
+    assert hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y}, index=lag)).dt == 0.5
+    assert hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y})).dt is None
+    assert hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y}, index=stamps),
+                                dt=2.0).dt == 2.0  # a dt given wins
+    uneven = stamps.delete(3)
+    with pytest.raises(DataValidationError, match="not uniformly sampled"):
+        hb.IOData.from_frame(pd.DataFrame({"u": u[:-1], "y": y[:-1]}, index=uneven))

@@ -18,7 +18,8 @@ from ..systems.experiments import snr_db
 from ..tables import bound_text
 from .paths import check_output_dir
 
-__all__ = ["REPORT_FILES", "IdentificationReport", "interval_table", "write_report"]
+__all__ = ["REPORT_FILES", "IdentificationReport", "assumption_lines", "interval_table",
+           "write_panels", "write_report"]
 
 #: The files :func:`write_report` writes into its directory (nothing else there is touched).
 REPORT_FILES = ("report.md", "backlash_characteristic.png", "backlash_sets.png", "intervals.png",
@@ -42,6 +43,41 @@ def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
             r += f" {fmt.format(true[k])} | {'yes' if inside else '**NO**'} |"
         rows.append(r)
     return "\n".join(rows)
+
+
+def assumption_lines(ident) -> list:
+    """The report's Assumptions section: what every interval of the fitted identifier
+    ``ident`` rests on, and the central model with its sampling time (the report had
+    neither; the text and JSON outputs do, trial 13)."""
+    from ..tables import dt_text, poly_z
+
+    lines = ["## Assumptions", "", *[f"- {a}" for a in ident.assumptions_], ""]
+    if not np.all(np.isfinite(ident.linear_.bounds_)):
+        return lines + ["Central model: not given (a linear-block interval is "
+                        "infinite).", ""]
+    tf = ident.linear_.to_transfer_function()
+    num, den = np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])
+    unit = getattr(ident.linear_, "time_unit_", "")
+    return lines + [f"Central model (the centre of the intervals): G(z) = "
+                    f"({poly_z(num)}) / ({poly_z(den)}), sampling time "
+                    f"{dt_text(getattr(ident, 'dt_', None), unit)}.", ""]
+
+
+def write_panels(out: Path, panels) -> None:
+    """Draw and save each figure of ``panels`` -- ``(file name, subplot shape, size,
+    draw(axes))`` -- into the directory ``out`` (created; matplotlib's Agg backend)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(exist_ok=True)
+    for name, shape, size, draw in panels:
+        fig, axes = plt.subplots(*shape, figsize=size)
+        draw(axes)
+        fig.tight_layout()
+        fig.savefig(out / name, dpi=120)
+        plt.close(fig)
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,26 +159,9 @@ class IdentificationReport(Result):
             f"band; the first {int((~b).sum())} start the recursion).",
             "", "![envelope](envelope.png)", ""]
 
-    def _assumptions(self) -> list:
-        """What every interval rests on, and the central model with its sampling time (the
-        report had neither; the text and JSON outputs do, trial 13)."""
-        from ..tables import dt_text, poly_z
-
-        ident = self.ident
-        lines = ["## Assumptions", "", *[f"- {a}" for a in ident.assumptions_], ""]
-        if not np.all(np.isfinite(ident.linear_.bounds_)):
-            return lines + ["Central model: not given (a linear-block interval is "
-                            "infinite).", ""]
-        tf = ident.linear_.to_transfer_function()
-        num, den = np.ravel(tf.num[0][0]), np.ravel(tf.den[0][0])
-        unit = getattr(ident.linear_, "time_unit_", "")
-        return lines + [f"Central model (the centre of the intervals): G(z) = "
-                        f"({poly_z(num)}) / ({poly_z(den)}), sampling time "
-                        f"{dt_text(getattr(ident, 'dt_', None), unit)}.", ""]
-
     def summary(self) -> str:
         """The Markdown text of ``report.md`` (figures referenced by file name)."""
-        return "\n".join([f"# {self.title}", "", *self._experiment(), *self._assumptions(),
+        return "\n".join([f"# {self.title}", "", *self._experiment(), *assumption_lines(self.ident),
                           *self._stage1(), *self._stage2()])
 
     def to_dict(self) -> dict:
@@ -213,22 +232,11 @@ class IdentificationReport(Result):
         """Write ``report.md`` and its figures into ``outdir`` (see :func:`write_report`)."""
         out = check_output_dir(outdir, REPORT_FILES, force=overwrite,
                                force_hint="pass overwrite=True")
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        out.mkdir(exist_ok=True)
-        panels = (("backlash_sets.png", (1, 2), (10, 4), self._draw_sets),
-                  ("backlash_characteristic.png", (1, 1), (6, 4.5), self._draw_characteristic),
-                  ("intervals.png", (1, 1), (6, 3.5), self._draw_intervals),
-                  ("envelope.png", (1, 1), (9, 3.5), self._draw_envelope))
-        for name, shape, size, draw in panels:
-            fig, axes = plt.subplots(*shape, figsize=size)
-            draw(axes)
-            fig.tight_layout()
-            fig.savefig(out / name, dpi=120)
-            plt.close(fig)
+        write_panels(out, (("backlash_sets.png", (1, 2), (10, 4), self._draw_sets),
+                           ("backlash_characteristic.png", (1, 1), (6, 4.5),
+                            self._draw_characteristic),
+                           ("intervals.png", (1, 1), (6, 3.5), self._draw_intervals),
+                           ("envelope.png", (1, 1), (9, 3.5), self._draw_envelope)))
         path = out / "report.md"
         path.write_text(self.summary())
         return path

@@ -77,7 +77,6 @@ def test_the_a_priori_box_can_be_given(capsys, record):
 
 @pytest.mark.parametrize("extra, message", [
     (("--prbs", "p.csv"), "not both"),
-    (("--report", "out"), "--report needs"),
     (("--steady-output-bound", 0.1), "--steady-output-bound belongs"),
 ])
 def test_conflicting_options_are_refused(capsys, record, extra, message):
@@ -139,3 +138,32 @@ def test_text_speaks_command_line_and_gives_the_linear_model(capsys, tmp_path):
     assert "central model: G(z) = " in out
     rc, out, _ = _run(capsys, "identify", "--record", path, *ARGS, "--json")
     assert _strict(out)["transfer_function"]["den"][0] == 1.0
+
+
+def test_report_of_one_record_holds_the_truth_and_its_figures(capsys, record, tmp_path):
+    """Issue 26: the report works on a one-record fit (it was refused, "--report needs the
+    chapter's two experiments"): report.md with the record, the assumptions, both blocks'
+    intervals and the envelope, and its three figures; stdout keeps the text result."""
+    out_dir = tmp_path / "rep"
+    rc, out, err = _run(capsys, "identify", "--record", record, *ARGS, "--report", out_dir)
+    assert rc == 0 and "report written to" in err and "report written" not in out
+    assert "ml" in out and "assumptions" in out
+    files = sorted(p.name for p in out_dir.iterdir())
+    assert files == ["backlash_characteristic.png", "envelope.png", "intervals.png",
+                     "report.md"]
+    text = (out_dir / "report.md").read_text()
+    for section in ("## Record", "## Assumptions", "## Backlash", "## Linear block",
+                    "### Output envelope"):
+        assert section in text
+    assert "N = 60 samples, sampling time 0.1" in text
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:5]]
+            for line in text.splitlines()
+            if line.startswith("| ") and line.split("|")[1].strip() in
+            ("ml", "cl", "mr", "cr", "a1", "b1")}
+    truth = dict(zip(("ml", "cl", "mr", "cr", "a1", "b1"), (*GAMMA, -0.5, 0.5), strict=True))
+    for name, (lo, _, hi) in rows.items():
+        assert float(lo) - 1e-4 <= truth[name] <= float(hi) + 1e-4, name  # 4 digits shown
+    assert len(rows) == 6
+    # an existing report is kept without --force, before any fit
+    rc, out, err = _run(capsys, "identify", "--record", record, *ARGS, "--report", out_dir)
+    assert rc != 0 and "--force" in err and out == ""

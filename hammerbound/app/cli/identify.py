@@ -53,9 +53,9 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true",
                    help="write the result as JSON to stdout (and nothing else)")
     p.add_argument("--report", default=None, metavar="DIR",
-                   help=f"the two experiments (--steady, --prbs) only: write report.md + "
-                        f"figures into DIR (its parent must exist; an existing report there "
-                        f"is kept unless {FORCE_FLAG} is given)")
+                   help=f"write report.md + figures into DIR (the two experiments' report, "
+                        f"or with --record the one-record report; its parent must exist; an "
+                        f"existing report there is kept unless {FORCE_FLAG} is given)")
     add_model_set_option(p)
     add_force_option(p, "report files and the --model-set file")
     p.set_defaults(func=run)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from .console import cli_terms, recorded_warnings
@@ -27,9 +29,6 @@ def run_one_record(args) -> int:
     output_bound = require(args.output_bound, "--output-bound",
                            "the bound on the record's output errors that the intervals rest "
                            "on, e.g. --output-bound 0.05")
-    if args.report:
-        raise UsageError("--report needs the chapter's two experiments (--steady, --prbs); "
-                         "with --record use --json for the intervals in machine-readable form")
     if getattr(args, "inner_signal", "independent") != "independent":
         raise UsageError("--inner-signal belongs to the PRBS experiment (--prbs); with "
                          "--record the backlash's output is bounded jointly with the linear "
@@ -38,6 +37,7 @@ def run_one_record(args) -> int:
         raise UsageError("--steady-output-bound belongs to --steady; one record has one "
                          "output error bound (--output-bound)")
     model_set = check_model_set(args)
+    report_dir = _report_dir(args)
     with recorded_warnings() as seen:  # the data's warnings too (JSON)
         data, steady = _read(args)
         ident = HammersteinBacklashIdentifier(
@@ -57,14 +57,30 @@ def run_one_record(args) -> int:
     if args.json:
         print(json_text({**_record(args, ident, data, output_bound, tf),
                          "model_set": written, "warnings": seen}))
-        return exit_status(model_set, written)
-    print("record " + record_line(args.record, data))
-    if steady is not None:
-        print(f"steady-state points {args.steady}: {steady[0].size}, used jointly")
-    print("\n".join(assumption_lines(given, [])))
-    print(cli_terms(ident.summary()))
-    print(tf_text)
+    else:
+        print("record " + record_line(args.record, data))
+        if steady is not None:
+            print(f"steady-state points {args.steady}: {steady[0].size}, used jointly")
+        print("\n".join(assumption_lines(given, [])))
+        print(cli_terms(ident.summary()))
+        print(tf_text)
+    if report_dir is not None:
+        from ..record_report import write_record_report
+
+        path = write_record_report(ident, data.u, data.y, report_dir, overwrite=args.force)
+        print(f"hammerbound identify: report written to {path}", file=sys.stderr)
     return exit_status(model_set, written)
+
+
+def _report_dir(args):
+    """``--report DIR`` checked before the fit (None without it)."""
+    if not args.report:
+        return None
+    from ..paths import check_output_dir
+    from ..record_report import RECORD_REPORT_FILES
+
+    return check_output_dir(args.report, RECORD_REPORT_FILES, force=args.force,
+                            option="--report")
 
 
 def _read(args):

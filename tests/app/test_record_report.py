@@ -1,0 +1,62 @@
+"""The report of a one-record fit (``hammerbound.app.record_report``), on records simulated
+here (the tests' own play operator and scipy's lfilter)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from oracles import play
+from scipy.signal import lfilter
+
+import hammerbound as hb
+from hammerbound.app.record_report import RecordReport, line_bands, write_record_report
+from hammerbound.exceptions import ParameterValidationError
+
+GAMMA = (0.25, 0.06, 0.26, 0.05)
+
+
+def _fit(u, y):
+    ident = hb.HammersteinBacklashIdentifier(
+        linear=hb.LinearEIVSetEstimator(na=1, nb=1, nk=1, output_bound=0.02, method="lp"),
+        procedure="one-record")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return ident.fit(u, y)
+
+
+def test_an_input_that_never_reverses_gives_a_report_without_a_band(tmp_path):
+    """A ramp leaves the left line unidentified: the report says there is no envelope and
+    no characteristic band instead of drawing one it cannot stand behind."""
+    u = np.linspace(-2.0, 2.0, 40)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], play(u, *GAMMA))
+    y = y + 0.02 * np.random.default_rng(0).uniform(-1, 1, u.size)
+    ident = _fit(u, y)
+    assert not np.all(np.isfinite(ident.gamma_bounds_))
+    path = write_record_report(ident, u, y, tmp_path / "rep")
+    text = path.read_text()
+    assert "No envelope: an interval is infinite" in text
+    assert "| cl |" in text and "inf" in text
+    assert (tmp_path / "rep" / "envelope.png").exists()
+    rep = RecordReport.build(ident, u, y)
+    assert rep.to_dict()["envelope"] is None
+
+
+def test_the_line_bands_hold_every_line_of_the_box():
+    """The band of each line over the box (its corners) holds the line of any point of the
+    box (sampled here)."""
+    box = np.array([[0.2, 0.3], [0.0, 0.1], [0.25, 0.27], [0.04, 0.08]])
+    u = np.linspace(-2, 2, 41)
+    llo, lhi, rlo, rhi = line_bands(box, u)
+    rng = np.random.default_rng(1)
+    for ml, cl, mr, cr in rng.uniform(box[:, 0], box[:, 1], (500, 4)):
+        assert np.all((llo - 1e-12 <= ml * (u + cl)) & (ml * (u + cl) <= lhi + 1e-12))
+        assert np.all((rlo - 1e-12 <= mr * (u - cr)) & (mr * (u - cr) <= rhi + 1e-12))
+
+
+def test_a_two_stage_fit_is_refused_with_the_other_report_named():
+    ident = hb.HammersteinBacklashIdentifier()
+    ident.procedure_ = "two-stage"
+    with pytest.raises(ParameterValidationError, match="IdentificationReport"):
+        RecordReport.build(ident, np.zeros(3), np.zeros(3))

@@ -18,7 +18,7 @@ from ..results import OutputEnvelope, Result, jsonable
 from ..systems.experiments import snr_db
 from ..tables import bound_text
 from .paths import check_output_dir
-from .report import assumption_lines, interval_table
+from .report import assumption_lines, checked_axes, envelope_lines, interval_table
 
 __all__ = ["RECORD_REPORT_FILES", "RecordReport", "write_record_report"]
 
@@ -114,14 +114,7 @@ class RecordReport(Result):
         if self.envelope is None:
             return lines + ["No envelope: an interval is infinite (the record does not "
                             "bound it).", ""]
-        b = self.envelope.banded
-        return lines + [
-            "Every noise-free output consistent with the intervals and the past data lies "
-            "in the one-step band; measurements may deviate from it by at most the noise "
-            f"bound. Fraction of measurements within band +- output bound: "
-            f"{self.envelope.coverage():.3f} (over the {int(b.sum())} samples that have a "
-            f"band; the first {int((~b).sum())} start the recursion).",
-            "", "![envelope](envelope.png)", ""]
+        return lines + envelope_lines(self.envelope)
 
     def summary(self) -> str:
         """The Markdown text of ``report.md`` (figures referenced by file name)."""
@@ -186,12 +179,7 @@ class RecordReport(Result):
             grid = fig.add_gridspec(2, 2)
             ax = [fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[0, 1]),
                   fig.add_subplot(grid[1, :])]
-        ax = list(np.ravel(ax))
-        if len(ax) != 3:
-            from ..exceptions import ParameterValidationError
-
-            raise ParameterValidationError(f"pass 3 axes (characteristic, intervals, "
-                                           f"envelope); got {len(ax)}.")
+        ax = checked_axes(ax, "characteristic, intervals, envelope")
         self._draw_characteristic(ax[0])
         self._draw_intervals(ax[1])
         self._draw_envelope(ax[2])
@@ -202,14 +190,12 @@ class RecordReport(Result):
     def write(self, outdir, *, overwrite=False) -> Path:
         """Write ``report.md`` and its figures into ``outdir`` (see
         :func:`write_record_report`)."""
-        from .report import write_panels
+        from .report import linear_panels, write_panels
 
         out = check_output_dir(outdir, RECORD_REPORT_FILES, force=overwrite,
                                force_hint="pass overwrite=True")
         write_panels(out, (("backlash_characteristic.png", (1, 1), (6, 4.5),
-                            self._draw_characteristic),
-                           ("intervals.png", (1, 1), (6, 3.5), self._draw_intervals),
-                           ("envelope.png", (1, 1), (9, 3.5), self._draw_envelope)))
+                            self._draw_characteristic), *linear_panels(self)))
         path = out / "report.md"
         path.write_text(self.summary())
         return path

@@ -18,8 +18,9 @@ from ..systems.experiments import snr_db
 from ..tables import bound_text
 from .paths import check_output_dir
 
-__all__ = ["REPORT_FILES", "IdentificationReport", "assumption_lines", "interval_table",
-           "write_panels", "write_report"]
+__all__ = ["REPORT_FILES", "IdentificationReport", "assumption_lines", "checked_axes",
+           "envelope_lines", "interval_table", "linear_panels", "write_panels",
+           "write_report"]
 
 #: The files :func:`write_report` writes into its directory (nothing else there is touched).
 REPORT_FILES = ("report.md", "backlash_characteristic.png", "backlash_sets.png", "intervals.png",
@@ -61,6 +62,36 @@ def assumption_lines(ident) -> list:
     return lines + [f"Central model (the centre of the intervals): G(z) = "
                     f"({poly_z(num)}) / ({poly_z(den)}), sampling time "
                     f"{dt_text(getattr(ident, 'dt_', None), unit)}.", ""]
+
+
+def envelope_lines(envelope) -> list:
+    """What the one-step output envelope says of the data, and its figure."""
+    b = envelope.banded
+    return ["Every noise-free output consistent with the intervals and the past data lies "
+            "in the one-step band; measurements may deviate from it by at most the noise "
+            f"bound. Fraction of measurements within band +- output bound: "
+            f"{envelope.coverage():.3f} (over the {int(b.sum())} samples that have a "
+            f"band; the first {int((~b).sum())} start the recursion).",
+            "", "![envelope](envelope.png)", ""]
+
+
+def checked_axes(ax, names: str) -> list:
+    """``ax`` as a flat list of one Axes per name of ``names`` (comma-separated), else a
+    ParameterValidationError naming them."""
+    ax = list(np.ravel(ax))
+    n = len(names.split(","))
+    if len(ax) != n:
+        from ..exceptions import ParameterValidationError
+
+        raise ParameterValidationError(f"pass {n} axes ({names}); got {len(ax)}.")
+    return ax
+
+
+def linear_panels(report) -> tuple:
+    """The figures both reports draw of the linear block: its intervals and the output
+    envelope (``report._draw_intervals``, ``report._draw_envelope``)."""
+    return (("intervals.png", (1, 1), (6, 3.5), report._draw_intervals),
+            ("envelope.png", (1, 1), (9, 3.5), report._draw_envelope))
 
 
 def write_panels(out: Path, panels) -> None:
@@ -149,20 +180,13 @@ class IdentificationReport(Result):
             it = info.nodes if info.nodes is not None else info.iterations
             lines.append(f"| {info.sense} {info.param} | {info.status} | "
                          f"{'yes' if info.certified else 'no'} | {info.time:.2f} | {it} |")
-        b = self.envelope.banded
-        return lines + [
-            "", "![intervals](intervals.png)", "", "### Output envelope", "",
-            "Every noise-free output consistent with the intervals and the past data lies "
-            "in the one-step band; measurements may deviate from it by at most the noise "
-            f"bound. Fraction of measurements within band +- output bound: "
-            f"{self.envelope.coverage():.3f} (over the {int(b.sum())} samples that have a "
-            f"band; the first {int((~b).sum())} start the recursion).",
-            "", "![envelope](envelope.png)", ""]
+        return lines + ["", "![intervals](intervals.png)", "", "### Output envelope", "",
+                        *envelope_lines(self.envelope)]
 
     def summary(self) -> str:
         """The Markdown text of ``report.md`` (figures referenced by file name)."""
-        return "\n".join([f"# {self.title}", "", *self._experiment(), *assumption_lines(self.ident),
-                          *self._stage1(), *self._stage2()])
+        return "\n".join([f"# {self.title}", "", *self._experiment(),
+                          *assumption_lines(self.ident), *self._stage1(), *self._stage2()])
 
     def to_dict(self) -> dict:
         """JSON-serialisable: the intervals of both blocks, ``u_star``, the inner-signal
@@ -214,12 +238,7 @@ class IdentificationReport(Result):
             ax = [fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[0, 1]),
                   fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1]),
                   fig.add_subplot(grid[2, :])]
-        ax = list(np.ravel(ax))
-        if len(ax) != 5:
-            from ..exceptions import ParameterValidationError
-
-            raise ParameterValidationError(f"pass 5 axes (left set, right set, "
-                                           f"characteristic, intervals, envelope); got {len(ax)}.")
+        ax = checked_axes(ax, "left set, right set, characteristic, intervals, envelope")
         self._draw_sets(ax[:2])
         self._draw_characteristic(ax[2])
         self._draw_intervals(ax[3])
@@ -235,8 +254,7 @@ class IdentificationReport(Result):
         write_panels(out, (("backlash_sets.png", (1, 2), (10, 4), self._draw_sets),
                            ("backlash_characteristic.png", (1, 1), (6, 4.5),
                             self._draw_characteristic),
-                           ("intervals.png", (1, 1), (6, 3.5), self._draw_intervals),
-                           ("envelope.png", (1, 1), (9, 3.5), self._draw_envelope)))
+                           *linear_panels(self)))
         path = out / "report.md"
         path.write_text(self.summary())
         return path

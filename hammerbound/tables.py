@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bound_text", "dt_text", "interval_frame", "interval_records", "interval_text",
+__all__ = ["assumptions_text", "bound_text", "dt_text", "interval_frame", "interval_records", "interval_text",
            "poly_z"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
@@ -20,6 +20,12 @@ def bound_text(bound) -> str:
     v = np.asarray(bound, dtype=float)
     lo, hi = float(np.min(v)), float(np.max(v))
     return f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g} (per sample)"
+
+
+def assumptions_text(items) -> str:
+    """The assumptions a summary's intervals rest on: ``assumptions:`` and one ``  - item``
+    line each (every summary lists them so, after its table)."""
+    return "assumptions:\n" + "\n".join(f"  - {a}" for a in items)
 
 
 def dt_text(dt, unit: str = "") -> str:

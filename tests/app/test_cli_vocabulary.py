@@ -139,7 +139,7 @@ def test_input_bound_given_or_printed_as_assumed(capsys, rec):
     assert rc == 0
     assert "given: output error bound 0.05 (--output-bound)" in out
     assert "assumed: input error bound 0 (exact input" in out
-    assert "assumptions: output error bound |eta_t| <= 0.05" in out  # the summary's line
+    assert "assumptions:\n  - output error bound |eta_t| <= 0.05" in out  # the summary's
     rc, out, _ = _run(capsys, "eiv", rec["eiv"], *EIV, "--output-bound", 0.05,
                       "--input-bound", 0.0)
     assert "assumed:" not in out and "input error bound 0 (--input-bound)" in out

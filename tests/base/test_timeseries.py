@@ -221,8 +221,9 @@ def test_iodata_from_frame_and_backlash_tables():
     fr = bl.to_frame()
     assert list(fr["parameter"]) == ["ml", "cl", "mr", "cr"]
     np.testing.assert_allclose(fr["upper"], bl.gamma_bounds_[:, 1])
-    assert bl.summary().splitlines()[1].startswith("assumptions: output error bound")
-    assert bl.summary().splitlines()[3].startswith("ml ")
+    lines = bl.summary().splitlines()
+    assert lines[1].startswith("parameter") and lines[2].startswith("ml ")
+    assert lines[6:8] == ["assumptions:", "  - output error bound |eta| <= 0.05"]
 
 
 def test_plain_array_kfold_splice_message_names_the_cause():

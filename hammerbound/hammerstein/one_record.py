@@ -11,10 +11,10 @@ assumption).
 
 from __future__ import annotations
 
-import sys
 import time
 import warnings
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
@@ -32,7 +32,6 @@ from ..joint import (
     ASSUMED_LIMIT_RTOL,
     GAMMA_NAMES,
     LIMIT_RTOL,
-    WIDEN_FACTOR,
     GammaPrior,
     RecordProblem,
     at_prior_limit,
@@ -48,8 +47,9 @@ from ..relaxations.problem import (
     resolve_theta_box,
     theta_names,
 )
-from ..status import NOT_IDENTIFIED
+from ..status import BOX, NOT_IDENTIFIED, RELAXATION
 from ..tolerances import FEASIBILITY_RTOL
+from .default_box import search_default_box
 
 __all__ = ["OneRecordFit", "fit_one_record"]
 
@@ -240,7 +240,9 @@ def _not_identified_infos(infos, theta_bounds, gamma_bounds) -> tuple:
         if np.isinf(b[k, e]):
             info = replace(info, bound=float(b[k, e]), status=NOT_IDENTIFIED)
         elif b[k, e] != info.bound:  # tightened by the gain equality (gain_tightened)
-            info = replace(info, bound=float(b[k, e]))
+            # an end so moved is no longer the a priori box's (review)
+            info = replace(info, bound=float(b[k, e]),
+                           status=RELAXATION if info.status == BOX else info.status)
         out.append(info)
     return tuple(out)
 
@@ -392,16 +394,9 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     warn_bound_covers_output("HammersteinBacklashIdentifier.fit", data.output_name or "y",
                              data.y, ob, stacklevel=5)
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
-    problem, res = _search(lin, data, prior, steady, steady_bound, ob, deadline)
-    rows = _limits_reached(res.bounds, problem.p, prior)
-    if rows and (deadline is None or time.time() < deadline):
-        # a default limit reached may hold up other ends (see joint.prior): once wider
-        prior = prior.widened(rows)
-        if lin.progress:
-            print(f"one-record: {', '.join(GAMMA_NAMES[i] for i in rows)} reached the "
-                  f"default backlash box; fitting again with it {WIDEN_FACTOR:g}x wider",
-                  file=sys.stderr, flush=True)
-        problem, res = _search(lin, data, prior, steady, steady_bound, ob, deadline)
+    prior, problem, res = search_default_box(
+        partial(_search, lin, data, steady=steady, steady_bound=steady_bound, ob=ob,
+                deadline=deadline), prior, deadline, bool(lin.progress))
     _warn_gain_sign(problem, res)
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
@@ -417,7 +412,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                         time.perf_counter() - t0)
 
 
-def _search(lin, data, prior, steady, steady_bound, ob, deadline):
+def _search(lin, data, prior, *, steady, steady_bound, ob, deadline):
     """The problem under ``prior`` and its :func:`~hammerbound.joint.record_bounds`."""
     problem = _problem(lin, data, prior, steady, steady_bound, ob)
     try:
@@ -429,14 +424,6 @@ def _search(lin, data, prior, steady, steady_bound, ob, deadline):
     except EmptyFeasibleSetError as exc:
         raise _with_gain_sign(exc, problem) from exc
     return problem, res
-
-
-def _limits_reached(bounds, p, prior) -> list:
-    """Rows of the backlash whose upper end is at a default (assumed) limit."""
-    if prior.user_given:
-        return []
-    return [i for i in range(4)
-            if at_prior_limit(bounds[p + i, 1], prior.box, i, 1, ASSUMED_LIMIT_RTOL)]
 
 
 def in_param_order(infos, p):

@@ -30,7 +30,7 @@ from .local import restore
 from .problem import RecordProblem
 from .progress import RecordProgress
 from .search import search_end
-from .tighten import map_jobs, outer_leaves, workers
+from .tighten import map_jobs, outer_leaves, pool_size
 from .units import RecordUnits
 
 __all__ = ["RecordDetails", "record_bounds"]
@@ -213,7 +213,7 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
     skipped = {(k, s) for k, s in jobs
                if skip is not None and skip(k, s, box[k, 0] if s > 0 else box[k, 1])}
     todo = [(k, s) for k, s in jobs if (k, s) not in skipped]
-    procs = workers(n_jobs, len(todo))
+    procs = pool_size(n_jobs, len(todo), deadline)  # as map_jobs will run them
     args = [(problem, leaves, k, s, _best_start(pool, k, s), kw, (i, len(todo), procs))
             for i, (k, s) in enumerate(todo)]
     bar.start("interval end", len(args))

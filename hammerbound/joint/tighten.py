@@ -158,14 +158,20 @@ def workers(n_jobs, n) -> int:
 POOL_MIN_SECONDS = 5.0
 
 
+def pool_size(n_jobs, n, deadline=None) -> int:
+    """The processes :func:`map_jobs` uses for ``n`` items: :func:`workers`, or 1 with less
+    than :data:`POOL_MIN_SECONDS` left before ``deadline``."""
+    short = deadline is not None and deadline - time.time() < POOL_MIN_SECONDS
+    return 1 if short else workers(n_jobs, n)
+
+
 def map_jobs(fn, items, n_jobs, each=None, deadline=None):
     """``[fn(*a) for a in items]``, over :func:`workers` processes (joblib) when that
     pays; ``each(result)`` is called in this process as each result arrives (in order).
     With less than :data:`POOL_MIN_SECONDS` left before ``deadline`` the items run here
     (each stops at the deadline), where starting the workers can take longer than that
     (a fit with ``total_time_limit=0.5`` and ``n_jobs=2`` took 5 s, review)."""
-    short = deadline is not None and deadline - time.time() < POOL_MIN_SECONDS
-    procs = 1 if short else workers(n_jobs, len(items))
+    procs = pool_size(n_jobs, len(items), deadline)
     if procs == 1:
         results = (fn(*a) for a in items)
     else:

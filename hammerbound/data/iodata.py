@@ -149,7 +149,9 @@ class IOData:
                 f"column {exc} not found; the frame has {list(frame)}.") from None
         if t is None and tt is None and dt is None:
             tt = _index_seconds(frame)  # a DatetimeIndex was ignored (dt None, trial 14)
-            t = None if tt is None else "time [s]"
+            if tt is not None:
+                t = "the frame's index"
+                names.setdefault("time_unit", "s")
         return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names)
 
     @staticmethod
@@ -356,9 +358,11 @@ def _columns_hint(X, func) -> str:
 
 
 def _index_seconds(frame):
-    """The frame's datetime or timedelta index as seconds from its first entry, or None
+    """The frame's datetime, period or timedelta index as seconds from its first entry, or None
     (no such index: a plain row number says nothing of the time)."""
     index = getattr(frame, "index", None)
+    if hasattr(index, "to_timestamp") and hasattr(index, "freq"):  # a PeriodIndex
+        index = index.to_timestamp()
     kind = getattr(getattr(index, "dtype", None), "kind", "")
     if kind not in "mM" or kind == "" or len(index) == 0:
         return None

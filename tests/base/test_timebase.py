@@ -135,3 +135,16 @@ def test_a_frames_datetime_index_is_its_time_base():
     uneven = stamps.delete(3)
     with pytest.raises(DataValidationError, match="not uniformly sampled"):
         hb.IOData.from_frame(pd.DataFrame({"u": u[:-1], "y": y[:-1]}, index=uneven))
+
+
+def test_a_period_index_is_a_time_base_and_an_uneven_index_is_named():
+    """Review: a PeriodIndex still gave dt = None; an uneven index's error named a column
+    "time [s]" that the frame does not have."""
+    pd = pytest.importorskip("pandas")
+    u, y = record()
+    periods = pd.period_range("2026-01-01 08:00", periods=u.size, freq="10s")
+    d = hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y}, index=periods))
+    assert d.dt == 10.0 and d.time_unit == "s"
+    stamps = pd.date_range("2026-01-01 08:00", periods=u.size, freq="10s").delete(3)
+    with pytest.raises(DataValidationError, match="the frame's index"):
+        hb.IOData.from_frame(pd.DataFrame({"u": u[:-1], "y": y[:-1]}, index=stamps))

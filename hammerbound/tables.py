@@ -9,17 +9,28 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["assumptions_text", "bound_text", "dt_text", "interval_frame", "interval_records", "interval_text",
-           "poly_z"]
+__all__ = ["assumptions_text", "bound_text", "dt_text", "interval_frame", "interval_records",
+           "interval_text", "number_text", "poly_z"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
 
 def bound_text(bound) -> str:
-    """``"0.05"`` for a constant bound, ``"0.01..0.05 (per sample)"`` otherwise."""
+    """``"0.05"`` for a constant bound, ``"0.01..0.05 (per sample)"`` otherwise; each value
+    with the digits it has (up to 10): a bound of 0.0200005 (a rounding allowance added to
+    0.02) was shown as 0.02 (new-user trial 15)."""
     v = np.asarray(bound, dtype=float)
     lo, hi = float(np.min(v)), float(np.max(v))
-    return f"{lo:.4g}" if lo == hi else f"{lo:.4g}..{hi:.4g} (per sample)"
+    return number_text(lo) if lo == hi else f"{number_text(lo)}..{number_text(hi)} (per sample)"
+
+
+def number_text(v: float) -> str:
+    """``v`` in the fewest significant digits (4 to 10) that give it back exactly, else 10."""
+    for digits in (4, 6, 8):
+        text = f"{v:.{digits}g}"
+        if float(text) == v:
+            return text
+    return f"{v:.10g}"
 
 
 def assumptions_text(items) -> str:

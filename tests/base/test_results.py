@@ -346,3 +346,20 @@ def test_summary_table_prints_small_parameters_with_their_digits():
     assert half > 0
     # rows of order one keep their fixed decimals
     assert rows["a1"][0] == "-0.7612" and rows["cl"][0] == "0.0000"
+
+
+def test_bounds_are_shown_with_the_digits_they_have():
+    """New-user trial 15: an output bound of 0.0200005 (0.02 plus the rounding of a CSV
+    with 6 decimals) was shown as 0.02 in the report and the summaries."""
+    from hammerbound.tables import bound_text, number_text
+
+    assert bound_text(0.0200005) == "0.0200005" and bound_text(0.05) == "0.05"
+    assert bound_text(np.array([0.01, 0.0200005])) == "0.01..0.0200005 (per sample)"
+    assert float(number_text(0.001821345678912)) == pytest.approx(0.001821345678912,
+                                                                   rel=1e-9)
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 60)
+    y = np.r_[0.0, 0.5 * u[:-1]] + rng.uniform(-0.02, 0.02, 60)
+    est = hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.0200005, method="lp")
+    est.fit(u, y, input_bound=0.0)
+    assert "|eta_t| <= 0.0200005" in est.summary()

@@ -7,7 +7,7 @@ import numpy as np
 from ._compat import DEPRECATED, renamed_value
 
 __all__ = ["backlash_band", "plot_backlash", "plot_envelope", "plot_feasible_set",
-           "plot_intervals"]
+           "plot_intervals", "plot_relative_intervals"]
 
 
 def _axes(ax):
@@ -75,6 +75,32 @@ def plot_intervals(bounds, names, ax=None, *, true_values=None, labels=None, nor
         ax.plot(tv, np.arange(p), "r|", ms=14, mew=2, label="true value")
     ax.set_yticks(np.arange(p), names)
     ax.set_xlabel("(bound - true) / half-width of first method" if normalise else "value")
+    ax.legend(fontsize=7)
+    return ax
+
+
+def plot_relative_intervals(bounds, names, ax=None, *, true_values=None):
+    """Each interval relative to its centre, in per cent of ``|centre|``: intervals of very
+    different sizes and widths on one axis (in their own units, narrow intervals next to
+    large values were invisible; new-user trial 15). An infinite interval is named as not
+    bounded; ``true_values`` are marked."""
+    ax = _axes(ax)
+    b = np.asarray(bounds, dtype=float)
+    p = len(names)
+    finite = np.all(np.isfinite(b), axis=1)
+    centre = np.where(finite, b.mean(axis=1), 0.0)
+    scale = np.where(finite, np.maximum(np.abs(centre), 1e-300), 1.0) / 100.0
+    rows = np.arange(p)
+    ax.hlines(rows[finite], ((b[:, 0] - centre) / scale)[finite],
+              ((b[:, 1] - centre) / scale)[finite], color="C0", lw=4, label="interval")
+    for k in rows[~finite]:
+        ax.text(0.0, k, "not bounded", ha="center", va="center", fontsize=8)
+    if true_values is not None:
+        tv = (np.asarray(true_values, dtype=float) - centre) / scale
+        ax.plot(tv[finite], rows[finite], "r|", ms=14, mew=2, label="true value")
+    ax.axvline(0.0, color="k", lw=0.5)
+    ax.set_yticks(rows, names)
+    ax.set_xlabel("(bound - centre) / |centre|  [%]")
     ax.legend(fontsize=7)
     return ax
 

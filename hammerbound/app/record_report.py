@@ -110,7 +110,7 @@ class RecordReport(Result):
         lines = ["## Linear block", "",
                  interval_table(lin.param_names_, lin.bounds_, self.theta_true), "",
                  *_status_table(self.ident.bound_info_[8:]), "",
-                 "![intervals](intervals.png)", "", "### Output envelope", ""]
+                 "![intervals of both blocks](intervals.png)", "", "### Output envelope", ""]
         if self.envelope is None:
             return lines + ["No envelope: an interval is infinite (the record does not "
                             "bound it).", ""]
@@ -158,8 +158,13 @@ class RecordReport(Result):
         ax.set_title("backlash lines over the intervals")
 
     def _draw_intervals(self, ax):
-        lin = self.ident.linear_
-        lin.intervals_.plot(ax, true_values=self.theta_true, label=lin.method)
+        from ..plotting import plot_relative_intervals
+
+        truth = (None if self.gamma_true is None or self.theta_true is None
+                 else np.r_[self.gamma_true, self.theta_true])
+        plot_relative_intervals(self.ident.bounds_, self.ident.param_names_, ax,
+                                true_values=truth)
+        ax.set_title("intervals of both blocks, relative to their centres")
 
     def _draw_envelope(self, ax):
         if self.envelope is None:

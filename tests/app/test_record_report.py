@@ -60,3 +60,24 @@ def test_a_two_stage_fit_is_refused_with_the_other_report_named():
     ident.procedure_ = "two-stage"
     with pytest.raises(ParameterValidationError, match="IdentificationReport"):
         RecordReport.build(ident, np.zeros(3), np.zeros(3))
+
+
+def test_relative_intervals_show_narrow_intervals_of_large_values():
+    """Trial 15: in their own units, intervals 0.01 wide next to values of 1 were
+    invisible. Relative to their centres (per cent of |centre|) each bar shows its width;
+    an infinite interval is named."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from hammerbound.plotting import plot_relative_intervals
+
+    bounds = np.array([[0.99, 1.01], [-2.2, -1.8], [0.0, np.inf]])
+    fig, ax = plt.subplots()
+    plot_relative_intervals(bounds, ["a", "b", "c"], ax, true_values=[1.0, -2.1, 0.5])
+    (bars,) = ax.collections
+    segs = bars.get_segments()
+    np.testing.assert_allclose([s[:, 0] for s in segs], [[-1.0, 1.0], [-10.0, 10.0]])
+    assert [t.get_text() for t in ax.texts] == ["not bounded"]
+    plt.close(fig)

@@ -80,7 +80,8 @@ def plot_intervals(bounds, names, ax=None, *, true_values=None, labels=None, nor
 
 
 def plot_relative_intervals(bounds, names, ax=None, *, true_values=None):
-    """Each interval relative to its centre, in per cent of ``|centre|``: intervals of very
+    """Each interval relative to its centre, in per cent of ``|centre|`` (of the half-width
+    for an interval about 0, which then spans +-100 %): intervals of very
     different sizes and widths on one axis (in their own units, narrow intervals next to
     large values were invisible; new-user trial 15). An infinite interval is named as not
     bounded; ``true_values`` are marked."""
@@ -89,7 +90,10 @@ def plot_relative_intervals(bounds, names, ax=None, *, true_values=None):
     p = len(names)
     finite = np.all(np.isfinite(b), axis=1)
     centre = np.where(finite, b.mean(axis=1), 0.0)
-    scale = np.where(finite, np.maximum(np.abs(centre), 1e-300), 1.0) / 100.0
+    half = np.where(finite, 0.5 * (b[:, 1] - b[:, 0]), 0.0)
+    # |centre|, or the half-width for an interval about 0 (review: b in [-0.05, 0.05]
+    # divided by 1e-300 hid every other interval)
+    scale = np.where(finite, np.maximum(np.maximum(np.abs(centre), half), 1e-300), 1.0) / 100
     rows = np.arange(p)
     ax.hlines(rows[finite], ((b[:, 0] - centre) / scale)[finite],
               ((b[:, 1] - centre) / scale)[finite], color="C0", lw=4, label="interval")
@@ -100,7 +104,7 @@ def plot_relative_intervals(bounds, names, ax=None, *, true_values=None):
         ax.plot(tv[finite], rows[finite], "r|", ms=14, mew=2, label="true value")
     ax.axvline(0.0, color="k", lw=0.5)
     ax.set_yticks(rows, names)
-    ax.set_xlabel("(bound - centre) / |centre|  [%]")
+    ax.set_xlabel("(bound - centre) / max(|centre|, half-width)  [%]")
     ax.legend(fontsize=7)
     return ax
 

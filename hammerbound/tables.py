@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["assumptions_text", "bound_text", "dt_text", "interval_frame", "interval_records",
-           "interval_text", "number_text", "poly_z"]
+           "interval_text", "number_text", "poly_z", "rounded_text"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
@@ -25,12 +25,28 @@ def bound_text(bound) -> str:
 
 
 def number_text(v: float) -> str:
-    """``v`` in the fewest significant digits (4 to 10) that give it back exactly, else 10."""
+    """``v`` in the fewest significant digits (4 to 10) that give it back exactly, else 10
+    rounded down (``v`` is a bound: the one shown is never looser than the one used)."""
     for digits in (4, 6, 8):
         text = f"{v:.{digits}g}"
         if float(text) == v:
             return text
-    return f"{v:.10g}"
+    return rounded_text(v, down=True, digits=10)
+
+
+def rounded_text(v: float, down: bool, digits: int = 4) -> str:
+    """``v`` in ``digits`` significant digits, rounded down (``down``) or up, never to the
+    other side: an assumption shown rounded must be no weaker than the one used (an upper
+    limit of an a priori box rounds down, the ends of a range it holds over round
+    outward; review: ``m_l in [0, 102.5]`` was shown for a limit of 102.4967)."""
+    text = f"{v:.{digits}g}"
+    if not np.isfinite(v) or float(text) == v or (float(text) < v) == down:
+        return text
+    q = 10.0 ** (np.floor(np.log10(abs(v))) - (digits - 1))
+    text = f"{(np.floor(v / q) if down else np.ceil(v / q)) * q:.{digits}g}"
+    if float(text) != v and (float(text) > v) == down:  # rounding of q itself: exact
+        return repr(float(v))
+    return text
 
 
 def assumptions_text(items) -> str:

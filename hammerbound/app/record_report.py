@@ -85,7 +85,7 @@ class RecordReport(Result):
 
         ident, lin = self.ident, self.ident.linear_
         pr, rev = lin.problem_, reversal_summary(self.u)
-        deta = float(np.max(pr.deta)) if hasattr(pr, "deta") else np.nan
+        deta = np.asarray(pr.deta, dtype=float)  # per sample, as the fit used it
         return ["## Record", "",
                 f"- N = {self.u.size} samples, sampling time "
                 f"{dt_text(getattr(ident, 'dt_', None), getattr(lin, 'time_unit_', ''))}",
@@ -93,7 +93,7 @@ class RecordReport(Result):
                 f"reversals {rev['down']:.4g} down, {rev['up']:.4g} up (the dead band is "
                 "identified only where the input moves back by more than it)",
                 f"- output error bound {bound_text(deta)}; SNR of the measured output "
-                f"against the bound: {snr_db(self.y, deta):.1f} dB",
+                f"against the bound: {snr_db(self.y, float(np.max(deta))):.1f} dB",
                 f"- method `{lin.method}`, na = {pr.na}, nb = {pr.nb}, nk = {pr.nk}, initial "
                 "backlash state unknown", ""]
 

@@ -5,7 +5,11 @@ reaches a default limit, the fit is run again with that limit
 :data:`~hammerbound.joint.prior.WIDEN_FACTOR` times wider -- when the time left allows it
 (twice what the first fit took: the wider box is slower) -- and that fit is reported,
 unless the time limit stopped it where the first one had finished: then the first stays,
-resting on its box (in the assumptions), and a warning says so. An empty verdict of the
+resting on its box (in the assumptions), and a warning says so. The wider fit's
+intervals rest on a weaker assumption and may be wider (an end no record of that input can
+bound, e.g. the far dead band of an input that never reverses, still widens the box): so
+a fit given the time for the second run may report wider intervals than one without it,
+each guaranteed under the box its assumptions list. An empty verdict of the
 default box names that box (a backlash beyond it is not excluded). A box the user gave is
 used as given.
 """
@@ -42,7 +46,10 @@ def search_default_box(search, prior, deadline, progress=False):
     names = ", ".join(GAMMA_NAMES[i] for i in rows)
     _say(progress, f"{names} reached the default backlash box; fitting again with it "
                    f"{WIDEN_FACTOR:g}x wider")
-    wproblem, wres = search(wider)
+    try:
+        wproblem, wres = search(wider)
+    except EmptyFeasibleSetError as exc:  # then the default box is empty too
+        raise _in_default_box(exc, wider) from exc
     if _stopped(wres) and not _stopped(res):
         warnings.warn(
             f"{names} reached the default backlash box, and the fit with it "

@@ -48,6 +48,7 @@ from ..relaxations.problem import (
     theta_names,
 )
 from ..status import BOX, NOT_IDENTIFIED, RELAXATION
+from ..tables import bound_text, rounded_text
 from ..tolerances import FEASIBILITY_RTOL
 from .default_box import search_default_box
 
@@ -105,13 +106,16 @@ def _box_words(theta_box, na, nb, nk) -> str:
 
 
 def _assumptions(problem, prior, lin, steady) -> tuple:
-    out = [f"output errors |eta_t| <= {float(np.max(problem.deta)):g} on every sample",
+    deta = np.asarray(problem.deta, dtype=float)
+    every = " on every sample" if np.all(deta == deta.flat[0]) else ""
+    out = [f"output errors |eta_t| <= {bound_text(deta)}{every}",  # (per sample: review)
            "the input is known exactly",
            "linear block of unit steady-state gain (22.8)"
            + _box_words(lin.theta_box, problem.na, problem.nb, problem.nk),
            prior.describe(),
            f"the backlash lines do not cross over the record's inputs "
-           f"[{float(np.min(problem.u)):.4g}, {float(np.max(problem.u)):.4g}] "
+           f"[{rounded_text(float(np.min(problem.u)), down=True)}, "
+           f"{rounded_text(float(np.max(problem.u)), down=False)}] "
            "(m_l (u + c_l) >= m_r (u - c_r): a well-posed backlash)"]
     given = given_rows(lin.theta_box, problem.na, problem.nb, problem.nk)
     if not given[problem.na:].all():

@@ -176,9 +176,13 @@ class GammaPrior:
         return GammaPrior(box, user_given=False)
 
     def describe(self) -> str:
-        g = self.box
+        """The box as an assumption, each limit rounded inward (the box shown is never
+        wider than the one used)."""
+        from ..tables import rounded_text
+
+        rows = [f"{name} in [{rounded_text(lo, down=False)}, {rounded_text(hi, down=True)}]"
+                for name, (lo, hi) in zip(("m_l", "c_l", "m_r", "c_r"), self.box,
+                                          strict=True)]
         who = "given" if self.user_given else "assumed (default; pass gamma_box to change)"
-        return (f"backlash box {who}: m_l in [{g[0, 0]:.4g}, {g[0, 1]:.4g}], c_l in "
-                f"[{g[1, 0]:.4g}, {g[1, 1]:.4g}], m_r in [{g[2, 0]:.4g}, {g[2, 1]:.4g}], "
-                f"c_r in [{g[3, 0]:.4g}, {g[3, 1]:.4g}] (c_l, c_r >= 0: the dead band "
+        return (f"backlash box {who}: {', '.join(rows)} (c_l, c_r >= 0: the dead band "
                 "[-c_l, c_r] holds u = 0)")

@@ -73,11 +73,14 @@ def test_relative_intervals_show_narrow_intervals_of_large_values():
 
     from hammerbound.plotting import plot_relative_intervals
 
-    bounds = np.array([[0.99, 1.01], [-2.2, -1.8], [0.0, np.inf]])
+    bounds = np.array([[0.99, 1.01], [-2.2, -1.8], [-0.05, 0.05], [0.0, np.inf]])
     fig, ax = plt.subplots()
-    plot_relative_intervals(bounds, ["a", "b", "c"], ax, true_values=[1.0, -2.1, 0.5])
+    plot_relative_intervals(bounds, ["a", "b", "z", "c"], ax,
+                            true_values=[1.0, -2.1, 0.01, 0.5])
     (bars,) = ax.collections
     segs = bars.get_segments()
-    np.testing.assert_allclose([s[:, 0] for s in segs], [[-1.0, 1.0], [-10.0, 10.0]])
+    # an interval about 0 is scaled by its half-width (it was divided by 1e-300, review)
+    np.testing.assert_allclose([s[:, 0] for s in segs],
+                               [[-1.0, 1.0], [-10.0, 10.0], [-100.0, 100.0]], atol=1e-9)
     assert [t.get_text() for t in ax.texts] == ["not bounded"]
     plt.close(fig)

@@ -317,3 +317,27 @@ def test_a_dead_band_beyond_the_default_box_does_not_push_the_slope_out():
         ident.fit(u, y)
     assert ident.contains((ml, cl, mr, cr), [-0.5, 0.5])
     assert ident.gamma_bounds_[0, 0] <= ml
+
+
+def test_a_per_sample_output_bound_is_stated_as_used():
+    """Review: with 0.0192 at three samples and 0.02 elsewhere the assumptions said
+    "|eta_t| <= 0.02 on every sample", under which three intervals missed the truth."""
+    rng = np.random.default_rng(5)
+    u = np.repeat(rng.uniform(-2, 2, 12), 5)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], _play(u, 0.5, 0.1, 0.5, 0.1))
+    bound = np.full(u.size, 0.02)
+    bound[[10, 20, 30]] = 0.0192
+    y = y + rng.uniform(-0.0192, 0.0192, u.size)
+    ident = hb.HammersteinBacklashIdentifier(
+        linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=bound, method="lp"),
+        procedure="one-record")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ident.fit(u, y)
+    first = ident.assumptions_[0]
+    assert first == "output errors |eta_t| <= 0.0192..0.02 (per sample)", first
+    import re
+
+    lo, hi = (float(v) for v in re.search(r"record's inputs \[(\S+), (\S+)\]",
+                                          ident.summary()).groups())
+    assert lo <= u.min() and hi >= u.max()  # the range it holds over, rounded outward

@@ -80,3 +80,14 @@ def test_a_default_limit_reached_is_widened_and_a_given_box_is_kept():
     assert not wide.user_given
     given = GammaPrior(PRIOR, user_given=True)
     np.testing.assert_array_equal(given.widened([0, 1]).box, PRIOR)
+
+
+def test_the_box_shown_is_never_wider_than_the_box_used():
+    """Review: a default limit of 102.4967 was shown as m_l in [0, 102.5] -- an assumption
+    weaker than the one the intervals rest on."""
+    from hammerbound.joint.prior import GammaPrior
+
+    box = np.array([[0.0, 102.4967], [0.0123456, 3.3394], [0.5, 1.99999], [0.0, 0.25]])
+    text = GammaPrior(box, user_given=False).describe()
+    assert "m_l in [0, 102.4]" in text and "c_l in [0.01235, 3.339]" in text
+    assert "m_r in [0.5, 1.999]" in text and "c_r in [0, 0.25]" in text

@@ -47,7 +47,7 @@ from ..relaxations.problem import (
     resolve_theta_box,
     theta_names,
 )
-from ..status import BOX, NOT_IDENTIFIED, RELAXATION
+from ..status import BOX, INACCURATE, NOT_IDENTIFIED, RELAXATION
 from ..tables import bound_text, rounded_text
 from ..tolerances import FEASIBILITY_RTOL
 from .default_box import search_default_box
@@ -169,6 +169,23 @@ def _warn_stopped(infos, named, method="exact"):
             "gives each end's status).",
             # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
             SearchLimitWarning, stacklevel=5)
+
+
+def _warn_inaccurate(infos, lps_stopped) -> None:
+    """A SearchLimitWarning naming the finite ends of status INACCURATE: some relaxation
+    LPs ended before optimality, so those bounds (certified from the LPs' duals) may be
+    looser than the relaxation gives (review: they had no warning of their own)."""
+    ends = [f"{i.param} {i.end}" for i in infos
+            if i.status == INACCURATE and np.isfinite(i.bound)]
+    if ends:
+        warnings.warn(
+            f"{lps_stopped} relaxation LP(s) ended before optimality (their own time limit, "
+            f"at most hammerbound.joint.relaxation.LP_TIME_LIMIT s, or HiGHS could not "
+            f"solve them): the bounds of {', '.join(ends)} are certified from those LPs' "
+            "duals and may be looser than the relaxation allows. Rescaling the data or a "
+            "narrower gamma_box may help.", SearchLimitWarning,
+            # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
+            stacklevel=5)
 
 
 def _lead(stopped_by_time) -> str:
@@ -410,6 +427,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                                d is not None and d.stopped_by_time)
     _warn_stopped(res.infos, {name for name, _ in found} | set(b_found), lin.method)
     res = replace(res, infos=_not_identified_infos(res.infos, tb, gb))
+    _warn_inaccurate(res.infos, 0 if d is None else d.lps_stopped)
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, tb, gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,

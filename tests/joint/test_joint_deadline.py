@@ -164,3 +164,24 @@ def test_lp_ends_whose_lps_failed_are_not_said_to_be_at_a_time_limit():
         infos = _lp_infos(["a1", "b1"], box, stopped, failed)
         assert {i.status for i in infos} == {want}
     assert "limit" not in describe(INACCURATE)
+
+
+def test_finite_ends_of_failed_lps_are_named_in_a_warning():
+    """Review: ends of status INACCURATE (LPs that ended before optimality on their own)
+    had no warning, where status LIMIT had one."""
+    import warnings
+    from types import SimpleNamespace
+
+    from hammerbound.exceptions import SearchLimitWarning
+    from hammerbound.hammerstein.one_record import _warn_inaccurate
+    from hammerbound.status import INACCURATE, RELAXATION
+
+    infos = [SimpleNamespace(param="a1", end="lower", status=INACCURATE, bound=-0.6),
+             SimpleNamespace(param="ml", end="upper", status=INACCURATE, bound=np.inf),
+             SimpleNamespace(param="b1", end="lower", status=RELAXATION, bound=0.3)]
+    with pytest.warns(SearchLimitWarning, match=r"3 relaxation LP\(s\) .*bounds of a1 lower "
+                                                r"are certified"):
+        _warn_inaccurate(infos, 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _warn_inaccurate(infos[1:], 3)

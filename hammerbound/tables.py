@@ -51,7 +51,8 @@ def rounded_text(v: float, down: bool, digits: int = 4) -> str:
 
 def assumptions_text(items) -> str:
     """The assumptions a summary's intervals rest on: ``assumptions:`` and one ``  - item``
-    line each (every summary lists them so, after its table)."""
+    line each (every summary lists them so, after its table:
+    :meth:`~hammerbound.results.IntervalSet.summary`)."""
     return "assumptions:\n" + "\n".join(f"  - {a}" for a in items)
 
 

@@ -291,7 +291,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         """Text summary: the procedure and its settings, the interval table (and, for one
         record, the assumptions the bounds rest on)."""
         check_is_fitted(self, "bounds_")
-        from ..tables import assumptions_text, dt_text
+        from ..tables import dt_text
 
         lin = self.linear_
         pr = lin.problem_
@@ -299,8 +299,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
                     f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")
-            return self.intervals_.summary(title=head) + "\n" + assumptions_text(
-                self.assumptions_)
+            return self.intervals_.summary(title=head, assumptions=self.assumptions_)
         inner = self.inner_signal
         if inner == "two-level" and lin.method == "lp":
             inner += (" (not used by method 'lp', which bounds each equation's errors on "
@@ -308,8 +307,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
                 f"{inner}, N = {pr.N}, dt = {dt}")
-        return self.intervals_.summary(title=head) + "\n" + assumptions_text(
-            self.assumptions_)
+        return self.intervals_.summary(title=head, assumptions=self.assumptions_)
 
     @property
     def center_(self):

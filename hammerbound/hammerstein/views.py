@@ -88,15 +88,13 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
         """Text summary: the linear block's intervals of the joint (one-record) fit and the
         assumptions the fit rests on (those of the whole identifier)."""
         pr = self.problem_
-        from ..tables import assumptions_text, dt_text
+        from ..tables import dt_text
 
         head = (f"linear block of a one-record fit: method {self.method}, na={pr.na} "
                 f"nb={pr.nb} nk={pr.nk}, N = {pr.N}, "
                 f"dt = {dt_text(self.dt_, self.time_unit_)}, "
                 f"gain B(1)/A(1) = {self.steady_state_gain:g}")
-        table = self.intervals_.summary(title=head)
-        return table + "\n" + assumptions_text(self.assumptions_) if self.assumptions_ \
-            else table
+        return self.intervals_.summary(title=head, assumptions=self.assumptions_)
 
     def _require_bounded(self, what):
         """Refuse ``what`` (it needs every interval finite) when the record left an

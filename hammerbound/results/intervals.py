@@ -323,11 +323,14 @@ class IntervalSet(Result):
 
         return interval_frame(self.param_names, self.bounds, self.status_text())
 
-    def summary(self, title: str | None = None) -> str:
-        """The intervals as a fixed-width text table (under ``title``, if given)."""
-        from ..tables import interval_text
+    def summary(self, title: str | None = None, assumptions=()) -> str:
+        """The intervals as a fixed-width text table (under ``title``, if given), then the
+        ``assumptions`` they rest on, one per line (:func:`~hammerbound.tables.assumptions_text`;
+        none: the table alone)."""
+        from ..tables import assumptions_text, interval_text
 
-        return interval_text(self.param_names, self.bounds, self.status_text(), title=title)
+        table = interval_text(self.param_names, self.bounds, self.status_text(), title=title)
+        return table + "\n" + assumptions_text(assumptions) if assumptions else table
 
     def to_dict(self) -> dict:
         """JSON-serialisable: ``param_names``, ``bounds`` (an infinite end as ``None``),

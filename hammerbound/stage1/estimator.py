@@ -364,12 +364,12 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     def summary(self) -> str:
         """Text summary: the exact feasible sets and the tight intervals (22.24)."""
         check_is_fitted(self, "left_")
-        from ..tables import assumptions_text, bound_text
+        from ..tables import bound_text
 
         head = (f"BacklashSetEstimator: exact feasible sets, left {len(self.left_.vertices)} "
                 f"and right {len(self.right_.vertices)} vertices, inputs in "
                 f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]")
-        return self.intervals_.summary(title=head) + "\n" + assumptions_text((
+        return self.intervals_.summary(title=head, assumptions=(
             f"output error bound |eta| <= {bound_text(self.output_bound_)}",
             "the steady-state samples are settled (a transient left adds to their errors)",
             "unit steady-state gain of the linear block (22.8)"))

@@ -19,7 +19,7 @@ from ..data.iodata import signal_label
 from ..data.validation import as_bound, as_signal, as_theta
 from ..exceptions import DataValidationError, ParameterValidationError
 from ..results import OutputEnvelope
-from ..tables import assumptions_text, dt_text
+from ..tables import dt_text
 from .fitting import assumption_list
 
 __all__ = ["LinearModelMixin", "is_vector_like"]
@@ -66,8 +66,7 @@ class LinearModelMixin:
                            getattr(self, "signal_units_", ("", "")))
         if sig:
             head += f"\nsignals: {sig}"
-        return (self.intervals_.summary(title=head) + "\n"
-                + assumptions_text(assumption_list(self, pr)))
+        return self.intervals_.summary(title=head, assumptions=assumption_list(self, pr))
 
     def method_label(self) -> str:
         """The method as the summary names it: the moment method with its relaxation

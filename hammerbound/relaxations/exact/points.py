@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...exceptions import SolverError
-from ...solvers.highs_process import wall_stamp
+from ...solvers.highs_process import past, seconds_left, wall_stamp
 from ..problem import EIVProblem, check_theta
 from ..witness import WitnessLP, fixed_theta_matrix, seek_feasible
 from ..witness import on_gain_plane as _on_gain_plane  # noqa: F401 - used by bnb
@@ -205,9 +205,7 @@ def _fixed_a_lp(problem: EIVProblem, a, cost_b, cost_s, s_range, deadline=None):
 
 def _time_option(deadline):
     """linprog's ``time_limit`` for an LP that must end by ``deadline`` (none: {})."""
-    if deadline is None:
-        return {}
-    return {"time_limit": max(deadline - time.time(), 1e-3)}
+    return {} if deadline is None else {"time_limit": seconds_left(np.inf, deadline)}
 
 
 def b_for_a(problem: EIVProblem, theta, k: int, sense: float) -> np.ndarray | None:
@@ -268,7 +266,7 @@ def seek_a(problem: EIVProblem, start, box, verify, max_evals=SEEK_A_EVALS, dead
         pass
 
     def neg_margin(a):
-        if deadline is not None and time.time() > deadline:
+        if past(deadline):
             raise _Done
         a = np.clip(a, lo, hi)
         s, b = a_margin(problem, a, deadline)

@@ -40,6 +40,7 @@ from ..joint import (
     record_box,
     unidentified,
 )
+from ..joint.relaxation import gain_tolerance
 from ..relaxations.problem import (
     b_lags_of,
     given_rows,
@@ -49,7 +50,6 @@ from ..relaxations.problem import (
 )
 from ..status import BOX, INACCURATE, NOT_IDENTIFIED, RELAXATION
 from ..tables import bound_text, rounded_text
-from ..tolerances import FEASIBILITY_RTOL
 from .default_box import search_default_box
 
 __all__ = ["OneRecordFit", "fit_one_record"]
@@ -279,8 +279,7 @@ def gain_tightened(problem, theta_bounds) -> np.ndarray:
     na, p, g = problem.na, problem.p, float(problem.gain)
     if g <= 0 or not np.all(np.isfinite(tb[:na])):
         return tb
-    box = problem.box[:p]
-    tol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box), axis=1))) * max(1, g))
+    tol = gain_tolerance(g, problem.box[:p])  # the relaxation's row, over the a priori box
     lo = g * (1.0 + tb[:na, 0].sum())
     hi = g * (1.0 + tb[:na, 1].sum())
     for j in range(na, p):

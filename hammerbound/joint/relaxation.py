@@ -36,7 +36,7 @@ from .hull_rows import hull_rows
 from .modes import AMBIG, DOWN, INIT, LEFT, RIGHT, UP, InnerStructure, inner_structure, line_range
 from .problem import RecordProblem
 
-__all__ = ["JointRelaxation", "build_relaxation", "solve_lp"]
+__all__ = ["JointRelaxation", "build_relaxation", "gain_tolerance", "solve_lp"]
 
 
 #: A solve that runs more than this many simplex iterations per row and column of the LP
@@ -383,6 +383,13 @@ def _equation_rows(rows, problem, box, st, cols):
              round_down(-y[t_eq] - tau), round_up(-y[t_eq] + tau), key=key(K_EQ, t_eq))
 
 
+def gain_tolerance(g, theta_box) -> float:
+    """The outward tolerance of the gain equality (22.8) ``sum b - g sum a = g`` over the
+    box ``theta_box`` of ``theta`` (rows): the row of the relaxation holds within it."""
+    return FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(theta_box), axis=1)))
+                               * max(1, abs(g)))
+
+
 def _gain_rows(rows, problem, box, cols):
     """The gain equality (22.8) and its RLT rows (multiplied by every inner variable)."""
     p, na = problem.p, problem.na
@@ -390,8 +397,7 @@ def _gain_rows(rows, problem, box, cols):
     blo, bhi = cols.blo, cols.bhi
     g = float(problem.gain)
     gvals = np.concatenate([-g * np.ones(na), np.ones(nbc)])
-    gtol = FEASIBILITY_RTOL * (abs(g) + float(np.sum(np.max(np.abs(box[:p]), axis=1)))
-                               * max(1, abs(g)))
+    gtol = gain_tolerance(g, box[:p])
     rows.add(np.zeros(p, dtype=np.int64), np.arange(p), gvals, g - gtol, g + gtol,
              key=key(K_GAIN))
     pmax = np.maximum(np.abs(cols.pl), np.abs(cols.ph)).reshape(p, nbeta)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 
-from ..paths import FORCE_FLAG, add_force_option, check_output_dir
+from ..paths import FORCE_FLAG, add_force_option
 from .console import cli_terms, recorded_warnings
 from .model_set import add_model_set_option, check_model_set, exit_status, write_model_set
 from .options import (
@@ -15,6 +15,7 @@ from .options import (
     add_csv_options,
     add_model_options,
     add_stage2_options,
+    report_dir,
     require,
     stage2_kwargs,
     theta_box_given,
@@ -110,8 +111,7 @@ def _two_records(args) -> int:
     output_bound, steady_bound, given, assumed = _bounds(args)
     box_lines, box_json = theta_box_given(args)
     given = given + box_lines
-    report_dir = (check_output_dir(args.report, REPORT_FILES, force=args.force,
-                                   option="--report") if args.report else None)
+    out_dir = report_dir(args, REPORT_FILES)
     model_set = check_model_set(args)
     ident = HammersteinBacklashIdentifier(
         BacklashSetEstimator(steady_bound),
@@ -140,10 +140,10 @@ def _two_records(args) -> int:
         print("\n".join(assumption_lines(given, assumed)))
         print(cli_terms(ident.summary()))
         print(tf_text)
-    if report_dir is not None:
+    if out_dir is not None:
         from ..report import write_report
 
-        path = write_report(ident, *steady, data.u, data.y, report_dir, overwrite=args.force)
+        path = write_report(ident, *steady, data.u, data.y, out_dir, overwrite=args.force)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
     return exit_status(model_set, written)
 

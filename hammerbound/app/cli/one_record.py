@@ -8,7 +8,7 @@ import numpy as np
 
 from .console import cli_terms, recorded_warnings
 from .model_set import check_model_set, exit_status, write_model_set
-from .options import CLI_NAMES, UsageError, require, stage2_kwargs
+from .options import CLI_NAMES, UsageError, report_dir, require, stage2_kwargs
 from .printing import assumption_lines, data_fields, json_text, record_line, transfer_function
 
 __all__ = ["run_one_record"]
@@ -37,7 +37,9 @@ def run_one_record(args) -> int:
         raise UsageError("--steady-output-bound belongs to --steady; one record has one "
                          "output error bound (--output-bound)")
     model_set = check_model_set(args)
-    report_dir = _report_dir(args)
+    from ..record_report import RECORD_REPORT_FILES
+
+    out_dir = report_dir(args, RECORD_REPORT_FILES)
     with recorded_warnings() as seen:  # the data's warnings too (JSON)
         data, steady = _read(args)
         ident = HammersteinBacklashIdentifier(
@@ -64,23 +66,12 @@ def run_one_record(args) -> int:
         print("\n".join(assumption_lines(given, [])))
         print(cli_terms(ident.summary()))
         print(tf_text)
-    if report_dir is not None:
+    if out_dir is not None:
         from ..record_report import write_record_report
 
-        path = write_record_report(ident, data.u, data.y, report_dir, overwrite=args.force)
+        path = write_record_report(ident, data.u, data.y, out_dir, overwrite=args.force)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
     return exit_status(model_set, written)
-
-
-def _report_dir(args):
-    """``--report DIR`` checked before the fit (None without it)."""
-    if not args.report:
-        return None
-    from ..paths import check_output_dir
-    from ..record_report import RECORD_REPORT_FILES
-
-    return check_output_dir(args.report, RECORD_REPORT_FILES, force=args.force,
-                            option="--report")
 
 
 def _read(args):

@@ -62,6 +62,16 @@ def require(value, flag: str, why: str):
     return value
 
 
+def report_dir(args, files):
+    """The directory of ``--report DIR``, checked before the fit for the report's ``files``
+    (None without the option)."""
+    if not args.report:
+        return None
+    from ..paths import check_output_dir
+
+    return check_output_dir(args.report, files, force=args.force, option="--report")
+
+
 def add_bound_options(p, *, input_bound=True, steady=False):
     """``--output-bound`` (required: checked by :func:`require` in the command, so that
     the old spellings also count) and ``--input-bound`` (default 0, printed as an

@@ -214,21 +214,25 @@ def _search_nd(obj, base, cidx, params, grid_size, target, starts, coarse=False)
         v = a + np.clip(w, 0.0, 1.0) * (b - a)
         return np.where(logs, np.exp(np.where(logs, v, 0.0)), v)
 
-    order = np.argsort(vals)
     opts = {"maxfev": (8 if coarse else 30) * k, "xatol": 1e-4,
             "fatol": 1e-12 * (1 + (target or 0.0))}
-    for j in order[: 1 if coarse else 2]:
-        minimize(lambda w: f(from_unit(w)), to_unit(np.array(pts[j])), method="Nelder-Mead",
+
+    def nelder_mead(start):
+        minimize(lambda w: f(from_unit(w)), to_unit(np.asarray(start)), method="Nelder-Mead",
                  options=opts)
+
+    def best_point():
+        return np.array(min(list(f.keys), key=f))
+
+    for j in np.argsort(vals)[: 1 if coarse else 2]:
+        nelder_mead(pts[j])
     if coarse:
         return
     for _ in range(RESTARTS):  # Nelder-Mead stalls on the minimax error's kinks: restart
-        best = np.array(min(list(f.keys), key=f))
-        if target is not None and f(best) <= target:
+        if target is not None and f(best_point()) <= target:
             break
-        minimize(lambda w: f(from_unit(w)), to_unit(best), method="Nelder-Mead",
-                 options=opts)
-    best = np.array(min(list(f.keys), key=f))
+        nelder_mead(best_point())
+    best = best_point()
     if target is not None and target < f(best) <= 1.01 * target:
         _pattern(f, best, lo, hi, target)
 

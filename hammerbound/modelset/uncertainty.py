@@ -54,7 +54,7 @@ import numpy as np
 from ..exceptions import ParameterValidationError, UnboundedSetError
 from .frequency import _lipschitz
 from .gain_plane import plane_centre, plane_numerator
-from .weight import UncertaintyWeight, WeightCertificate
+from .weight import UncertaintyWeight, WeightCertificate, num_den
 from .weight_shape import embed, fit_shape, magnitude, polynomial, start_from_roots
 from .zonotope import ROUND_RTOL, value_sets
 
@@ -270,8 +270,7 @@ def _poly_abs(coefs, omega, dt):
 
 def _weight_lower(W, omega, dt):
     """Lower bound of ``|W|`` on each interval of ``omega`` (see the module doc)."""
-    num = np.ravel(np.asarray(W.num[0][0], dtype=float))
-    den = np.ravel(np.asarray(W.den[0][0], dtype=float))
+    num, den = num_den(W)
     nv, LN, en = _poly_abs(num, omega, dt)
     dv, LD, ed = _poly_abs(den, omega, dt)
     h = np.diff(omega)

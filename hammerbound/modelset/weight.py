@@ -116,11 +116,9 @@ class UncertaintyWeight(Result):
         on the gain plane it is not the box centre), poles and zeros as ``[re, im]``, the
         fit grid, deviation and ``|W|``, the proof."""
         c = self.certificate
-        num = np.ravel(np.asarray(self.W.num[0][0], dtype=float))
-        den = np.ravel(np.asarray(self.W.den[0][0], dtype=float))
-        g0 = {"num": np.ravel(np.asarray(self.central.num[0][0], dtype=float)),
-              "den": np.ravel(np.asarray(self.central.den[0][0], dtype=float)),
-              "variable": "z"}
+        num, den = num_den(self.W)
+        g0_num, g0_den = num_den(self.central)
+        g0 = {"num": g0_num, "den": g0_den, "variable": "z"}
         return jsonable({
             "kind": self.kind, "order": self.order, "num": num, "den": den, "central": g0,
             "dt": None if self.W.dt is True else self.W.dt,
@@ -140,8 +138,13 @@ class UncertaintyWeight(Result):
         return plot_weight(self, ax, db=db)
 
 
+def num_den(tf) -> tuple:
+    """The numerator and denominator coefficients of a SISO transfer function (float
+    arrays, highest power of z first)."""
+    return tuple(np.ravel(np.asarray(c[0][0], dtype=float)) for c in (tf.num, tf.den))
+
+
 def _tf_text(W) -> str:
-    num = np.ravel(np.asarray(W.num[0][0], dtype=float))
-    den = np.ravel(np.asarray(W.den[0][0], dtype=float))
+    num, den = num_den(W)
     return (f"({' '.join(f'{v:+.4g}' for v in num)}) / ({' '.join(f'{v:+.4g}' for v in den)})"
             " in powers of z, highest first")

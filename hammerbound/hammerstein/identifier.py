@@ -51,14 +51,15 @@ def _inner_text(inner_signal, x, bound) -> str:
     """The stage-2 assumption on the inner signal ``x`` (its centre values): an error per
     sample, or (two-level, Result 1) one unknown value per PRBS level (trial 13: "(per
     sample)" was said of both)."""
-    from ..tables import bound_text
+    from ..tables import bound_text, rounded_text
 
     if inner_signal != "two-level":
         return f"inner signal within the stage-1 bounds |dx_t| <= {bound_text(bound)}"
     x, bound = np.asarray(x, dtype=float), np.broadcast_to(bound, np.shape(x))
-    up, down = float(np.max(bound[x > 0], initial=0)), float(np.max(bound[x < 0], initial=0))
+    up, down = (rounded_text(float(np.max(bound[s], initial=0)), down=True)  # no weaker
+                for s in (x > 0, x < 0))                                   # than used
     return ("inner signal at two unknown levels (Result 1), one per PRBS level, within "
-            f"their stage-1 bounds |dx| <= {up:.4g} (u = +u*) and {down:.4g} (u = -u*)")
+            f"their stage-1 bounds |dx| <= {up} (u = +u*) and {down} (u = -u*)")
 
 
 def _central_system(backlash, A, B, dt=None):

@@ -165,13 +165,16 @@ class BacklashInverse(Result):
     def summary(self) -> str:
         """The central backlash, the command range and the guaranteed error over it."""
         v = np.linspace(self.v_range[0], self.v_range[1], 201)
+        from ..tables import rounded_text
+
         lo, hi = self.error_bounds(v)
         ml, cl, mr, cr = self.gamma
         return (f"backlash inverse of ml={ml:.4g} cl={cl:.4g} mr={mr:.4g} cr={cr:.4g}, "
                 f"from x0 = {self.x0:g}\n"
                 f"commands v in [{self.v_range[0]:.4g}, {self.v_range[1]:.4g}], inputs u in "
                 f"[{self.u_range[0]:.4g}, {self.u_range[1]:.4g}]\n"
-                f"guaranteed residual x - v in [{lo.min():.4g}, {hi.max():.4g}] over the "
+                f"guaranteed residual x - v in [{rounded_text(lo.min(), down=True)}, "
+                f"{rounded_text(hi.max(), down=False)}] over the "  # rounded outward
                 "command range (every feasible backlash)")
 
     def to_dict(self) -> dict:

@@ -541,3 +541,17 @@ def test_identifier_delegates_and_figures(stage1, tmp_path):
     fig2.savefig(tmp_path / "comp.png")
     plt.close("all")
     assert (tmp_path / "bode.png").stat().st_size > 0
+
+
+def test_inverse_summary_rounds_its_guaranteed_band_outward(stage1):
+    """The summary's "guaranteed residual x - v in [lo, hi]" was printed with ``.4g``,
+    which may round either end inward (a narrower band than the one guaranteed)."""
+    import re
+
+    inv = stage1[0].inverse()
+    v = np.linspace(inv.v_range[0], inv.v_range[1], 201)
+    lo, hi = inv.error_bounds(v)
+    shown = re.search(r"guaranteed residual x - v in \[(\S+), (\S+)\]", inv.summary())
+    a, b = (float(t) for t in shown.groups())
+    assert a <= lo.min() and b >= hi.max()  # never inside the band
+    assert np.isclose(a, lo.min(), rtol=1e-3) and np.isclose(b, hi.max(), rtol=1e-3)

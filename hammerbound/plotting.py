@@ -171,7 +171,7 @@ def plot_backlash(bl, u=None, y=None, ax=None, *, output_bound=None, u_star=None
     return ax
 
 
-def plot_envelope(t, y, lower, upper, ax=None, *, center=None, label="data"):
+def plot_envelope(t, y, lower, upper, ax=None, *, center=None, label="data", xlabel="sample t"):
     """Measured output (``y``; None: not drawn) with the guaranteed output envelope."""
     ax = _axes(ax)
     ax.fill_between(t, lower, upper, color="C0", alpha=0.3, step="mid", label="output envelope")
@@ -179,7 +179,7 @@ def plot_envelope(t, y, lower, upper, ax=None, *, center=None, label="data"):
         ax.plot(t, center, color="C0", lw=1, label="central model")
     if y is not None:
         ax.plot(t, y, ".", color="k", ms=3, label=label)
-    ax.set_xlabel("sample t")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("output")
     ax.legend(fontsize=7)
     return ax

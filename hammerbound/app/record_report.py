@@ -18,7 +18,7 @@ from ..results import OutputEnvelope, Result, jsonable
 from ..systems.experiments import snr_db
 from ..tables import bound_text
 from .paths import check_output_dir
-from .report import assumption_lines, checked_axes, envelope_lines, interval_table
+from .report import assumption_lines, checked_axes, envelope_lines, interval_table, time_axis
 
 __all__ = ["RECORD_REPORT_FILES", "RecordReport", "write_record_report"]
 
@@ -171,7 +171,7 @@ class RecordReport(Result):
             ax.text(0.5, 0.5, "an interval is infinite: no envelope", ha="center",
                     va="center", transform=ax.transAxes)
             return
-        self.envelope.plot(ax, center=self.ident.predict(self.u))
+        self.envelope.plot(ax, center=self.ident.predict(self.u), **time_axis(self.ident))
         ax.set_title("record output, central model and guaranteed one-step envelope")
 
     def plot(self, ax=None):

@@ -75,6 +75,13 @@ def envelope_lines(envelope) -> list:
             "", "![envelope](envelope.png)", ""]
 
 
+def time_axis(ident) -> dict:
+    """The keywords of :meth:`OutputEnvelope.plot` that draw a report's envelope over time
+    when the fit knows its sampling time (trial 15: the envelope was in samples)."""
+    return {"dt": getattr(ident, "dt_", None),
+            "time_unit": getattr(ident.linear_, "time_unit_", "")}
+
+
 def checked_axes(ax, names: str) -> list:
     """``ax`` as a flat list of one Axes per name of ``names`` (comma-separated), else a
     ParameterValidationError naming them."""
@@ -224,7 +231,7 @@ class IdentificationReport(Result):
         lin.intervals_.plot(ax, true_values=self.theta_true, label=lin.method)
 
     def _draw_envelope(self, ax):
-        self.envelope.plot(ax, center=self.ident.predict(self.prbs_u))
+        self.envelope.plot(ax, center=self.ident.predict(self.prbs_u), **time_axis(self.ident))
         ax.set_title("PRBS output, central model and guaranteed one-step envelope")
 
     def plot(self, ax=None):

@@ -145,12 +145,13 @@ def plot_compensation(inv, ax=None, *, n=400, samples=None, max_samples=30):
     R, L = inv.right_vertices, inv.left_vertices
     r_all = R[None, :, 0] * u[:, None] - R[None, :, 1]
     l_all = L[None, :, 0] * u[:, None] + L[None, :, 1]
-    a1.fill_between(u, r_all.min(1), r_all.max(1), color="C0", alpha=0.3, lw=0,
-                    label="right line, feasible band")
-    a1.fill_between(u, l_all.min(1), l_all.max(1), color="C1", alpha=0.3, lw=0,
+    # left line C0, right line C1, as in every other figure of the package (trial 15)
+    a1.fill_between(u, l_all.min(1), l_all.max(1), color="C0", alpha=0.3, lw=0,
                     label="left line, feasible band")
-    a1.plot(u, mr * (u - cr), "C0", lw=1)
-    a1.plot(u, ml * (u + cl), "C1", lw=1)
+    a1.fill_between(u, r_all.min(1), r_all.max(1), color="C1", alpha=0.3, lw=0,
+                    label="right line, feasible band")
+    a1.plot(u, ml * (u + cl), "C0", lw=1)
+    a1.plot(u, mr * (u - cr), "C1", lw=1)
     a1.set_xlabel("u")
     a1.set_ylabel("x")
     a1.set_title("backlash characteristic")

@@ -102,9 +102,15 @@ class OutputEnvelope(Result):
         return jsonable({"lower": self.lower, "upper": self.upper,
                          "coverage": self.coverage()})
 
-    def plot(self, ax=None, *, t=None, center=None, label="data"):
-        """The band with the measured output (and a ``center`` line); returns the Axes."""
+    def plot(self, ax=None, *, t=None, center=None, label="data", dt=None, time_unit=""):
+        """The band with the measured output (and a ``center`` line) over ``t``, else over
+        time ``k * dt`` when a sampling time ``dt`` is given, else over the sample index;
+        returns the Axes."""
         from ..plotting import plot_envelope
 
+        xlabel = "sample t"
+        if t is None and dt is not None:
+            t, xlabel = np.arange(self.lower.size) * dt, f"time {time_unit}".strip()
         t = np.arange(self.lower.size) if t is None else t
-        return plot_envelope(t, self.y, self.lower, self.upper, ax, center=center, label=label)
+        return plot_envelope(t, self.y, self.lower, self.upper, ax, center=center, label=label,
+                             xlabel=xlabel)

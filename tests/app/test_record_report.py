@@ -84,3 +84,28 @@ def test_relative_intervals_show_narrow_intervals_of_large_values():
                                [[-1.0, 1.0], [-10.0, 10.0], [-100.0, 100.0]], atol=1e-9)
     assert [t.get_text() for t in ax.texts] == ["not bounded"]
     plt.close(fig)
+
+
+def test_the_envelope_is_drawn_over_time_when_the_sampling_time_is_known():
+    """Trial 15: the report's envelope had its x axis in samples although the record gave
+    its sampling time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-2, 2, 12), 8)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], play(u, *GAMMA)) + 0.02 * rng.uniform(-1, 1, u.size)
+    ident = _fit(hb.IOData(u, y, dt=0.5, time_unit="s"), None)
+    assert np.all(np.isfinite(ident.bounds_))
+    rep = RecordReport.build(ident, u, y)
+    fig, ax = plt.subplots()
+    rep._draw_envelope(ax)
+    assert ax.get_xlabel() == "time s"
+    assert ax.dataLim.x1 == pytest.approx(0.5 * (u.size - 1), rel=0.02)
+    plt.close(fig)
+    fig, ax = plt.subplots()  # without a sampling time: samples, as before
+    rep.envelope.plot(ax)
+    assert ax.get_xlabel() == "sample t"
+    plt.close(fig)

@@ -555,3 +555,19 @@ def test_inverse_summary_rounds_its_guaranteed_band_outward(stage1):
     a, b = (float(t) for t in shown.groups())
     assert a <= lo.min() and b >= hi.max()  # never inside the band
     assert np.isclose(a, lo.min(), rtol=1e-3) and np.isclose(b, hi.max(), rtol=1e-3)
+
+
+def test_inverse_plot_colours_the_lines_as_the_other_figures(stage1):
+    """Trial 15: the inverse's figure drew the left line in C1 and the right in C0, the
+    report's characteristic the other way round."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_rgb
+
+    fig = stage1[0].inverse().plot()
+    bands = {c.get_label(): to_rgb(c.get_facecolor()[0]) for c in fig.axes[0].collections}
+    assert bands["left line, feasible band"] == to_rgb("C0")
+    assert bands["right line, feasible band"] == to_rgb("C1")
+    plt.close(fig)

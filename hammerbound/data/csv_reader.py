@@ -117,6 +117,20 @@ def _not_a_number(path, lineno, column, text) -> str:
     return msg
 
 
+def _check_width(path, lineno, row, width, delimiter) -> None:
+    """A row with more (non-empty) fields than the header has its values shifted into
+    other columns: a decimal comma in a comma-separated file (``2.38,3.5,8,827`` read
+    3.5 and 8.0, new-user trial 17) or a stray separator. Refused, never read."""
+    if len(row) > width and any(f.strip() for f in row[width:]):
+        sep = "a tab" if delimiter == "\t" else repr(delimiter)
+        raise DataValidationError(
+            f"{path}, line {lineno}: the row has {len(row)} fields but the header (or first "
+            f"row) has {width}, so its values would land in the wrong columns: "
+            f"{delimiter.join(row)!r}. A decimal comma in a file separated by {sep}, or a "
+            "stray separator? Fix the row (decimal points, e.g. 8.827 not 8,827), or pass "
+            "the file's own delimiter.")
+
+
 def _delimiter(delimiter, names) -> str:
     if isinstance(delimiter, str) and delimiter in _TAB:
         return "\t"
@@ -174,6 +188,7 @@ def _read_columns(path, columns, delimiter, names):
         for lineno, row in enumerate(reader, start=2):
             if not row or all(not f.strip() for f in row):
                 continue
+            _check_width(path, lineno, row, len(header), delimiter)
             for c, i in zip(columns, idx, strict=True):
                 if i >= len(row):
                     raise DataValidationError(
@@ -294,6 +309,7 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
         raise DataValidationError(f"{path} has a header but no data rows.")
     u, y, bad = [], [], []
     for ln, r in rows:
+        _check_width(path, ln, r, ncols, delimiter)
         try:
             uv, yv = float(r[ju]), float(r[jy])
         except (IndexError, ValueError):

@@ -76,3 +76,50 @@ def test_a_table_of_both_signals_as_x_gets_advice():
         est.fit(frame)
     with pytest.raises(hb.exceptions.DataValidationError, match="2 columns: the model"):
         est.fit(frame.to_numpy())
+
+
+def _one_decimal_comma(rows: str) -> str:
+    """The rows with one value written with a decimal comma (the third line's y)."""
+    lines = rows.splitlines(keepends=True)
+    lines[2] = lines[2].replace("-0.125", "-0,125")
+    return "".join(lines)
+
+
+@pytest.mark.parametrize("header", ["t,u,y", "u,y,t"])
+def test_a_row_with_more_fields_than_the_header_is_refused(tmp_path, header):
+    """Trial 17: ``2.38,3.5,8,827`` (a decimal comma in one value) was read as y = 8.0
+    with no warning; in a steady-state file the fit then ran on the wrong value."""
+    rows = _rows() if header == "t,u,y" else "".join(
+        f"{u},{y},{0.1 * k:.1f}\n" for k, (u, y) in enumerate(zip(U, Y, strict=True)))
+    path = _write(tmp_path, header + "\n" + _one_decimal_comma(rows))
+    with pytest.raises(DataValidationError, match=r"line 4: the row has 4 fields but the "
+                       r"header \(or first row\) has 3.*decimal comma"):
+        hb.IOData.from_csv(path, t=None)
+
+
+def test_the_headerless_reader_refuses_a_shifted_row_too(tmp_path):
+    from hammerbound.data.csv_reader import read_io_csv
+
+    body = "".join(f"{u},{y}\n" for u, y in zip(U, Y, strict=True)).replace("-0.125", "-0,125")
+    with pytest.raises(DataValidationError, match="line 3: the row has 3 fields"):
+        read_io_csv(_write(tmp_path, body))
+
+
+def test_trailing_empty_fields_are_still_read(tmp_path):
+    """Spreadsheets pad rows with empty fields: those are not shifted values."""
+    body = "".join(f"{u},{y},,\n" for u, y in zip(U, Y, strict=True))
+    data = hb.IOData.from_csv(_write(tmp_path, "u,y\n" + body))
+    assert np.array_equal(data.u, U) and np.array_equal(data.y, Y)
+
+
+def test_identify_refuses_a_steady_state_file_with_a_shifted_row(tmp_path, capsys):
+    """The command line read the steady-state file of trial 17 and exited 0."""
+    steady = "u,y\n1.0,0.2\n-1.0,-0.3\n2.0,0.5\n-2.0,-0,6\n"  # -0,6: a decimal comma
+    path = _write(tmp_path, steady, name="steady.csv")
+    prbs = _write(tmp_path, "u,y\n" + "".join(f"{u},{y}\n" for u, y in
+                                              zip(np.tile([1.0, -1.0], 10), np.zeros(20),
+                                                  strict=True)), name="prbs.csv")
+    code = main(["identify", "--steady", str(path), "--prbs", str(prbs),
+                 "--output-bound", "0.05"])
+    assert code == 2
+    assert "line 5: the row has 3 fields" in capsys.readouterr().err

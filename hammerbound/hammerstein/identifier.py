@@ -33,7 +33,14 @@ from ..exceptions import DataValidationError, ParameterValidationError
 from ..results import IntervalSet
 from ..stage2.linear_model import is_vector_like
 from ..systems.models import GAMMA_NAMES, Backlash, HammersteinSystem
-from .setup import check_bounds, choose_procedure, record_of, stage_estimators, steady_bound
+from .setup import (
+    GAIN_ASSUMPTION,
+    check_bounds,
+    choose_procedure,
+    record_of,
+    stage_estimators,
+    steady_bound,
+)
 
 __all__ = ["HammersteinBacklashIdentifier"]
 
@@ -233,7 +240,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             "settled: a transient left counts against the steady-state output bound",
             f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",
             _inner_text(self._inner_used(), self.xc_, lin.problem_.input_bound),
-            "linear block of unit steady-state gain (22.8)",
+            GAIN_ASSUMPTION,
             _theta_box_text(lin),
         )
         ml, cl, mr, cr = bl.gamma_center_

@@ -51,6 +51,7 @@ from ..relaxations.problem import (
 from ..status import BOX, INACCURATE, NOT_IDENTIFIED, RELAXATION
 from ..tables import bound_text, rounded_text
 from .default_box import search_default_box
+from .setup import GAIN_ASSUMPTION
 
 __all__ = ["OneRecordFit", "fit_one_record"]
 
@@ -110,7 +111,7 @@ def _assumptions(problem, prior, lin, steady) -> tuple:
     every = " on every sample" if np.all(deta == deta.flat[0]) else ""
     out = [f"output errors |eta_t| <= {bound_text(deta)}{every}",  # (per sample: review)
            "the input is known exactly",
-           "linear block of unit steady-state gain (22.8)"
+           GAIN_ASSUMPTION
            + _box_words(lin.theta_box, problem.na, problem.nb, problem.nk),
            prior.describe(),
            f"the backlash lines do not cross over the record's inputs "

@@ -15,6 +15,13 @@ from ..stage2.estimator import LinearEIVSetEstimator
 
 PROCEDURES = ("auto", "two-stage", "one-record")
 
+#: The unit-gain normalisation (22.8) and what it implies at rest, as every fit's
+#: assumptions say it: the model has no output offset, so a sensor's offset is read as
+#: a shift of the backlash lines (trial 17: 0.3 mm moved c_l from 0.40 to [0.548, 0.574]
+#: and c_r from 0.30 to [0.150, 0.173], every status optimal).
+GAIN_ASSUMPTION = ("linear block of unit steady-state gain (22.8), no output offset (at rest "
+                   "y = x, the backlash output: subtract a sensor offset first)")
+
 
 def _stage_estimator(value, cls, name, example):
     """A clone of the stage estimator ``value`` (an instance of ``cls``), or a typed error

@@ -315,10 +315,13 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
 
     def suggest_prbs_level(self, margin: float = 0.25) -> float:
-        """A PRBS level inside the admissible range: ``u_hi - margin (u_hi - u_lo)``.
-
-        With an unbounded range (``m_l == m_r`` can be excluded on neither side) it returns
-        ``(1 + margin) * 10 * u_lo``.
+        """A PRBS level inside the admissible range and the tested amplitudes:
+        ``top - margin (top - u_lo)`` with ``top = min(u_hi, U)``, ``U`` the largest
+        amplitude the steady-state data reached on both sides (the lines are known only
+        where the experiment tested them: new-user trial 17 was suggested 9.64 V for a
+        valve tested to +-5 V, from the lines' crossing). With an unbounded range
+        (``m_l == m_r`` can be excluded on neither side, and ``U`` does not cap it) it
+        returns ``(1 + margin) * 10 * u_lo``.
         """
         margin = as_real("margin", margin, lo=0.0, hi=1.0, example="0.25")
         u_lo, u_hi = self.admissible_prbs_range()
@@ -327,9 +330,11 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
                 "no PRBS level satisfies Result 1 for every feasible backlash: the dead zone "
                 "and the line crossing overlap. Reduce the noise or add steady-state data."
             )
-        if not np.isfinite(u_hi):
+        tested = float(min(-self.input_range_[0], self.input_range_[1]))
+        top = min(u_hi, tested) if tested > u_lo else u_hi
+        if not np.isfinite(top):
             return float((1 + margin) * 10 * u_lo)
-        return float(u_hi - margin * (u_hi - u_lo))
+        return float(top - margin * (top - u_lo))
 
     def inner_signal_bounds(self, u_star: float) -> InnerSignalBounds:
         """Exact bounds (22.25)-(22.26) on the inner PRBS levels, after checking Result 1."""

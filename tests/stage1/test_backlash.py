@@ -223,3 +223,29 @@ def test_empty_set_names_first_bad_measurement():
     assert info.value.side == "right"
     assert info.value.first_index == right[7]
     assert "index" in str(info.value)
+
+
+def _valve_steady(amplitudes, rng):
+    """Settled steady states of a backlash tested at +-amplitudes (trial 17's valve:
+    m_l = 2.0, c_l = 0.4, m_r = 2.1, c_r = 0.3), errors uniform within 0.05."""
+    a = np.asarray(amplitudes, dtype=float)
+    u = np.concatenate([a, -a])
+    y = np.where(u > 0, 2.1 * (u - 0.3), 2.0 * (u + 0.4)) + rng.uniform(-0.05, 0.05, u.size)
+    return u, y
+
+
+def test_the_suggested_level_stays_within_the_tested_amplitudes():
+    """Trial 17: tested to +-5 V, the suggestion was 9.64 V -- from the crossing of the
+    lines, far beyond where the experiment had seen them."""
+    import warnings
+
+    u, y = _valve_steady(np.linspace(0.8, 5.0, 10), np.random.default_rng(0))
+    est = BacklashSetEstimator(0.05).fit(u, y)
+    lo, hi = est.admissible_prbs_range()
+    assert hi > 5.0  # the lines cross far out: the range itself goes beyond the data
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        level = est.suggest_prbs_level()
+    assert lo < level <= 5.0
+    assert level == pytest.approx(5.0 - 0.25 * (5.0 - lo))
+

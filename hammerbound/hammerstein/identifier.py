@@ -232,10 +232,12 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.theta_bounds_ = lin.bounds_
         self.bound_info_ = tuple(lin.bound_info_)
         self.intervals_ = IntervalSet.stack(bl.intervals_, lin.intervals_, method="two-stage")
+        from ..stage1.smallest_bound import smallest_bound_text
         from ..tables import bound_text
 
         self.assumptions_ = (
-            f"steady-state output errors |eta| <= {bound_text(bl.output_bound_)}",
+            f"steady-state output errors |eta| <= {bound_text(bl.output_bound_)}"
+            + smallest_bound_text(bl.smallest_bound_factor_, bl.output_bound_),
             "u > 0 steady states on the right line, u < 0 on the left (square waves), "
             "settled: a transient left counts against the steady-state output bound",
             f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",

@@ -28,6 +28,7 @@ from ..systems.models import GAMMA_NAMES
 from .feasible_set import Edge, PolygonFeasibleSet
 from .inner_signal import InnerSignalBounds
 from .side_polygon import SideProblem
+from .smallest_bound import smallest_bound_factor, smallest_bound_text
 
 __all__ = ["BacklashSetEstimator", "InnerSignalBounds"]  # InnerSignalBounds: from .inner_signal
 
@@ -192,6 +193,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             sets[side] = self._fit_side(side, X[idx], y[idx], deta[idx], idx)
         self.left_, self.right_ = sets["left"], sets["right"]
         self.output_bound_ = deta
+        self.smallest_bound_factor_ = smallest_bound_factor(X, y, deta)
         self.input_range_ = (float(X.min()), float(X.max()))
         self.intervals_ = IntervalSet(GAMMA_NAMES, np.vstack(
             [self.left_.orthotope, self.right_.orthotope]), method=self.method)
@@ -237,7 +239,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         return EmptyFeasibleSetError(
             f"no backlash parameters (m, c) > 0 explain the {side}-side steady-state data within "
             f"the output bound: the set becomes empty at measurement index {k}. Check that "
-            "sample, output_bound (too small?) and that the data are at steady state. "
+            "sample, output_bound (too small?), that the data are at steady state and that "
+            "the input and output columns are not swapped. "
             f"(Certified in exact arithmetic by the constraints {which}, with the tolerance "
             "of docs/tolerances.md.)"
             + _sign_hint(problem.u, problem.y),
@@ -375,9 +378,11 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
                 f"and right {len(self.right_.vertices)} vertices, inputs in "
                 f"[{self.input_range_[0]:g}, {self.input_range_[1]:g}]")
         return self.intervals_.summary(title=head, assumptions=(
-            f"output error bound |eta| <= {bound_text(self.output_bound_)}",
+            f"output error bound |eta| <= {bound_text(self.output_bound_)}"
+            + smallest_bound_text(self.smallest_bound_factor_, self.output_bound_),
             "the steady-state samples are settled (a transient left adds to their errors)",
-            "unit steady-state gain of the linear block (22.8)"))
+            "unit steady-state gain of the linear block (22.8), no output offset (subtract "
+            "a sensor offset first)"))
 
     # ------------------------------------------------------------------ model set (issue 16)
     def sample(self, n, random_state=None):

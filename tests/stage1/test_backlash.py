@@ -249,3 +249,41 @@ def test_the_suggested_level_stays_within_the_tested_amplitudes():
     assert lo < level <= 5.0
     assert level == pytest.approx(5.0 - 0.25 * (5.0 - lo))
 
+
+
+def _chebyshev(u, y):
+    """The tests' own smallest max |y - m u - q| over lines: for fixed m the best q leaves
+    (max r - min r) / 2 of r = y - m u, which is convex in m."""
+    from scipy.optimize import minimize_scalar
+
+    def half_range(m):
+        r = y - m * u
+        return 0.5 * (r.max() - r.min())
+
+    return minimize_scalar(half_range, bounds=(-100, 100), method="bounded",
+                           options={"xatol": 1e-12}).fun
+
+
+def test_the_smallest_bound_the_data_allow_is_stated_and_is_a_lower_bound():
+    """Trial 17: with 0.048 for noise within 0.05 the interval of m_r excluded the truth,
+    and nothing showed how close the data came to the bound. The summary states the
+    smallest bound at which a line explains both sides (never above the true one), and
+    below it the fit is refused."""
+    u, y = _valve_steady(np.linspace(0.8, 5.0, 10), np.random.default_rng(4))
+    need = max(_chebyshev(u[u > 0], y[u > 0]), _chebyshev(u[u < 0], y[u < 0]))
+    est = BacklashSetEstimator(0.05).fit(u, y)
+    stated = est.smallest_bound_factor_ * 0.05
+    assert need * (1 - 1e-5) <= stated <= need
+    shown = float(est.summary().split("the data allow no bound below ")[1].split(":")[0])
+    assert shown <= stated and shown == pytest.approx(stated, rel=1e-2)
+    with pytest.raises(EmptyFeasibleSetError):
+        BacklashSetEstimator(0.99 * need).fit(u, y)
+    BacklashSetEstimator(1.01 * need).fit(u, y)  # and just above it, a set
+
+
+def test_an_empty_stage_one_names_swapped_columns():
+    """Trial 17: identify with --u-col and --y-col swapped said "too small? steady
+    state?" only."""
+    u, y = _valve_steady(np.linspace(0.8, 5.0, 10), np.random.default_rng(0))
+    with pytest.raises(EmptyFeasibleSetError, match="columns are not swapped"):
+        BacklashSetEstimator(0.05).fit(y, u)

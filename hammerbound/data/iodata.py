@@ -18,7 +18,7 @@ import numpy as np
 
 from ..exceptions import DataValidationError, DataWarning, ParameterValidationError
 from .csv_reader import PYTHON_NAMES
-from .timebase import find_time_column, time_unit_of, uniform_step
+from .timebase import find_time_column, name_and_unit, time_unit_of, uniform_step
 from .validation import as_signal
 
 __all__ = ["IOData", "signal_label", "uniform_step"]
@@ -196,8 +196,12 @@ class IOData:
                     f"{where}: the time column {t!r} has step {step:g} but dt={dt:g} was "
                     f"given; drop one of them (or pass {(spell or PYTHON_NAMES)['no_t']} to "
                     "ignore the column).")
-        names.setdefault("input_name", uname)
-        names.setdefault("output_name", yname)
+        for which, column in (("input", uname), ("output", yname)):
+            base, unit = name_and_unit(column)
+            if unit and f"{which}_unit" not in names:  # "y [mm]": name y, unit mm
+                names[f"{which}_unit"] = unit
+                names.setdefault(f"{which}_name", base)
+            names.setdefault(f"{which}_name", column)
         return cls(u, y, dt, t0=t0, **names)
 
     # ------------------------------------------------------------------ views

@@ -18,13 +18,26 @@ import numpy as np
 from ..exceptions import DataValidationError
 from .validation import as_signal
 
-__all__ = ["TIME_NAMES", "find_time_column", "time_unit_of", "uniform_step"]
+__all__ = ["TIME_NAMES", "find_time_column", "name_and_unit", "time_unit_of", "uniform_step"]
 
 #: base names recognised as a time column (case-insensitive)
 TIME_NAMES = ("t", "time", "times", "timestamp", "zeit", "tiempo", "temps")
 _UNIT = r"(?:\s*[\[(]\s*(?P<u1>[^\])]*?)\s*[\])]|[ _/](?P<u2>s|sec|secs|seconds|ms|us|min|h))?"
 _TIME_RE = re.compile(r"^\s*(?P<base>" + "|".join(TIME_NAMES) + r")" + _UNIT + r"\s*$",
                       re.IGNORECASE)
+
+
+_NAME_UNIT_RE = re.compile(r"^\s*(?P<base>.*?\S)\s*[\[(]\s*(?P<unit>[^\])]*?)\s*[\])]\s*$")
+
+
+def name_and_unit(name) -> tuple[str, str]:
+    """A column name with a unit in brackets, ``"y [mm]"`` or ``"u (V)"``, as ``("y",
+    "mm")``; ``("y", "")`` for a name without one (new-user trial 17: the units of
+    ``u [V]`` and ``y [mm]`` were lost, and no parameter carried one)."""
+    m = _NAME_UNIT_RE.match(str(name))
+    if m is None or not m.group("unit"):
+        return str(name).strip(), ""
+    return m.group("base"), m.group("unit")
 
 
 def time_unit_of(name) -> str | None:

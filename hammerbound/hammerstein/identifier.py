@@ -69,6 +69,17 @@ def _inner_text(inner_signal, x, bound) -> str:
             f"their stage-1 bounds |dx| <= {up} (u = +u*) and {down} (u = -u*)")
 
 
+def _units_line(units) -> str:
+    """The units of the parameters, from the record's (empty when it gives none; trial
+    17: with ``u [V]`` and ``y [mm]`` no parameter carried a unit)."""
+    u, y = units
+    if not (u or y):
+        return ""
+    u, y = u or "input unit", y or "output unit"
+    return (f"\nunits: m_l, m_r in {y}/{u}; c_l, c_r in {u}; a_i, b_j none (unit gain: the "
+            f"inner signal x is in {y})")
+
+
 def _central_system(backlash, A, B, dt=None):
     """The central model; its A need not be stable (the centre of intervals that contain
     stable A's may lie outside the stability region): warn instead of failing the fit."""
@@ -216,6 +227,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.bounds_ = np.array(self.intervals_.bounds)
         self.param_names_ = self.intervals_.param_names
         self.dt_ = data.dt
+        self.units_ = (data.input_unit, data.output_unit)
         self.output_bound_ = output_bound
         self.n_features_in_ = 1
         return self
@@ -308,7 +320,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         dt = dt_text(self.dt_, getattr(lin, "time_unit_", ""))
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
-                    f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}")
+                    f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}"
+                    + _units_line(getattr(self, "units_", ("", ""))))
             return self.intervals_.summary(title=head, assumptions=self.assumptions_)
         inner = self.inner_signal
         if inner == "two-level" and lin.method == "lp":
@@ -316,7 +329,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                       "their own; method='exact' uses it)")
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
-                f"{inner}, N = {pr.N}, dt = {dt}")
+                f"{inner}, N = {pr.N}, dt = {dt}" + _units_line(getattr(self, "units_", ("", ""))))
         return self.intervals_.summary(title=head, assumptions=self.assumptions_)
 
     @property

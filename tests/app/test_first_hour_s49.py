@@ -47,3 +47,32 @@ def test_an_offset_is_what_moves_the_dead_bands():
     assert cl[0] <= 0.4 <= cl[1] and cr[0] <= 0.3 <= cr[1]
     cl, cr = shifted.gamma_bounds_[1], shifted.gamma_bounds_[3]
     assert cl[0] > 0.4 and cr[1] < 0.3
+
+
+def test_units_in_the_column_names_are_the_record_units(tmp_path):
+    """Trial 17: ``u [V]`` and ``y [mm]`` kept their units inside the names, the units
+    stayed empty and no parameter carried one."""
+    from oracles import play
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-3, 3, 20), 10)
+    y = lfilter([0, 0.3], [1, -0.7], play(u, 2.0, 0.4, 2.1, 0.3)) + rng.uniform(-0.05, 0.05,
+                                                                               u.size)
+    path = tmp_path / "valve.csv"
+    path.write_text("time [s],u [V],y (mm)\n" + "".join(
+        f"{0.02 * k:.2f},{float(a)!r},{float(b)!r}\n" for k, (a, b) in enumerate(zip(u, y, strict=True))))
+    data = hb.IOData.from_csv(path, u="u [V]", y="y (mm)")
+    assert (data.input_name, data.input_unit) == ("u", "V")
+    assert (data.output_name, data.output_unit) == ("y", "mm")
+    given = hb.IOData.from_csv(path, u="u [V]", y="y (mm)", input_unit="volt")
+    assert (given.input_name, given.input_unit) == ("u [V]", "volt")  # what is given wins
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idf = hb.HammersteinBacklashIdentifier(
+            linear=hb.LinearEIVSetEstimator(output_bound=0.05, na=1, nb=1, method="lp",
+                                            total_time_limit=60),
+            procedure="one-record").fit(data)
+    assert "units: m_l, m_r in mm/V; c_l, c_r in V" in idf.summary()
+    plain = hb.IOData(u, y)
+    assert (plain.input_unit, plain.output_unit) == ("", "")

@@ -48,7 +48,7 @@ def line_bands(gamma_bounds, u):
     return left.min(axis=0), left.max(axis=0), right.min(axis=0), right.max(axis=0)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class RecordReport(Result):
     """The identification report of a one-record fit and its record.
 

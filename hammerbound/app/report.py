@@ -118,7 +118,7 @@ def write_panels(out: Path, panels) -> None:
         plt.close(fig)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class IdentificationReport(Result):
     """The identification report of a fitted two-stage identifier and its data.
 

@@ -201,7 +201,7 @@ class Disagreement:
     hints: tuple = ()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class DiagnosisReport(Result):
     """Result of :func:`diagnose`.
 

@@ -51,7 +51,7 @@ def _signal(v):
                      else v)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class BacklashInverse(Result):
     """Backlash-inverse compensator with a guaranteed residual error band.
 

@@ -92,7 +92,7 @@ def _lipschitz(lo, hi, lags, dt):
     return float(dt * np.sum(np.asarray(lags, float) * np.maximum(np.abs(lo), np.abs(hi))))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class FrequencyEnvelope(Result):
     """Guaranteed bounds on ``G(e^{j w dt})`` for every parameter vector in a box.
 

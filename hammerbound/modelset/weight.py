@@ -31,7 +31,7 @@ class WeightCertificate:
     min_ratio: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class UncertaintyWeight(Result):
     """A certified uncertainty weight.
 

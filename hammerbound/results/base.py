@@ -47,8 +47,31 @@ def _figure(drawn):
     return drawn if hasattr(drawn, "savefig") else drawn.figure
 
 
+def _short(value) -> str:
+    """A field's value in a result's repr: arrays by shape, other objects by type."""
+    if isinstance(value, np.ndarray):
+        return f"<array {value.shape}>" if value.size > 6 else repr(value.tolist())
+    if value is None or isinstance(value, (bool, int, float, str, np.number)):
+        return repr(value)
+    if isinstance(value, tuple) and len(value) <= 6 and all(
+            isinstance(v, (bool, int, float, str, np.number)) for v in value):
+        return repr(value)
+    return f"<{type(value).__name__}>"
+
+
 class Result:
     """Mixin of the common result shape (see the module docstring)."""
+
+    def __repr__(self) -> str:
+        """One line: the class and its fields, arrays by shape (new-user trial 16: the
+        dataclass repr of an UncertaintyWeight printed thousands of numbers)."""
+        from dataclasses import fields, is_dataclass
+
+        if not is_dataclass(self):
+            return object.__repr__(self)
+        shown = ", ".join(f"{f.name}={_short(getattr(self, f.name))}" for f in fields(self)
+                          if f.repr)
+        return f"{type(self).__name__}({shown})"
 
     def save(self, path, *, dpi: int = 110, **plot_kwargs) -> Path:
         """Draw :meth:`plot` ``(**plot_kwargs)`` in a new figure, write it to ``path``, close it.

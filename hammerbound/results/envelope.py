@@ -12,7 +12,7 @@ from .intervals import outward_margin
 __all__ = ["OutputEnvelope"]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class OutputEnvelope(Result):
     """Guaranteed one-step-ahead band ``lower_t <= w_t <= upper_t`` of the noise-free output.
 

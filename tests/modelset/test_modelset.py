@@ -571,3 +571,16 @@ def test_inverse_plot_colours_the_lines_as_the_other_figures(stage1):
     assert bands["left line, feasible band"] == to_rgb("C0")
     assert bands["right line, feasible band"] == to_rgb("C1")
     plt.close(fig)
+
+
+def test_results_have_a_one_line_repr(stage1):
+    """Trial 16: the repr of an UncertaintyWeight printed thousands of numbers (the
+    dataclass default); results now show arrays by shape, on one line."""
+    from hammerbound.results import OutputEnvelope
+
+    inv = stage1[0].inverse()
+    env = OutputEnvelope(np.zeros(500), np.ones(500), np.full(500, 0.5), 0.1)
+    for result in (inv, env):
+        text = repr(result)
+        assert "\n" not in text and len(text) < 600 and "<array" in text, text
+        assert text.startswith(type(result).__name__ + "(")

@@ -202,7 +202,10 @@ def _read_columns(path, columns, delimiter, names):
                         from None
                 if not np.isfinite(v):
                     raise DataValidationError(
-                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not finite."
+                        f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not finite. "
+                        "A gap in a record cannot be dropped silently (the model needs "
+                        "consecutive samples): split the record at the gap and fit the "
+                        "longest part, or fill the value if you know it."
                     )
                 out[c].append(v)
     if not out[columns[0]]:

@@ -133,7 +133,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         uses all data jointly also for the chapter's experiments.
     gamma_box : array of shape (4, 2) or None
         One-record path: a priori box of ``(m_l, c_l, m_r, c_r)`` (rows ``[lower, upper]``).
-        Default: ``0 <= m <= 100 * range(y) / range(u)`` and ``0 <= c <= range(u)``, printed
+        Default: ``0 <= m <= 100 * (range(y) + 2 output_bound) / range(u)`` and
+        ``0 <= c <= range(u)``, printed
         as an assumption; ends that only such an assumed limit holds are reported as
         infinite with a :class:`~hammerbound.exceptions.NotIdentifiedWarning`.
 

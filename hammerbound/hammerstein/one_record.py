@@ -189,11 +189,21 @@ def _warn_inaccurate(infos, lps_stopped) -> None:
             stacklevel=5)
 
 
-def _lead(stopped_by_time) -> str:
+#: causes of :func:`~hammerbound.joint.prior.unidentified` that are the record's own
+_RECORD_CAUSES = ("the input never reverses", "the record does not excite")
+
+
+def _lead(stopped_by_time, causes=()) -> str:
     """How a not-identified warning begins: with the time limit when it stopped the
-    search (new-user trial 9 read "the record does not bound" as the record's fault)."""
-    return ("within the time limit the search did not bound" if stopped_by_time
-            else "the record does not bound")
+    search (new-user trial 9 read "the record does not bound" as the record's fault),
+    with the record only when every cause is the record's (trial 16: "the record does
+    not bound cl, cr" where a gamma_box bounded them from the same record: the
+    relaxation over the default box was too weak)."""
+    if stopped_by_time:
+        return "within the time limit the search did not bound"
+    if causes and all(c.startswith(_RECORD_CAUSES) for c in causes):
+        return "the record does not bound"
+    return "the search did not bound"
 
 
 def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
@@ -219,7 +229,8 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
              "The other intervals rest on the default backlash box (in assumptions_): a "
              "slope or dead band beyond it (e.g. a state that starts on a line far from "
              "the record's inputs) could lie outside them. ")
-    warnings.warn(f"{_lead(stopped_by_time)} {names}: {causes}. Those ends are {what}. "
+    lead = _lead(stopped_by_time, [c for _, c in found])
+    warnings.warn(f"{lead} {names}: {causes}. Those ends are {what}. "
                   + rests + _scale_hint(problem, bounds, {n for n, _ in found}, stopped_by_time)
                   + _advice(stopped_by_time, lps_stopped, prior.user_given),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
@@ -320,7 +331,9 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
         "|b_j| <= 1e4, an assumption and not the record's answer, so those ends are "
         "reported as infinite (and there is no central model). The other intervals hold "
         f"under that box (see assumptions_). To bound them, {more}use a record that moves "
-        "the input more often, or pass a theta_box from what you know of the gain.",
+        "the input more often, or lower na, nb if the plant may be of lower order (a "
+        "pole of the model cancelling a zero leaves its b_j free), or pass a theta_box "
+        "from what you know of the gain.",
         # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
         NotIdentifiedWarning, stacklevel=5)
     return tb, hit

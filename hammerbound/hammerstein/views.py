@@ -100,8 +100,9 @@ class LinearBlockView(LinearModelMixin, ModelSetMixin):
         """Refuse ``what`` (it needs every interval finite) when the record left an
         interval of the linear block unbounded (a ``b_j`` at the default box)."""
         require_bounded(what, self.param_names_, self.bounds_,
-                        ". Identify from a record that moves the input more often, or give "
-                        "a theta_box from what you know.")
+                        ". Identify from a record that moves the input more often, or with "
+                        "lower na, nb if the plant may be of lower order, or give a "
+                        "theta_box from what you know.")
 
     def _polys(self, theta=None):
         """The central (or given ``theta``) polynomials; no central model when an

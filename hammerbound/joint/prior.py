@@ -6,8 +6,9 @@ Every bound of the one-record method lies inside an a priori box of
 with every result and can be replaced by the user:
 
 * ``|b_j| <= b_bound`` (default ``1e4``, as stage 2);
-* ``m_l, m_r <= m_max`` (default ``100`` times the slope ``range(y) / range(u)`` the record
-  shows; with the unit gain (22.8) the backlash slopes carry the gain of the system);
+* ``m_l, m_r <= m_max`` (default ``100`` times the slope ``(range(y) + 2 deta) / range(u)``
+  the record allows, its outputs' range widened by their errors; with the unit gain (22.8)
+  the backlash slopes carry the gain of the system);
 * ``c_l, c_r <= c_max`` (default the input's range: a dead band wider than every input
   move is never crossed after the first line the record touches).
 

@@ -39,7 +39,10 @@ LEAF_SHRINK = 0.05
 #: What an EmptyFeasibleSetError of the one-record search suggests.
 EMPTY_HINT = ("Check the output bound (every error within it?), the orders na, nb and the "
               "delay nk, and any gamma_box you gave; an output bound too small for the "
-              "noise, or a model of the wrong order, leaves nothing to explain the record. "
+              "noise, or a model of the wrong order, leaves nothing to explain the record; "
+              "values rounded in the file add up to half their last digit to the error "
+              "(noise within 0.01 written with 6 decimals needs 0.0100005), and swapped "
+              "input and output columns explain nothing either. "
               "The model also needs a backlash whose lines do not cross inside the "
               "record's input range (m_l (u + c_l) >= m_r (u - c_r) at every input; unequal "
               "slopes cross at u = (m_l c_l + m_r c_r) / (m_r - m_l)): a record that drives "

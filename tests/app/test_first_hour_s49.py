@@ -6,6 +6,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 from oracles import one_record
 
 import hammerbound as hb
@@ -76,3 +77,90 @@ def test_units_in_the_column_names_are_the_record_units(tmp_path):
     assert "units: m_l, m_r in mm/V; c_l, c_r in V" in idf.summary()
     plain = hb.IOData(u, y)
     assert (plain.input_unit, plain.output_unit) == ("", "")
+
+
+def test_the_command_line_says_whose_central_model_it_prints(tmp_path, capsys):
+    """Trial 16: with the backlash not bounded, ``identify --record`` printed "central
+    model: G(z) = ..." (the linear block's interval centre) as if it were the system's
+    estimate; Python has ``system_ = None`` there."""
+    from oracles import play
+    from scipy.signal import lfilter
+
+    from hammerbound.app.cli import main
+
+    u = np.linspace(-2.0, 2.0, 40)  # never reverses: the left line is not identified
+    y = lfilter([0.0, 0.5], [1.0, -0.5], play(u, 0.25, 0.06, 0.26, 0.05))
+    y = y + 0.02 * np.random.default_rng(0).uniform(-1, 1, u.size)
+    path = tmp_path / "ramp.csv"
+    path.write_text("u,y\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(u.tolist(), y.tolist(),
+                                                                       strict=True)))
+    code = main(["identify", "--record", str(path), "--na", "1", "--nb", "1", "--output-bound",
+                 "0.02", "--method", "lp", "--total-time-limit", "60"])
+    out = capsys.readouterr().out
+    assert code == 0 and "inf" in out
+    line = next(ln for ln in out.splitlines() if ln.startswith("central model"))
+    assert "G(z)" in line and "of the linear block alone" in line
+    assert "the backlash is not bounded: no model of the whole system" in line
+
+
+@pytest.mark.deep
+def test_a_swapped_record_is_told_it_may_be_swapped():
+    """Trial 16: swapped columns gave "the gain is negative: fit -y", which stays empty;
+    the message now names swapped columns too (17 s on one core)."""
+    from oracles import play
+    from scipy.signal import lfilter
+
+    from hammerbound.exceptions import EmptyFeasibleSetError
+
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 20), 10)
+    y = lfilter([0, 0.15], [1, -0.85], play(u, 1.0, 0.08, 1.0, 0.12))
+    y = y + rng.uniform(-0.01, 0.01, u.size)
+    ident = hb.HammersteinBacklashIdentifier(
+        linear=hb.LinearEIVSetEstimator(output_bound=0.01, na=1, nb=1, method="lp",
+                                        total_time_limit=120), procedure="one-record")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(EmptyFeasibleSetError, match="columns are swapped"):
+            ident.fit(y, u)
+
+
+def test_a_not_identified_warning_blames_the_record_only_for_the_record_causes():
+    """Trial 16: "the record does not bound cl, cr" where the same record, with a
+    gamma_box, bounded both: the relaxation over the default box was too weak to tell.
+    The record is named only when the input never reverses (or does not excite)."""
+    from oracles import play
+    from scipy.signal import lfilter
+
+    from hammerbound.exceptions import NotIdentifiedWarning
+    from hammerbound.hammerstein.one_record import _lead
+    from hammerbound.joint.prior import unidentified
+
+    u = np.linspace(-2.0, 2.0, 40)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], play(u, 0.25, 0.06, 0.26, 0.05))
+    y = y + 0.02 * np.random.default_rng(0).uniform(-1, 1, u.size)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hb.HammersteinBacklashIdentifier(
+            linear=hb.LinearEIVSetEstimator(output_bound=0.02, na=1, nb=1, method="lp",
+                                            total_time_limit=60),
+            procedure="one-record").fit(u, y)
+    said = [str(w.message) for w in caught if w.category is NotIdentifiedWarning]
+    assert said and all(m.startswith("the record does not bound") for m in said), said
+    # a reversing input whose end sits at the assumed limit: the cause is the search's
+    rev = np.r_[np.linspace(-2, 2, 20), np.linspace(2, -2, 20)]
+    box = np.array([[0, 10.0], [0, 4.0], [0, 10.0], [0, 4.0]])
+    bounds = box.copy()
+    assumed = np.zeros((4, 2), dtype=bool)
+    assumed[:, 1] = True
+    causes = [c for _, c in unidentified(rev, ("ml", "cl", "mr", "cr"), bounds, box, assumed)]
+    assert causes and _lead(False, causes) == "the search did not bound"
+    assert _lead(True, causes).startswith("within the time limit")
+
+
+def test_command_line_warnings_name_no_python_attribute():
+    """Trial 16: a command-line warning said "(in assumptions_)"."""
+    from hammerbound.app.cli.console import to_cli
+
+    text = to_cli("The other intervals rest on the default backlash box (in assumptions_): a")
+    assert "assumptions_" not in text and "(in the assumptions printed)" in text

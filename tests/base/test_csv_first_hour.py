@@ -123,3 +123,12 @@ def test_identify_refuses_a_steady_state_file_with_a_shifted_row(tmp_path, capsy
                  "--output-bound", "0.05"])
     assert code == 2
     assert "line 5: the row has 3 fields" in capsys.readouterr().err
+
+
+def test_a_nan_in_the_record_says_what_to_do(tmp_path):
+    """Trial 16: "'nan' is not finite" named the value but not what to do about it."""
+    body = "".join(f"{u},{'nan' if k == 3 else y}\n"
+                   for k, (u, y) in enumerate(zip(U, Y, strict=True)))
+    with pytest.raises(DataValidationError, match=r"line 5, column 'y': 'nan' is not "
+                       r"finite\. .*split the record at the gap"):
+        hb.IOData.from_csv(_write(tmp_path, "u,y\n" + body))

@@ -47,6 +47,7 @@ _TERMS = [
     (r"\(bound_info_ gives each end's status(?: and certified gap)?\)",
      "(the status column gives each end's status; --json its details)"),
     (r"\(see assumptions_\)", "(see the assumptions printed)"),
+    (r"\(in assumptions_\)", "(in the assumptions printed)"),  # trial 16
     (r"Pass prbs_level=u\* for a two-level signal with rounding noise\.",
      "Write a two-level PRBS as +-u* in the file (shift an offset or 0/1 signal); pass an "
      "ordinary record as --record DATA.csv."),

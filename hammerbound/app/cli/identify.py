@@ -42,7 +42,8 @@ def add_parser(sub):
                    metavar=("ML_LO", "ML_HI", "CL_LO", "CL_HI", "MR_LO", "MR_HI", "CR_LO",
                             "CR_HI"),
                    help="--record: a priori box of the backlash (default: 0 <= m <= 100 "
-                        "range(y)/range(u), 0 <= c <= range(u), printed as an assumption)")
+                        "(range(y) + 2 bound)/range(u), 0 <= c <= range(u), printed as an "
+                        "assumption)")
     p.add_argument("--steady", default=None, metavar="CSV",
                    help="CSV of steady-state points (signed input amplitudes, outputs)")
     p.add_argument("--prbs", default=None, metavar="CSV",

@@ -412,6 +412,30 @@ def _warn_gain_sign(problem, res):
             stacklevel=5)
 
 
+def _warn_dead_band_covers_record(u, gamma_bounds):
+    """A DataWarning when every backlash left has its dead band over all the inputs
+    (``c_l > -min u`` and ``c_r > max u``): its lines then stay on both sides of 0 over
+    the record, so the inner signal can move only one way (down from a start above 0, up
+    from one below). New-user trial 16: an output bound 5x too small left c_l >= 1.21 and
+    c_r >= 0.97 over inputs in [-0.98, 0.97] (the time limit stopped the search), with
+    only time-limit warnings. Not a verdict of "empty": a record whose output moves one
+    way is explained so."""
+    lo, hi = float(np.min(u)), float(np.max(u))
+    cl, cr = float(gamma_bounds[1, 0]), float(gamma_bounds[3, 0])
+    if not (cl > -lo and cr > hi):
+        return
+    warnings.warn(
+        f"every backlash left has its dead band [-c_l, c_r] over all the record's inputs "
+        f"[{rounded_text(lo, down=True)}, {rounded_text(hi, down=False)}] (c_l >= "
+        f"{rounded_text(cl, down=True)}, c_r >= {rounded_text(cr, down=True)}): its inner "
+        "signal can "
+        "then move only one way over the whole record. If the output moves both ways, no "
+        "parameters explain it -- the output bound is probably too small for the noise, or "
+        "the orders too low -- and more time may certify the set empty.", DataWarning,
+        # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
+        stacklevel=5)
+
+
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                    output_bound=None) -> OneRecordFit:
     """Certified intervals of both blocks from the record ``data`` (an IOData)."""
@@ -439,6 +463,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     tb, b_found = _unbounded_b(problem, gain_tightened(problem, res.bounds[: problem.p]), lin,
                                d is not None and d.stopped_by_time)
     _warn_stopped(res.infos, {name for name, _ in found} | set(b_found), lin.method)
+    _warn_dead_band_covers_record(problem.u, gb)
     res = replace(res, infos=_not_identified_infos(res.infos, tb, gb))
     _warn_inaccurate(res.infos, 0 if d is None else d.lps_stopped)
     statuses = tuple(i.status for i in res.infos)

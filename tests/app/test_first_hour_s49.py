@@ -164,3 +164,24 @@ def test_command_line_warnings_name_no_python_attribute():
 
     text = to_cli("The other intervals rest on the default backlash box (in assumptions_): a")
     assert "assumptions_" not in text and "(in the assumptions printed)" in text
+
+
+def test_dead_bands_over_every_input_are_said_to_leave_one_way_moves():
+    """Trial 16: an output bound 5x too small left c_l >= 1.21 and c_r >= 0.97 over inputs
+    in [-0.98, 0.97] after the time limit (150 s on its record), with only time-limit
+    warnings. The warning's condition on the certified bounds, and its numbers rounded to
+    the safe side."""
+    from hammerbound.exceptions import DataWarning
+    from hammerbound.hammerstein.one_record import _warn_dead_band_covers_record
+
+    u = np.r_[-0.9757, 0.3, 0.966096]
+    gb = np.array([[0.0, 11.0], [1.2136225, np.inf], [0.0, 11.0], [0.970898, np.inf]])
+    with pytest.warns(DataWarning, match=r"over all the record's inputs \[-0.9757, 0.9661\] "
+                      r"\(c_l >= 1.213, c_r >= 0.9708\).*output bound is probably too small"):
+        _warn_dead_band_covers_record(u, gb)
+    for row, value in ((1, 0.97), (3, 0.96)):  # one side inside the inputs: no warning
+        part = gb.copy()
+        part[row, 0] = value
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            _warn_dead_band_covers_record(u, part)

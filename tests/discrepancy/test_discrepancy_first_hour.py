@@ -359,3 +359,29 @@ def test_a_black_box_delay_says_what_was_added():
     rep = diagnose(Box(), u, y, 0.02, candidates=["delay"])
     assert rep.effect == "delay", rep.summary()
     assert "d = 2 samples added" in rep.message
+
+
+def test_a_verdict_on_a_fitted_set_says_it_tests_the_central_model():
+    """New-user trial 17: a clean record of the true plant was "inconsistent" with the
+    identifier at the true output bound, while the truth was inside every interval: the
+    verdict is about the set's central model. A fitted set's report says so; the same
+    central model passed as a HammersteinSystem gets no such note."""
+    import warnings
+
+    import hammerbound as hb
+    from hammerbound.discrepancy import diagnose
+
+    ex = hb.chapter_example(0.05, N=100)
+    ident = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(0.05), hb.LinearEIVSetEstimator(output_bound=0.05, method="lp"),
+    ).fit(ex.prbs.u, ex.prbs.y, steady_state=ex.steady)
+    u = np.repeat(np.random.default_rng(5).uniform(-2, 2, 25), 8)
+    y = ex.system.simulate(u) + 0.6  # an offset far above the bound: inconsistent
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        of_set = diagnose(ident, u, y, output_bound=0.05, candidates=["delay"])
+        of_model = diagnose(ident.system_, u, y, output_bound=0.05, candidates=["delay"])
+    assert not of_set.consistent_before
+    assert "tests the fitted set's central model" in of_set.message
+    assert "ident.output_envelope" in of_set.message
+    assert "fitted set's central model" not in of_model.message

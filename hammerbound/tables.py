@@ -109,6 +109,22 @@ def interval_frame(names, bounds, status=None):
     return pd.DataFrame.from_records(recs, columns=list(COLUMNS))
 
 
+def _outward(v: float, fmt: str, side: int) -> str:
+    """``v`` in ``fmt`` (``"4f"`` or ``"3e"``), rounded down (``side < 0``), up (``> 0``)
+    or to nearest (0); infinite values as ``inf``/``-inf``."""
+    text = f"{v:.{fmt}}"
+    if side == 0 or not np.isfinite(v) or float(text) == v or (float(text) > v) == (side > 0):
+        return text
+    if fmt.endswith("f"):
+        step = 10.0 ** -int(fmt[:-1])
+    else:
+        step = 10.0 ** (int(text.split("e")[1]) - int(fmt[:-1]))
+    out = f"{float(text) + side * step:.{fmt}}"
+    if (float(out) - v) * side < 0:  # the step itself rounded back: keep v's own digits
+        return repr(float(v))
+    return out
+
+
 def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
     """Fixed-width text table of the intervals (the ``summary()`` of estimators)."""
     recs = interval_records(names, bounds, status)
@@ -122,8 +138,12 @@ def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
         # scientific notation: fixed decimals would print it as 0.0000
         mag = max(abs(r["lower"]), abs(r["upper"]))
         fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
-        # an unbounded interval has no centre: "-", not "nan" or "inf"
-        nums = " ".join(f"{'-':>{cw}}" if np.isnan(r[c]) else f"{r[c]:>{cw}.{fmt}}"
-                        for c in ("lower", "centre", "upper", "half_width"))
+        # an unbounded interval has no centre: "-", not "nan" or "inf"; the ends round
+        # outward and the half-width up, so the printed interval holds the certified one
+        # (to nearest, a lower end 0.24636 read 0.2464: a truth at 0.24638 looked outside)
+        nums = " ".join(f"{'-':>{cw}}" if np.isnan(r[c]) else
+                        f"{_outward(r[c], fmt, side):>{cw}}"
+                        for c, side in (("lower", -1), ("centre", 0), ("upper", 1),
+                                        ("half_width", 1)))
         lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")
     return "\n".join(lines)

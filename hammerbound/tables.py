@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["assumptions_text", "bound_text", "dt_text", "interval_frame", "interval_records",
-           "interval_text", "number_text", "poly_z", "rounded_text"]
+           "interval_text", "number_text", "outward_text", "poly_z", "rounded_text"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
@@ -109,7 +109,7 @@ def interval_frame(names, bounds, status=None):
     return pd.DataFrame.from_records(recs, columns=list(COLUMNS))
 
 
-def _outward(v: float, fmt: str, side: int) -> str:
+def outward_text(v: float, fmt: str, side: int) -> str:
     """``v`` in ``fmt`` (``"4f"`` or ``"3e"``), rounded down (``side < 0``), up (``> 0``)
     or to nearest (0); infinite values as ``inf``/``-inf``."""
     text = f"{v:.{fmt}}"
@@ -142,7 +142,7 @@ def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
         # outward and the half-width up, so the printed interval holds the certified one
         # (to nearest, a lower end 0.24636 read 0.2464: a truth at 0.24638 looked outside)
         nums = " ".join(f"{'-':>{cw}}" if np.isnan(r[c]) else
-                        f"{_outward(r[c], fmt, side):>{cw}}"
+                        f"{outward_text(r[c], fmt, side):>{cw}}"
                         for c, side in (("lower", -1), ("centre", 0), ("upper", 1),
                                         ("half_width", 1)))
         lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")

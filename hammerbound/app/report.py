@@ -15,7 +15,7 @@ import numpy as np
 
 from ..results import IntervalSet, OutputEnvelope, Result, jsonable
 from ..systems.experiments import snr_db
-from ..tables import bound_text
+from ..tables import bound_text, outward_text
 from .paths import check_output_dir
 
 __all__ = ["REPORT_FILES", "IdentificationReport", "assumption_lines", "checked_axes",
@@ -27,8 +27,10 @@ REPORT_FILES = ("report.md", "backlash_characteristic.png", "backlash_sets.png",
                 "envelope.png")
 
 
-def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
-    """Markdown table of intervals: parameter, lower, centre, upper, half-width (, true, inside)."""
+def interval_table(names, bounds, true=None, fmt="4f") -> str:
+    """Markdown table of intervals: parameter, lower, centre, upper, half-width (, true,
+    inside); the ends rounded outward, the half-width up (:func:`~hammerbound.tables.
+    outward_text`), as in every summary."""
     iv = IntervalSet(names, bounds)
     head = "| parameter | lower | centre | upper | half-width |"
     sep = "|---|---:|---:|---:|---:|"
@@ -38,10 +40,11 @@ def interval_table(names, bounds, true=None, fmt="{:.4f}") -> str:
     rows = [head, sep]
     for k, name in enumerate(iv.param_names):
         cells = (iv.lower[k], iv.center[k], iv.upper[k], iv.radius[k])
-        r = f"| {name} | " + " | ".join(fmt.format(c) for c in cells) + " |"
+        r = f"| {name} | " + " | ".join(outward_text(c, fmt, side) for c, side in
+                                         zip(cells, (-1, 0, 1, 1), strict=True)) + " |"
         if true is not None:
             inside = IntervalSet((name,), iv.bounds[k:k + 1]).contains([true[k]])
-            r += f" {fmt.format(true[k])} | {'yes' if inside else '**NO**'} |"
+            r += f" {outward_text(true[k], fmt, 0)} | {'yes' if inside else '**NO**'} |"
         rows.append(r)
     return "\n".join(rows)
 

@@ -376,8 +376,15 @@ def test_the_interval_table_rounds_its_ends_outward():
     hi = lo + np.abs(rng.normal(0, 1, 400)) * 10.0 ** rng.integers(-9, 0, 400)
     names = [f"p{k}" for k in range(lo.size)]
     rows = interval_text(names, np.column_stack([lo, hi])).splitlines()[1:]
+    from hammerbound.app.report import interval_table  # the reports' Markdown table
+
+    fixed = [r.replace("|", " ") for r in interval_table(
+        names, np.column_stack([lo, hi])).splitlines()[2:]]
     for row, a, b in zip(rows, lo, hi, strict=True):
         shown = [float(t) for t in row.split()[1:5]]
         assert shown[0] <= a and shown[2] >= b, (row, a, b)
         assert shown[3] >= (b - a) / 2
         assert shown[2] - shown[0] <= (b - a) + 2.5 * 10.0 ** np.floor(np.log10(max(abs(a), abs(b))) - 2)
+    for row, a, b in zip(fixed, lo, hi, strict=True):
+        shown = [float(t) for t in row.split()[1:5]]
+        assert shown[0] <= a and shown[2] >= b and shown[3] >= (b - a) / 2, (row, a, b)

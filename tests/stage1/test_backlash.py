@@ -287,3 +287,51 @@ def test_an_empty_stage_one_names_swapped_columns():
     u, y = _valve_steady(np.linspace(0.8, 5.0, 10), np.random.default_rng(0))
     with pytest.raises(EmptyFeasibleSetError, match="columns are not swapped"):
         BacklashSetEstimator(0.05).fit(y, u)
+
+
+def test_a_bound_far_below_the_errors_is_refused_not_answered_with_a_point():
+    """Review 49: a bound of 3e-7 for errors within 3e-6 gave a single vertex six times
+    outside the bound, every status optimal (the intersection routine returns a point of
+    an empty intersection; only a coarse sanity check guarded it)."""
+    a = np.array([1.0, 2.5, 4.0])
+    u = np.concatenate([a, -a])
+    e = np.random.default_rng(0).uniform(-1, 1, u.size)
+    y = np.where(u > 0, 2.1 * (u - 0.3), 2.0 * (u + 0.4)) + 3e-6 * e
+    with pytest.raises(EmptyFeasibleSetError, match="left-side"):
+        BacklashSetEstimator(3e-7).fit(u, y)
+    BacklashSetEstimator(3.1e-6).fit(u, y)  # a bound that holds the errors: a set
+
+
+def _exact_chebyshev(u, y, d):
+    """The tests' own exact weighted minimax line value: the largest over every 3 points
+    (distinct inputs) of the middle one's distance from the outer chord, in fractions."""
+    from fractions import Fraction as F
+    from itertools import combinations
+
+    pts = sorted((F(float(a)), F(float(b)), F(float(c))) for a, b, c in zip(u, y, d,
+                                                                           strict=True))
+    best = F(0)
+    for (u1, y1, d1), (u2, y2, d2), (u3, y3, d3) in combinations(pts, 3):
+        if u1 < u2 < u3:
+            lam = (u3 - u2) / (u3 - u1)
+            best = max(best, abs(y2 - lam * y1 - (1 - lam) * y3) / (d2 + lam * d1 + (1 - lam) * d3))
+    return best
+
+
+@pytest.mark.parametrize("scale", [1e-8, 1.0, 1e8])
+def test_the_smallest_bound_is_a_lower_bound_at_every_scale(scale):
+    """Review 49: at outputs x 1e8 the stated smallest bound (4.66e6) was above the exact
+    one (4.23e6) while the fit succeeded at 4.3e6: the LP's value, unscaled, was not a
+    lower bound. It is now the exact value of subsets of the points."""
+    from fractions import Fraction
+
+    from hammerbound.stage1.smallest_bound import smallest_bound_factor
+
+    for seed in range(6):
+        u, y = _valve_steady(np.linspace(0.8, 5.0, 7), np.random.default_rng(seed))
+        y = y * scale
+        d = np.full(u.size, 0.05 * scale) * np.random.default_rng(seed).uniform(0.5, 1, u.size)
+        f = smallest_bound_factor(u, y, d)
+        need = max(_exact_chebyshev(u[u > 0], y[u > 0], d[u > 0]),
+                   _exact_chebyshev(u[u < 0], y[u < 0], d[u < 0]))
+        assert Fraction(f) <= need and f >= 0.9 * float(need)

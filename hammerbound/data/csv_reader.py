@@ -117,6 +117,23 @@ def _not_a_number(path, lineno, column, text) -> str:
     return msg
 
 
+def _named_width(header) -> int:
+    """The header's columns up to its last non-empty name (``u,y,`` from a spreadsheet has
+    two: a value under the unnamed third column is a shifted one, review 49)."""
+    names = [h.strip() for h in header]
+    while names and not names[-1]:
+        names.pop()
+    return len(names)
+
+
+def _usual_width(rows) -> int:
+    """The most common number of fields (trailing empty ones dropped) of headerless rows:
+    a first row with a decimal comma must not set the width the others are checked
+    against (review 49)."""
+    widths = [_named_width(r) for _, r in rows]
+    return max(set(widths), key=widths.count) if widths else 0
+
+
 def _check_width(path, lineno, row, width, delimiter) -> None:
     """A row with more (non-empty) fields than the header has its values shifted into
     other columns: a decimal comma in a comma-separated file (``2.38,3.5,8,827`` read
@@ -188,7 +205,7 @@ def _read_columns(path, columns, delimiter, names):
         for lineno, row in enumerate(reader, start=2):
             if not row or all(not f.strip() for f in row):
                 continue
-            _check_width(path, lineno, row, len(header), delimiter)
+            _check_width(path, lineno, row, _named_width(header), delimiter)
             for c, i in zip(columns, idx, strict=True):
                 if i >= len(row):
                     raise DataValidationError(
@@ -301,6 +318,7 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
     if not all(numeric(f) for f in rows[0][1]):
         header, rows = rows[0][1], rows[1:]
     ncols = len(header) if header is not None else len(rows[0][1])
+    width = _named_width(header) if header is not None else _usual_width(rows)
     ju = _column_index(u_column, header, ncols, "u", 0, path, names)
     jy = _column_index(y_column, header, ncols, "y", 1, path, names)
     if ju == jy:
@@ -312,7 +330,7 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
         raise DataValidationError(f"{path} has a header but no data rows.")
     u, y, bad = [], [], []
     for ln, r in rows:
-        _check_width(path, ln, r, ncols, delimiter)
+        _check_width(path, ln, r, width, delimiter)
         try:
             uv, yv = float(r[ju]), float(r[jy])
         except (IndexError, ValueError):

@@ -196,9 +196,11 @@ class IOData:
                     f"{where}: the time column {t!r} has step {step:g} but dt={dt:g} was "
                     f"given; drop one of them (or pass {(spell or PYTHON_NAMES)['no_t']} to "
                     "ignore the column).")
+        bases = [name_and_unit(c)[0] for c in (uname, yname)]
         for which, column in (("input", uname), ("output", yname)):
             base, unit = name_and_unit(column)
-            if unit and f"{which}_unit" not in names:  # "y [mm]": name y, unit mm
+            if unit and f"{which}_unit" not in names and bases[0] != bases[1]:
+                # "y [mm]": name y, unit mm (not when both names would read the same)
                 names[f"{which}_unit"] = unit
                 names.setdefault(f"{which}_name", base)
             names.setdefault(f"{which}_name", column)

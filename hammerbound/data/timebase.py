@@ -27,7 +27,10 @@ _TIME_RE = re.compile(r"^\s*(?P<base>" + "|".join(TIME_NAMES) + r")" + _UNIT + r
                       re.IGNORECASE)
 
 
-_NAME_UNIT_RE = re.compile(r"^\s*(?P<base>.*?\S)\s*[\[(]\s*(?P<unit>[^\])]*?)\s*[\])]\s*$")
+# a unit in matching brackets after a space: "y [mm]", "u (V)"; not "x[1]", "y(t)" or
+# "P [kPa)" (review 49: indices and arguments were read as units)
+_NAME_UNIT_RE = re.compile(r"^\s*(?P<base>\S.*?)\s+(?:\[\s*(?P<u1>[^\[\]()]+?)\s*\]"
+                           r"|\(\s*(?P<u2>[^\[\]()]+?)\s*\))\s*$")
 
 
 def name_and_unit(name) -> tuple[str, str]:
@@ -35,9 +38,11 @@ def name_and_unit(name) -> tuple[str, str]:
     "mm")``; ``("y", "")`` for a name without one (new-user trial 17: the units of
     ``u [V]`` and ``y [mm]`` were lost, and no parameter carried one)."""
     m = _NAME_UNIT_RE.match(str(name))
-    if m is None or not m.group("unit"):
+    unit = None if m is None else (m.group("u1") or m.group("u2"))
+    # "x [1]" is an index, "y [mm] (filtered)" has two candidates: no unit read
+    if m is None or unit.isdigit() or any(c in m.group("base") for c in "[]()"):
         return str(name).strip(), ""
-    return m.group("base"), m.group("unit")
+    return m.group("base"), unit
 
 
 def time_unit_of(name) -> str | None:

@@ -327,7 +327,7 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
     which = ", ".join(hit)
     more = "give more time (total_time_limit), or " if stopped_by_time else ""
     warnings.warn(
-        f"{_lead(stopped_by_time)} {which}: the search reached the default box "
+        f"{_lead(stopped_by_time)} {which}: it reached the default box "
         "|b_j| <= 1e4, an assumption and not the record's answer, so those ends are "
         "reported as infinite (and there is no central model). The other intervals hold "
         f"under that box (see assumptions_). To bound them, {more}use a record that moves "

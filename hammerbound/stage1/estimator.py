@@ -322,7 +322,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         ``top - margin (top - u_lo)`` with ``top = min(u_hi, U)``, ``U`` the largest
         amplitude the steady-state data reached on both sides (the lines are known only
         where the experiment tested them: new-user trial 17 was suggested 9.64 V for a
-        valve tested to +-5 V, from the lines' crossing). With an unbounded range
+        valve tested to +-5 V, from the lines' crossing); a
+        :class:`~hammerbound.exceptions.DataWarning` when no admissible level lies within
+        them (``U <= u_lo``: the level then extrapolates the lines). With an unbounded range
         (``m_l == m_r`` can be excluded on neither side, and ``U`` does not cap it) it
         returns ``(1 + margin) * 10 * u_lo``.
         """
@@ -335,6 +337,16 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
         tested = float(min(-self.input_range_[0], self.input_range_[1]))
         top = min(u_hi, tested) if tested > u_lo else u_hi
+        if tested <= u_lo:  # review 49: this fell back to the old rule without a word
+            import warnings
+
+            from ..exceptions import DataWarning
+
+            warnings.warn(
+                f"the steady-state data reach only |u| = {tested:.4g} on one side, not past "
+                f"the dead band's largest edge {u_lo:.4g}: no admissible level lies within the "
+                "tested amplitudes, and the one suggested extrapolates the backlash lines. "
+                "Test larger amplitudes on both sides first.", DataWarning, stacklevel=2)
         if not np.isfinite(top):
             return float((1 + margin) * 10 * u_lo)
         return float(top - margin * (top - u_lo))

@@ -185,3 +185,24 @@ def test_dead_bands_over_every_input_are_said_to_leave_one_way_moves():
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             _warn_dead_band_covers_record(u, part)
+
+
+@pytest.mark.parametrize("name, read", [
+    ("u [V]", ("u", "V")), ("y (mm)", ("y", "mm")), ("T (°C)", ("T", "°C")),
+    ("flow (m3/h)", ("flow", "m3/h")),
+    # review 49: indices, arguments and unmatched brackets were read as units
+    ("x[1]", ("x[1]", "")), ("y(t)", ("y(t)", "")), ("sin(wt)", ("sin(wt)", "")),
+    ("P [kPa)", ("P [kPa)", "")), ("x [1]", ("x [1]", "")),
+    ("y [mm] (filtered)", ("y [mm] (filtered)", "")), ("u []", ("u []", "")),
+])
+def test_a_unit_is_read_only_from_a_bracket_after_a_space(name, read):
+    from hammerbound.data.timebase import name_and_unit
+
+    assert name_and_unit(name) == read
+
+
+def test_two_columns_that_would_read_the_same_name_keep_their_names():
+    """Review 49: ``x [a]`` and ``x [b]`` both became ``x``."""
+    data = hb.IOData.from_frame({"x [V]": np.arange(4.0), "x [mm]": np.ones(4)},
+                                u="x [V]", y="x [mm]", t=None)
+    assert (data.input_name, data.output_name) == ("x [V]", "x [mm]")

@@ -132,3 +132,21 @@ def test_a_nan_in_the_record_says_what_to_do(tmp_path):
     with pytest.raises(DataValidationError, match=r"line 5, column 'y': 'nan' is not "
                        r"finite\. .*split the record at the gap"):
         hb.IOData.from_csv(_write(tmp_path, "u,y\n" + body))
+
+
+def test_a_trailing_separator_in_the_header_does_not_hide_a_shifted_row(tmp_path):
+    """Review 49: a spreadsheet's header ``u,y,`` has an unnamed third column, and the
+    row ``2,38,3`` (2.38 with a decimal comma) was read as u = 2, y = 38."""
+    path = _write(tmp_path, "u,y,\n1.5,2.25,\n2,38,3\n1.0,2.0,\n")
+    with pytest.raises(DataValidationError, match="line 3: the row has 3 fields"):
+        hb.IOData.from_csv(path, t=None)
+
+
+def test_a_shifted_first_row_of_a_headerless_file_is_refused(tmp_path):
+    """Review 49: without a header the first row set the width the others were checked
+    against, so a shifted first row was read shifted."""
+    from hammerbound.data.csv_reader import read_io_csv
+
+    path = _write(tmp_path, "2,38,3\n1.5,2.25\n1.0,2.0\n0.5,1.0\n")
+    with pytest.raises(DataValidationError, match="line 1: the row has 3 fields"):
+        read_io_csv(path)

@@ -335,3 +335,18 @@ def test_the_smallest_bound_is_a_lower_bound_at_every_scale(scale):
         need = max(_exact_chebyshev(u[u > 0], y[u > 0], d[u > 0]),
                    _exact_chebyshev(u[u < 0], y[u < 0], d[u < 0]))
         assert Fraction(f) <= need and f >= 0.9 * float(need)
+
+
+def test_a_level_beyond_every_tested_amplitude_is_said_so():
+    """Review 49: with the left side tested only inside its dead band's largest edge, the
+    suggestion fell back to the crossing of the lines without a word."""
+    from hammerbound.exceptions import DataWarning
+
+    rng = np.random.default_rng(0)
+    u = np.r_[np.linspace(0.8, 5.0, 8), -np.array([0.1, 0.2, 0.3])]
+    y = np.where(u > 0, 2.1 * (u - 0.3), 2.0 * (u + 0.4)) + rng.uniform(-0.02, 0.02, u.size)
+    est = BacklashSetEstimator(0.02).fit(u, y)
+    lo, hi = est.admissible_prbs_range()
+    with pytest.warns(DataWarning, match="no admissible level lies within the tested"):
+        level = est.suggest_prbs_level()
+    assert lo < level < hi

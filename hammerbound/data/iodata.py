@@ -42,6 +42,16 @@ def _check_dt(dt):
     return float(dt)
 
 
+def _with_unit(header, name):
+    """The column ``name`` of ``header``, or the one column ``name [unit]`` when no column
+    is called ``name`` alone (review 49: a record written with its units was not found
+    again by its names)."""
+    if name is None or name in header:
+        return name
+    found = [h for h in header if name_and_unit(h)[0] == str(name) and name_and_unit(h)[1]]
+    return found[0] if len(found) == 1 else name
+
+
 class IOData:
     """One SISO input/output record with sampling time, names and units.
 
@@ -122,12 +132,15 @@ class IOData:
         separator (default ``","``). ``argument_names``: how messages name these settings
         (default the keywords above; see
         :data:`hammerbound.data.csv_reader.PYTHON_NAMES`). Other keywords: the names and
-        units of :class:`IOData` (names default to the column names).
+        units of :class:`IOData` (names default to the column names; a name with a unit,
+        ``u [V]``, gives name ``u`` and unit ``V``, and ``u="u"`` finds it when no column
+        is named ``u`` alone: :meth:`to_csv` writes units so).
         """
         from .csv_reader import _names, csv_header, read_columns
 
         spell = _names(argument_names)
         header = csv_header(path, delimiter=delimiter)
+        u, y = _with_unit(header, u), _with_unit(header, y)
         t = cls._time_column(header, t, (u, y), str(path), dt, spell)
         data = read_columns(path, [u, y] + ([t] if t else []), delimiter=delimiter,
                             argument_names=spell)
@@ -279,10 +292,11 @@ class IOData:
     def to_csv(self, path) -> None:
         """Write the record as a CSV file with a header row: ``t`` (``t [unit]`` with a
         time unit; omitted when ``dt`` is not given), then the input and output columns
-        under their names, each value written so that :meth:`from_csv` reads it back
-        exactly (units of the signals are not written)."""
+        under their names (``name [unit]`` with a unit), each value written so that
+        :meth:`from_csv` reads it back exactly, names and units too."""
         cols = [self.u, self.y]
-        header = [self.input_name, self.output_name]
+        header = [f"{n} [{unit}]" if unit else n for n, unit in
+                  ((self.input_name, self.input_unit), (self.output_name, self.output_unit))]
         if self.dt is not None:
             cols.insert(0, self.time)
             header.insert(0, f"t [{self.time_unit}]" if self.time_unit else "t")

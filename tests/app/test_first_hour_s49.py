@@ -206,3 +206,20 @@ def test_two_columns_that_would_read_the_same_name_keep_their_names():
     data = hb.IOData.from_frame({"x [V]": np.arange(4.0), "x [mm]": np.ones(4)},
                                 u="x [V]", y="x [mm]", t=None)
     assert (data.input_name, data.output_name) == ("x [V]", "x [mm]")
+
+
+def test_a_record_written_with_units_reads_back_with_them(tmp_path):
+    """Review 49: ``to_csv`` wrote ``u`` for a record read from ``u [V]`` (the unit lost),
+    and reading it with ``u="u [V]"`` failed. It writes ``u [V]`` now, and ``u="u"``
+    finds that column when none is called ``u`` alone."""
+    data = hb.IOData(np.arange(5.0), np.ones(5), dt=0.5, input_name="u", output_name="y",
+                     input_unit="V", output_unit="mm", time_unit="s")
+    path = tmp_path / "rec.csv"
+    data.to_csv(path)
+    assert path.read_text().splitlines()[0] == "t [s],u [V],y [mm]"
+    back = hb.IOData.from_csv(path)
+    assert (back.input_name, back.input_unit, back.output_name, back.output_unit) == (
+        "u", "V", "y", "mm")
+    assert np.array_equal(back.u, data.u) and back.dt == 0.5
+    again = hb.IOData.from_csv(path, u="u [V]", y="y [mm]")
+    assert np.array_equal(again.y, data.y)

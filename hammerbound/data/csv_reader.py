@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import DataValidationError
+from .timebase import name_and_unit
 
 __all__ = ["PYTHON_NAMES", "csv_header", "load_chapter_tables",
            "read_columns", "read_io_csv"]
@@ -184,6 +185,16 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+def column_with_unit(header, name):
+    """The column ``name`` of ``header``, or the one column ``name [unit]`` when no column
+    is called ``name`` alone (review 49: a record written with its units was not found
+    again by its names; the command line's ``--u-col u`` finds ``u [V]`` in every file)."""
+    if name is None or name in header:
+        return name
+    found = [h for h in header if name_and_unit(h)[0] == str(name) and name_and_unit(h)[1]]
+    return found[0] if len(found) == 1 else name
+
+
 def _read_columns(path, columns, delimiter, names):
     with path.open(newline="", encoding="utf-8-sig") as fh:
         reader = csv.reader(fh, delimiter=delimiter)
@@ -192,7 +203,8 @@ def _read_columns(path, columns, delimiter, names):
         except StopIteration:
             raise DataValidationError(f"{path}: the file is empty; expected a header row "
                                       f"with columns {list(columns)}.") from None
-        missing = [c for c in columns if c not in header]
+        actual = {c: column_with_unit(header, c) for c in columns}
+        missing = [c for c in columns if actual[c] not in header]
         if missing:
             how = sorted({names["u"], names["y"]})
             other = _separator_hint(header, delimiter, names) or _header_hint(header)
@@ -200,7 +212,7 @@ def _read_columns(path, columns, delimiter, names):
                 f"{path}: missing column(s) {missing}; the header has {header}{other}. "
                 f"Rename the columns or pass the right names ({', '.join(how)})."
             )
-        idx = [header.index(c) for c in columns]
+        idx = [header.index(actual[c]) for c in columns]
         out = {c: [] for c in columns}
         for lineno, row in enumerate(reader, start=2):
             if not row or all(not f.strip() for f in row):

@@ -42,16 +42,6 @@ def _check_dt(dt):
     return float(dt)
 
 
-def _with_unit(header, name):
-    """The column ``name`` of ``header``, or the one column ``name [unit]`` when no column
-    is called ``name`` alone (review 49: a record written with its units was not found
-    again by its names)."""
-    if name is None or name in header:
-        return name
-    found = [h for h in header if name_and_unit(h)[0] == str(name) and name_and_unit(h)[1]]
-    return found[0] if len(found) == 1 else name
-
-
 class IOData:
     """One SISO input/output record with sampling time, names and units.
 
@@ -136,11 +126,11 @@ class IOData:
         ``u [V]``, gives name ``u`` and unit ``V``, and ``u="u"`` finds it when no column
         is named ``u`` alone: :meth:`to_csv` writes units so).
         """
-        from .csv_reader import _names, csv_header, read_columns
+        from .csv_reader import _names, column_with_unit, csv_header, read_columns
 
         spell = _names(argument_names)
         header = csv_header(path, delimiter=delimiter)
-        u, y = _with_unit(header, u), _with_unit(header, y)
+        u, y = column_with_unit(header, u), column_with_unit(header, y)
         t = cls._time_column(header, t, (u, y), str(path), dt, spell)
         data = read_columns(path, [u, y] + ([t] if t else []), delimiter=delimiter,
                             argument_names=spell)

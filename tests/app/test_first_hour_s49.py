@@ -223,3 +223,22 @@ def test_a_record_written_with_units_reads_back_with_them(tmp_path):
     assert np.array_equal(back.u, data.u) and back.dt == 0.5
     again = hb.IOData.from_csv(path, u="u [V]", y="y [mm]")
     assert np.array_equal(again.y, data.y)
+
+
+def test_the_command_line_finds_columns_with_units_by_their_names(tmp_path, capsys):
+    """``--u-col u --y-col y`` (the defaults) find ``u [V]`` and ``y [mm]`` in both files of
+    ``identify`` (the steady-state file is read by another reader than the record)."""
+    from hammerbound.app.cli import main
+
+    ex = hb.chapter_example(0.05, N=60)
+    steady = tmp_path / "steady.csv"
+    steady.write_text("u [V],y [mm]\n" + "".join(
+        f"{a!r},{b!r}\n" for a, b in zip(ex.steady.u.tolist(), ex.steady.y.tolist(),
+                                         strict=True)))
+    prbs = tmp_path / "prbs.csv"
+    prbs.write_text("u [V],y [mm]\n" + "".join(
+        f"{a!r},{b!r}\n" for a, b in zip(ex.prbs.u.tolist(), ex.prbs.y.tolist(), strict=True)))
+    code = main(["identify", "--steady", str(steady), "--prbs", str(prbs), "--output-bound",
+                 "0.05", "--method", "lp"])
+    out = capsys.readouterr().out
+    assert code == 0 and "units: m_l, m_r in mm/V; c_l, c_r in V" in out

@@ -426,8 +426,9 @@ def _warn_dead_band_covers_record(u, gamma_bounds):
         return
     warnings.warn(
         f"every backlash left has its dead band [-c_l, c_r] over all the record's inputs "
-        f"[{rounded_text(lo, down=True)}, {rounded_text(hi, down=False)}] (c_l >= "
-        f"{rounded_text(cl, down=True)}, c_r >= {rounded_text(cr, down=True)}): its inner "
+        f"[{rounded_text(lo, down=True, digits=6)}, {rounded_text(hi, down=False, digits=6)}] "
+        f"(c_l >= {rounded_text(cl, down=True, digits=6)}, c_r >= "
+        f"{rounded_text(cr, down=True, digits=6)}): its inner "
         "signal can "
         "then move only one way over the whole record. If the output moves both ways, no "
         "parameters explain it -- the output bound is probably too small for the noise, or "

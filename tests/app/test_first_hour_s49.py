@@ -176,8 +176,9 @@ def test_dead_bands_over_every_input_are_said_to_leave_one_way_moves():
 
     u = np.r_[-0.9757, 0.3, 0.966096]
     gb = np.array([[0.0, 11.0], [1.2136225, np.inf], [0.0, 11.0], [0.970898, np.inf]])
-    with pytest.warns(DataWarning, match=r"over all the record's inputs \[-0.9757, 0.9661\] "
-                      r"\(c_l >= 1.213, c_r >= 0.9708\).*output bound is probably too small"):
+    with pytest.warns(DataWarning, match=r"over all the record's inputs \[-0.9757, 0.966096\] "
+                      r"\(c_l >= 1.21362, c_r >= 0.970898\).*output bound is probably too "
+                      r"small"):
         _warn_dead_band_covers_record(u, gb)
     for row, value in ((1, 0.97), (3, 0.96)):  # one side inside the inputs: no warning
         part = gb.copy()

@@ -138,6 +138,12 @@ def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
         # scientific notation: fixed decimals would print it as 0.0000
         mag = max(abs(r["lower"]), abs(r["upper"]))
         fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
+        hw = r["half_width"]
+        if fmt.endswith("f") and np.isfinite(hw) and 0 < hw < 10.0 ** (1 - digits):
+            # a narrow interval keeps two digits of its half-width (up to 10 decimals):
+            # rounded outward to 4 decimals, a width of 3e-7 read 0.9999 .. 1.0001
+            # (recheck 49)
+            fmt = f"{max(digits, min(10, 1 - int(np.floor(np.log10(hw)))))}f"
         # an unbounded interval has no centre: "-", not "nan" or "inf"; the ends round
         # outward and the half-width up, so the printed interval holds the certified one
         # (to nearest, a lower end 0.24636 read 0.2464: a truth at 0.24638 looked outside)

@@ -112,6 +112,9 @@ def _header_hint(header) -> str:
 
 def _not_a_number(path, lineno, column, text) -> str:
     msg = f"{path}, line {lineno}, column {column!r}: {text!r} is not a number."
+    if not text.strip():  # an empty cell: a gap, like a nan (recheck 49)
+        msg += (" An empty cell is a gap, which cannot be dropped silently (the model needs "
+                "consecutive samples): split the record at the gap, or fill the value.")
     if re.fullmatch(r"\s*[-+]?\d*,\d+([eE][-+]?\d+)?\s*", text):
         msg += (" Decimal commas are not read: save the file with decimal points (e.g. "
                 "from a spreadsheet with an English number format).")

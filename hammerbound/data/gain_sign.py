@@ -16,9 +16,9 @@ __all__ = ["NEGATED_HINT", "negative_gain_hint", "record_gain", "steady_slope"]
 #: What to do about a reverse-acting plant (swapped columns named: new-user trial 16).
 NEGATED_HINT = ("the model's backlash slopes are positive and its linear block has unit "
                 "gain (22.8), so a plant whose output falls as its input rises is "
-                "explained by no parameters of it: fit the negated output (-y) and read "
-                "the backlash in those terms -- unless the input and output columns are "
-                "swapped, which can give a negative gain too.")
+                "explained by no parameters of it. Are the input and output columns "
+                "swapped? That gives a negative gain too. If not, fit the negated output "
+                "(-y) and read the backlash in those terms.")
 
 
 def record_gain(u, y, lags_y, lags_u) -> float:

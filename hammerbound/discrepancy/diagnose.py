@@ -148,8 +148,16 @@ def diagnose(
 CENTRAL_NOTE = ("This tests the fitted set's central model (its A and backlash at the "
                 "centres of their intervals{b}), not the whole set: other models of the set, "
                 "the truth among them if the fit's assumptions hold, may explain the data. "
-                "The set's own check of new data is its output envelope "
-                "(ident.output_envelope(u, y)).")
+                "{check}")
+#: the set's own check of new data, by the procedure that fitted it (recheck 49: a
+#: two-stage fit's envelope refuses a record that is not a PRBS at +-u*)
+CENTRAL_CHECK = {
+    "one-record": "The set's own check of new data is its output envelope "
+                  "(ident.output_envelope(u, y)).",
+    "two-stage": "The set's own check is its output envelope, which takes a PRBS record at "
+                 "+-u* (ident.output_envelope(u_prbs, y_prbs)); a record of another input "
+                 "needs a one-record fit (procedure='one-record').",
+}
 
 
 def _of_central_model(model, report, do_refit):
@@ -161,7 +169,9 @@ def _of_central_model(model, report, do_refit):
     if report.consistent_before or not hasattr(model, "bounds_") \
             or not hasattr(model, "system_"):
         return report
-    note = CENTRAL_NOTE.format(b=", B refitted" if do_refit else ", B as well")
+    check = CENTRAL_CHECK.get(getattr(model, "procedure_", None),
+                              "Check the set itself on the data where it offers a check.")
+    note = CENTRAL_NOTE.format(b=", B refitted" if do_refit else ", B as well", check=check)
     return replace(report, message=f"{report.message} {note}")
 
 

@@ -243,3 +243,43 @@ def test_the_command_line_finds_columns_with_units_by_their_names(tmp_path, caps
                  "0.05", "--method", "lp"])
     out = capsys.readouterr().out
     assert code == 0 and "units: m_l, m_r in mm/V; c_l, c_r in V" in out
+
+
+def test_the_record_line_and_json_carry_the_units(tmp_path, capsys):
+    """Recheck 49: with ``u [V]`` read as name ``u`` and unit ``V`` the record line said
+    ``input 'u'`` (not the column the user named) and the JSON had no units."""
+    import json
+
+    from hammerbound.app.cli import main
+    from hammerbound.app.cli.printing import record_line
+
+    data = hb.IOData(np.arange(3.0), np.ones(3), input_name="u", input_unit="V",
+                     output_name="y", output_unit="mm")
+    assert record_line("r.csv", data).endswith("input 'u' [V], output 'y' [mm]")
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 20), 4)
+    y = np.convolve(u, [0.0, 0.5, 0.25])[: u.size] + rng.uniform(-0.01, 0.01, u.size)
+    path = tmp_path / "rec.csv"
+    path.write_text("u [V],y [mm]\n" + "".join(f"{a!r},{b!r}\n" for a, b in
+                                               zip(u.tolist(), y.tolist(), strict=True)))
+    assert main(["eiv", str(path), "--na", "1", "--nb", "2", "--nk", "0", "--output-bound",
+                 "0.05", "--input-bound", "0", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert (out["data"]["input_unit"], out["data"]["output_unit"]) == ("V", "mm")
+
+
+def test_an_empty_cell_is_a_gap_with_advice(tmp_path):
+    from hammerbound.exceptions import DataValidationError
+
+    path = tmp_path / "gap.csv"
+    path.write_text("u,y\n1,2\n2,\n3,4\n")
+    with pytest.raises(DataValidationError, match="An empty cell is a gap.*split the record"):
+        hb.IOData.from_csv(path, t=None)
+
+
+def test_the_negative_gain_hint_asks_about_swapped_columns_first():
+    """Recheck 49: it led with "fit -y", which on swapped columns is empty again."""
+    from hammerbound.data.gain_sign import negative_gain_hint
+
+    hint = negative_gain_hint(-2.95)
+    assert hint.index("swapped") < hint.index("fit the negated output")

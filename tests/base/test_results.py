@@ -388,3 +388,15 @@ def test_the_interval_table_rounds_its_ends_outward():
     for row, a, b in zip(fixed, lo, hi, strict=True):
         shown = [float(t) for t in row.split()[1:5]]
         assert shown[0] <= a and shown[2] >= b and shown[3] >= (b - a) / 2, (row, a, b)
+
+
+def test_a_narrow_interval_keeps_two_digits_of_its_width():
+    """Recheck 49: rounded outward to 4 decimals, a width of 3e-7 read 0.9999 .. 1.0001
+    with a half-width of 0.0001: the table now shows two digits of the half-width (the
+    ends still outward)."""
+    from hammerbound.tables import interval_text
+
+    row = interval_text(["a"], np.array([[0.99999985, 1.00000015]])).splitlines()[1]
+    lo, centre, hi, hw = (float(t) for t in row.split()[1:5])
+    assert lo <= 0.99999985 and hi >= 1.00000015 and hi - lo <= 4e-7
+    assert hw == pytest.approx(1.5e-7, rel=0.1)

@@ -383,5 +383,7 @@ def test_a_verdict_on_a_fitted_set_says_it_tests_the_central_model():
         of_model = diagnose(ident.system_, u, y, output_bound=0.05, candidates=["delay"])
     assert not of_set.consistent_before
     assert "tests the fitted set's central model" in of_set.message
-    assert "ident.output_envelope" in of_set.message
+    # recheck 49: a two-stage fit's envelope takes a PRBS at +-u* only; say so
+    assert "ident.output_envelope(u_prbs, y_prbs)" in of_set.message
+    assert "procedure='one-record'" in of_set.message
     assert "fitted set's central model" not in of_model.message

@@ -26,16 +26,21 @@ def transfer_function(linear, dt):
 
 def data_fields(data) -> dict:
     """The record's fields of a JSON output: ``N``, ``dt`` and its ``time_unit``, the
-    ``input`` and ``output`` names."""
+    ``input`` and ``output`` names and their units (empty when not known)."""
     return {"N": data.N, "dt": data.dt, "time_unit": data.time_unit,
-            "input": data.input_name, "output": data.output_name}
+            "input": data.input_name, "output": data.output_name,
+            "input_unit": data.input_unit, "output_unit": data.output_unit}
 
 
 def record_line(path, data) -> str:
-    """``data.csv: N = 60, dt = 0.1, input 'u', output 'y'``."""
+    """``data.csv: N = 60, dt = 0.1, input 'u', output 'y'`` (``input 'u' [V]`` with a
+    unit: the column ``u [V]``)."""
+    def signal(name, unit):
+        return repr(name) + (f" [{unit}]" if unit else "")
+
     return (f"{path}: N = {data.N}, dt = {dt_text(data.dt, data.time_unit)}, "
-            f"input {data.input_name!r}, "
-            f"output {data.output_name!r}")
+            f"input {signal(data.input_name, data.input_unit)}, "
+            f"output {signal(data.output_name, data.output_unit)}")
 
 
 def assumption_lines(given, assumed) -> list[str]:

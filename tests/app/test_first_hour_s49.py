@@ -121,7 +121,7 @@ def test_a_swapped_record_is_told_it_may_be_swapped():
                                         total_time_limit=120), procedure="one-record")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        with pytest.raises(EmptyFeasibleSetError, match="columns are swapped"):
+        with pytest.raises(EmptyFeasibleSetError, match="output columns swapped"):
             ident.fit(y, u)
 
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["assumptions_text", "bound_text", "dt_text", "interval_frame", "interval_records",
-           "interval_text", "number_text", "outward_text", "poly_z", "rounded_text"]
+           "interval_text", "number_text", "outward_text", "poly_z", "rounded_text",
+           "units_line"]
 
 COLUMNS = ("parameter", "lower", "centre", "upper", "half_width", "status")
 
@@ -54,6 +55,18 @@ def assumptions_text(items) -> str:
     line each (every summary lists them so, after its table:
     :meth:`~hammerbound.results.IntervalSet.summary`)."""
     return "assumptions:\n" + "\n".join(f"  - {a}" for a in items)
+
+
+def units_line(units) -> str:
+    """``"\nunits: m_l, m_r in mm/V; ..."`` from a record's ``(input, output)`` units, for
+    a summary's head (empty when the record gives none; trial 17: with ``u [V]`` and
+    ``y [mm]`` no parameter carried a unit)."""
+    u, y = units
+    if not (u or y):
+        return ""
+    u, y = u or "input unit", y or "output unit"
+    return (f"\nunits: m_l, m_r in {y}/{u}; c_l, c_r in {u}; a_i, b_j none (unit gain: the "
+            f"inner signal x is in {y})")
 
 
 def dt_text(dt, unit: str = "") -> str:

@@ -53,9 +53,12 @@ def assumption_lines(ident) -> list:
     """The report's Assumptions section: what every interval of the fitted identifier
     ``ident`` rests on, and the central model with its sampling time (the report had
     neither; the text and JSON outputs do, trial 13)."""
-    from ..tables import dt_text, poly_z
+    from ..tables import dt_text, poly_z, units_line
 
     lines = ["## Assumptions", "", *[f"- {a}" for a in ident.assumptions_], ""]
+    units = units_line(getattr(ident, "units_", ("", ""))).strip()
+    if units:  # recheck 49: the report had no units where the summary has them
+        lines += [units[0].upper() + units[1:] + ".", ""]
     if not np.all(np.isfinite(ident.linear_.bounds_)):
         return lines + ["Central model: not given (a linear-block interval is "
                         "infinite).", ""]

@@ -33,6 +33,7 @@ from ..exceptions import DataValidationError, ParameterValidationError
 from ..results import IntervalSet
 from ..stage2.linear_model import is_vector_like
 from ..systems.models import GAMMA_NAMES, Backlash, HammersteinSystem
+from ..tables import units_line
 from .setup import (
     GAIN_ASSUMPTION,
     check_bounds,
@@ -67,17 +68,6 @@ def _inner_text(inner_signal, x, bound) -> str:
                 for s in (x > 0, x < 0))                                   # than used
     return ("inner signal at two unknown levels (Result 1), one per PRBS level, within "
             f"their stage-1 bounds |dx| <= {up} (u = +u*) and {down} (u = -u*)")
-
-
-def _units_line(units) -> str:
-    """The units of the parameters, from the record's (empty when it gives none; trial
-    17: with ``u [V]`` and ``y [mm]`` no parameter carried a unit)."""
-    u, y = units
-    if not (u or y):
-        return ""
-    u, y = u or "input unit", y or "output unit"
-    return (f"\nunits: m_l, m_r in {y}/{u}; c_l, c_r in {u}; a_i, b_j none (unit gain: the "
-            f"inner signal x is in {y})")
 
 
 def _central_system(backlash, A, B, dt=None):
@@ -322,7 +312,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
                     f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}"
-                    + _units_line(getattr(self, "units_", ("", ""))))
+                    + units_line(getattr(self, "units_", ("", ""))))
             return self.intervals_.summary(title=head, assumptions=self.assumptions_)
         inner = self.inner_signal
         if inner == "two-level" and lin.method == "lp":
@@ -330,7 +320,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                       "their own; method='exact' uses it)")
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
-                f"{inner}, N = {pr.N}, dt = {dt}" + _units_line(getattr(self, "units_", ("", ""))))
+                f"{inner}, N = {pr.N}, dt = {dt}" + units_line(getattr(self, "units_", ("", ""))))
         return self.intervals_.summary(title=head, assumptions=self.assumptions_)
 
     @property

@@ -283,3 +283,26 @@ def test_the_negative_gain_hint_asks_about_swapped_columns_first():
 
     hint = negative_gain_hint(-2.95)
     assert hint.index("swapped") < hint.index("fit the negated output")
+
+
+def test_the_report_states_the_units(tmp_path):
+    """Recheck 49: report.md had no units where the summary has them."""
+    from oracles import play
+    from scipy.signal import lfilter
+
+    from hammerbound.app.record_report import write_record_report
+
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-2, 2, 12), 8)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], play(u, 0.25, 0.06, 0.26, 0.05))
+    y = y + 0.02 * rng.uniform(-1, 1, u.size)
+    data = hb.IOData(u, y, dt=0.5, input_name="u", output_name="y", input_unit="V",
+                     output_unit="mm", time_unit="s")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ident = hb.HammersteinBacklashIdentifier(
+            linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp",
+                                            total_time_limit=60),
+            procedure="one-record").fit(data)
+    text = write_record_report(ident, u, y, tmp_path / "rep").read_text()
+    assert "Units: m_l, m_r in mm/V; c_l, c_r in V" in text

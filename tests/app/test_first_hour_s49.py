@@ -12,6 +12,16 @@ from oracles import one_record
 import hammerbound as hb
 
 
+def _first_order_fit(data, bound):
+    """A one-record fit (na = nb = 1, method "lp", 60 s) of ``data``, warnings ignored."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return hb.HammersteinBacklashIdentifier(
+            linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=bound, method="lp",
+                                            total_time_limit=60),
+            procedure="one-record").fit(data)
+
+
 def _no_offset_said(assumptions) -> bool:
     return any("no output offset" in a and "subtract a sensor offset" in a
                for a in assumptions)
@@ -68,12 +78,7 @@ def test_units_in_the_column_names_are_the_record_units(tmp_path):
     assert (data.output_name, data.output_unit) == ("y", "mm")
     given = hb.IOData.from_csv(path, u="u [V]", y="y (mm)", input_unit="volt")
     assert (given.input_name, given.input_unit) == ("u [V]", "volt")  # what is given wins
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        idf = hb.HammersteinBacklashIdentifier(
-            linear=hb.LinearEIVSetEstimator(output_bound=0.05, na=1, nb=1, method="lp",
-                                            total_time_limit=60),
-            procedure="one-record").fit(data)
+    idf = _first_order_fit(data, 0.05)
     assert "units: m_l, m_r in mm/V; c_l, c_r in V" in idf.summary()
     plain = hb.IOData(u, y)
     assert (plain.input_unit, plain.output_unit) == ("", "")
@@ -298,11 +303,6 @@ def test_the_report_states_the_units(tmp_path):
     y = y + 0.02 * rng.uniform(-1, 1, u.size)
     data = hb.IOData(u, y, dt=0.5, input_name="u", output_name="y", input_unit="V",
                      output_unit="mm", time_unit="s")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        ident = hb.HammersteinBacklashIdentifier(
-            linear=hb.LinearEIVSetEstimator(na=1, nb=1, output_bound=0.02, method="lp",
-                                            total_time_limit=60),
-            procedure="one-record").fit(data)
+    ident = _first_order_fit(data, 0.02)
     text = write_record_report(ident, u, y, tmp_path / "rep").read_text()
     assert "Units: m_l, m_r in mm/V; c_l, c_r in V" in text

@@ -385,7 +385,11 @@ def _with_gain_sign(exc, problem):
     hint = negative_gain_hint(_record_gain(problem))
     if not hint:
         return exc
-    return EmptyFeasibleSetError(f"{exc} {hint}", side=exc.side, first_index=exc.first_index,
+    # the likeliest cause first, after the verdict, not after the general checklist
+    # (recheck 49: it came last in a message of about 1300 characters)
+    verdict, sep, rest = str(exc).partition("). ")
+    text = f"{verdict}). {hint} {rest}" if sep else f"{exc} {hint}"
+    return EmptyFeasibleSetError(text, side=exc.side, first_index=exc.first_index,
                                  relaxation=exc.relaxation)
 
 

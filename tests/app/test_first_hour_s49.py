@@ -126,8 +126,10 @@ def test_a_swapped_record_is_told_it_may_be_swapped():
                                         total_time_limit=120), procedure="one-record")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        with pytest.raises(EmptyFeasibleSetError, match="output columns swapped"):
+        with pytest.raises(EmptyFeasibleSetError, match="output columns swapped") as info:
             ident.fit(y, u)
+    text = str(info.value)  # the likeliest cause before the general checklist
+    assert text.index("swapped") < text.index("Check the output bound")
 
 
 def test_a_not_identified_warning_blames_the_record_only_for_the_record_causes():

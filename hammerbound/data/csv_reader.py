@@ -110,11 +110,15 @@ def _header_hint(header) -> str:
             "naming the columns, e.g. 'u,y' or 't,u,y')")
 
 
+#: what a gap in a record asks of the user (a nan or an empty cell)
+_GAP_ADVICE = ("cannot be dropped silently (the model needs consecutive samples): split the "
+               "record at the gap and fit the longest part, or fill the value if you know it.")
+
+
 def _not_a_number(path, lineno, column, text) -> str:
     msg = f"{path}, line {lineno}, column {column!r}: {text!r} is not a number."
     if not text.strip():  # an empty cell: a gap, like a nan (recheck 49)
-        msg += (" An empty cell is a gap, which cannot be dropped silently (the model needs "
-                "consecutive samples): split the record at the gap, or fill the value.")
+        msg += f" An empty cell is a gap, which {_GAP_ADVICE}"
     if re.fullmatch(r"\s*[-+]?\d*,\d+([eE][-+]?\d+)?\s*", text):
         msg += (" Decimal commas are not read: save the file with decimal points (e.g. "
                 "from a spreadsheet with an English number format).")
@@ -194,7 +198,8 @@ def column_with_unit(header, name):
     again by its names; the command line's ``--u-col u`` finds ``u [V]`` in every file)."""
     if name is None or name in header:
         return name
-    found = [h for h in header if name_and_unit(h)[0] == str(name) and name_and_unit(h)[1]]
+    found = [h for h, (base, unit) in zip(header, map(name_and_unit, header), strict=True)
+             if base == str(name) and unit]
     return found[0] if len(found) == 1 else name
 
 
@@ -216,11 +221,12 @@ def _read_columns(path, columns, delimiter, names):
                 f"Rename the columns or pass the right names ({', '.join(how)})."
             )
         idx = [header.index(actual[c]) for c in columns]
+        width = _named_width(header)
         out = {c: [] for c in columns}
         for lineno, row in enumerate(reader, start=2):
             if not row or all(not f.strip() for f in row):
                 continue
-            _check_width(path, lineno, row, _named_width(header), delimiter)
+            _check_width(path, lineno, row, width, delimiter)
             for c, i in zip(columns, idx, strict=True):
                 if i >= len(row):
                     raise DataValidationError(
@@ -235,9 +241,7 @@ def _read_columns(path, columns, delimiter, names):
                 if not np.isfinite(v):
                     raise DataValidationError(
                         f"{path}, line {lineno}, column {c!r}: {row[i]!r} is not finite. "
-                        "A gap in a record cannot be dropped silently (the model needs "
-                        "consecutive samples): split the record at the gap and fit the "
-                        "longest part, or fill the value if you know it."
+                        f"A gap in a record {_GAP_ADVICE}"
                     )
                 out[c].append(v)
     if not out[columns[0]]:

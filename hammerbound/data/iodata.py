@@ -18,7 +18,7 @@ import numpy as np
 
 from ..exceptions import DataValidationError, DataWarning, ParameterValidationError
 from .csv_reader import PYTHON_NAMES
-from .timebase import find_time_column, name_and_unit, time_unit_of, uniform_step
+from .timebase import find_time_column, name_and_unit, name_with_unit, time_unit_of, uniform_step
 from .validation import as_signal
 
 __all__ = ["IOData", "signal_label", "uniform_step"]
@@ -28,8 +28,7 @@ def signal_label(names, units) -> str:
     """``"force [N] -> position [mm]"``, or ``""`` for the defaults ``u -> y`` without units."""
     if tuple(names) == ("u", "y") and not any(units):
         return ""
-    return " -> ".join(n + (f" [{un}]" if un else "") for n, un in zip(names, units,
-                                                                        strict=True))
+    return " -> ".join(name_with_unit(n, un) for n, un in zip(names, units, strict=True))
 
 
 def _check_dt(dt):
@@ -199,10 +198,10 @@ class IOData:
                     f"{where}: the time column {t!r} has step {step:g} but dt={dt:g} was "
                     f"given; drop one of them (or pass {(spell or PYTHON_NAMES)['no_t']} to "
                     "ignore the column).")
-        bases = [name_and_unit(c)[0] for c in (uname, yname)]
-        for which, column in (("input", uname), ("output", yname)):
-            base, unit = name_and_unit(column)
-            if unit and f"{which}_unit" not in names and bases[0] != bases[1]:
+        read = [name_and_unit(c) for c in (uname, yname)]
+        for which, column, (base, unit) in zip(("input", "output"), (uname, yname), read,
+                                               strict=True):
+            if unit and f"{which}_unit" not in names and read[0][0] != read[1][0]:
                 # "y [mm]": name y, unit mm (not when both names would read the same)
                 names[f"{which}_unit"] = unit
                 names.setdefault(f"{which}_name", base)
@@ -285,8 +284,8 @@ class IOData:
         under their names (``name [unit]`` with a unit), each value written so that
         :meth:`from_csv` reads it back exactly, names and units too."""
         cols = [self.u, self.y]
-        header = [f"{n} [{unit}]" if unit else n for n, unit in
-                  ((self.input_name, self.input_unit), (self.output_name, self.output_unit))]
+        header = [name_with_unit(self.input_name, self.input_unit),
+                  name_with_unit(self.output_name, self.output_unit)]
         if self.dt is not None:
             cols.insert(0, self.time)
             header.insert(0, f"t [{self.time_unit}]" if self.time_unit else "t")
@@ -304,13 +303,15 @@ class IOData:
             fh.write("\n".join(lines) + "\n")
 
     def __repr__(self) -> str:
-        def sig(name, unit):
-            return repr(name) + (f" [{unit}]" if unit else "")
-
         dt = "None (not given)" if self.dt is None else f"{self.dt:g}" + (
             f" {self.time_unit}" if self.time_unit else "")
-        return (f"IOData(N={self.N}, dt={dt}, input={sig(self.input_name, self.input_unit)}, "
-                f"output={sig(self.output_name, self.output_unit)})")
+        return (f"IOData(N={self.N}, dt={dt}, input={self.signal_text('input')}, "
+                f"output={self.signal_text('output')})")
+
+    def signal_text(self, which: str) -> str:
+        """The ``"input"`` or ``"output"`` signal as messages quote it: ``'u' [V]``."""
+        return name_with_unit(repr(getattr(self, f"{which}_name")),
+                              getattr(self, f"{which}_unit"))
 
 
 def _same_output(data, y) -> bool:

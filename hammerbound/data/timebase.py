@@ -18,7 +18,8 @@ import numpy as np
 from ..exceptions import DataValidationError
 from .validation import as_signal
 
-__all__ = ["TIME_NAMES", "find_time_column", "name_and_unit", "time_unit_of", "uniform_step"]
+__all__ = ["TIME_NAMES", "find_time_column", "name_and_unit", "name_with_unit", "time_unit_of",
+           "uniform_step"]
 
 #: base names recognised as a time column (case-insensitive)
 TIME_NAMES = ("t", "time", "times", "timestamp", "zeit", "tiempo", "temps")
@@ -43,6 +44,12 @@ def name_and_unit(name) -> tuple[str, str]:
     if m is None or unit.isdigit() or any(c in m.group("base") for c in "[]()"):
         return str(name).strip(), ""
     return m.group("base"), unit
+
+
+def name_with_unit(name, unit) -> str:
+    """``"y [mm]"`` (``name`` alone without a unit): how a signal is labelled and written,
+    which :func:`name_and_unit` reads back."""
+    return f"{name} [{unit}]" if unit else str(name)
 
 
 def time_unit_of(name) -> str | None:

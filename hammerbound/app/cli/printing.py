@@ -35,12 +35,8 @@ def data_fields(data) -> dict:
 def record_line(path, data) -> str:
     """``data.csv: N = 60, dt = 0.1, input 'u', output 'y'`` (``input 'u' [V]`` with a
     unit: the column ``u [V]``)."""
-    def signal(name, unit):
-        return repr(name) + (f" [{unit}]" if unit else "")
-
     return (f"{path}: N = {data.N}, dt = {dt_text(data.dt, data.time_unit)}, "
-            f"input {signal(data.input_name, data.input_unit)}, "
-            f"output {signal(data.output_name, data.output_unit)}")
+            f"input {data.signal_text('input')}, output {data.signal_text('output')}")
 
 
 def assumption_lines(given, assumed) -> list[str]:

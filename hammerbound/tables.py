@@ -40,12 +40,20 @@ def rounded_text(v: float, down: bool, digits: int = 4) -> str:
     other side: an assumption shown rounded must be no weaker than the one used (an upper
     limit of an a priori box rounds down, the ends of a range it holds over round
     outward; review: ``m_l in [0, 102.5]`` was shown for a limit of 102.4967)."""
-    text = f"{v:.{digits}g}"
-    if not np.isfinite(v) or float(text) == v or (float(text) < v) == down:
+    return _directed_text(v, f"{digits}g", -1 if down else 1,
+                          lambda x: 10.0 ** (np.floor(np.log10(abs(x))) - (digits - 1)))
+
+
+def _directed_text(v: float, fmt: str, side: int, step) -> str:
+    """``v`` in the format ``fmt``, to nearest (``side`` 0), else never on the other side
+    of ``v`` than ``side``: the nearest text moved by one unit ``step(v)`` of the format's
+    last digit when it fell on the wrong side, or ``v``'s own digits when that step
+    rounds back past ``v``."""
+    text = f"{v:.{fmt}}"
+    if side == 0 or not np.isfinite(v) or float(text) == v or (float(text) > v) == (side > 0):
         return text
-    q = 10.0 ** (np.floor(np.log10(abs(v))) - (digits - 1))
-    text = f"{(np.floor(v / q) if down else np.ceil(v / q)) * q:.{digits}g}"
-    if float(text) != v and (float(text) > v) == down:  # rounding of q itself: exact
+    text = f"{float(text) + side * step(v):.{fmt}}"
+    if (float(text) - v) * side < 0:  # the rounding of the step itself: keep v exactly
         return repr(float(v))
     return text
 
@@ -125,17 +133,11 @@ def interval_frame(names, bounds, status=None):
 def outward_text(v: float, fmt: str, side: int) -> str:
     """``v`` in ``fmt`` (``"4f"`` or ``"3e"``), rounded down (``side < 0``), up (``> 0``)
     or to nearest (0); infinite values as ``inf``/``-inf``."""
-    text = f"{v:.{fmt}}"
-    if side == 0 or not np.isfinite(v) or float(text) == v or (float(text) > v) == (side > 0):
-        return text
+    decimals = int(fmt[:-1])
     if fmt.endswith("f"):
-        step = 10.0 ** -int(fmt[:-1])
-    else:
-        step = 10.0 ** (int(text.split("e")[1]) - int(fmt[:-1]))
-    out = f"{float(text) + side * step:.{fmt}}"
-    if (float(out) - v) * side < 0:  # the step itself rounded back: keep v's own digits
-        return repr(float(v))
-    return out
+        return _directed_text(v, fmt, side, lambda x: 10.0 ** -decimals)
+    return _directed_text(v, fmt, side,  # the last digit of the nearest text's mantissa
+                          lambda x: 10.0 ** (int(f"{x:.{fmt}}".split("e")[1]) - decimals))
 
 
 def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:

@@ -309,10 +309,10 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         lin = self.linear_
         pr = lin.problem_
         dt = dt_text(self.dt_, getattr(lin, "time_unit_", ""))
+        units = units_line(getattr(self, "units_", ("", "")))
         if self.procedure_ == "one-record":
             head = (f"HammersteinBacklashIdentifier: one record, method {lin.method}, "
-                    f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}"
-                    + units_line(getattr(self, "units_", ("", ""))))
+                    f"na={pr.na} nb={pr.nb} nk={pr.nk}, N = {pr.N}, dt = {dt}{units}")
             return self.intervals_.summary(title=head, assumptions=self.assumptions_)
         inner = self.inner_signal
         if inner == "two-level" and lin.method == "lp":
@@ -320,7 +320,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
                       "their own; method='exact' uses it)")
         head = (f"HammersteinBacklashIdentifier: u* = {self.u_star_:g}, stage 2 method "
                 f"{lin.method}, na={pr.na} nb={pr.nb} nk={pr.nk}, inner signal "
-                f"{inner}, N = {pr.N}, dt = {dt}" + units_line(getattr(self, "units_", ("", ""))))
+                f"{inner}, N = {pr.N}, dt = {dt}{units}")
         return self.intervals_.summary(title=head, assumptions=self.assumptions_)
 
     @property

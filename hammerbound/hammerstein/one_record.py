@@ -41,6 +41,7 @@ from ..joint import (
     unidentified,
 )
 from ..joint.relaxation import gain_tolerance
+from ..joint.tighten import EMPTY_HINT
 from ..relaxations.problem import (
     b_lags_of,
     given_rows,
@@ -385,10 +386,11 @@ def _with_gain_sign(exc, problem):
     hint = negative_gain_hint(_record_gain(problem))
     if not hint:
         return exc
-    # the likeliest cause first, after the verdict, not after the general checklist
-    # (recheck 49: it came last in a message of about 1300 characters)
-    verdict, sep, rest = str(exc).partition("). ")
-    text = f"{verdict}). {hint} {rest}" if sep else f"{exc} {hint}"
+    # the likeliest cause first, before the general checklist (recheck 49: it came last
+    # in a message of about 1300 characters)
+    text = str(exc)
+    text = (text.replace(EMPTY_HINT, f"{hint} {EMPTY_HINT}", 1) if EMPTY_HINT in text
+            else f"{text} {hint}")
     return EmptyFeasibleSetError(text, side=exc.side, first_index=exc.first_index,
                                  relaxation=exc.relaxation)
 
@@ -432,9 +434,8 @@ def _warn_dead_band_covers_record(u, gamma_bounds):
         f"every backlash left has its dead band [-c_l, c_r] over all the record's inputs "
         f"[{rounded_text(lo, down=True, digits=6)}, {rounded_text(hi, down=False, digits=6)}] "
         f"(c_l >= {rounded_text(cl, down=True, digits=6)}, c_r >= "
-        f"{rounded_text(cr, down=True, digits=6)}): its inner "
-        "signal can "
-        "then move only one way over the whole record. If the output moves both ways, no "
+        f"{rounded_text(cr, down=True, digits=6)}): its inner signal can then move only "
+        "one way over the whole record. If the output moves both ways, no "
         "parameters explain it -- the output bound is probably too small for the noise, or "
         "the orders too low -- and more time may certify the set empty.", DataWarning,
         # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller

@@ -164,9 +164,9 @@ class BacklashInverse(Result):
 
     def summary(self) -> str:
         """The central backlash, the command range and the guaranteed error over it."""
-        v = np.linspace(self.v_range[0], self.v_range[1], 201)
         from ..tables import rounded_text
 
+        v = np.linspace(self.v_range[0], self.v_range[1], 201)
         lo, hi = self.error_bounds(v)
         ml, cl, mr, cr = self.gamma
         return (f"backlash inverse of ml={ml:.4g} cl={cl:.4g} mr={mr:.4g} cr={cr:.4g}, "

@@ -251,17 +251,20 @@ def test_the_suggested_level_stays_within_the_tested_amplitudes():
 
 
 
-def _chebyshev(u, y):
-    """The tests' own smallest max |y - m u - q| over lines: for fixed m the best q leaves
-    (max r - min r) / 2 of r = y - m u, which is convex in m."""
-    from scipy.optimize import minimize_scalar
+def _exact_chebyshev(u, y, d):
+    """The tests' own exact weighted minimax line value: the largest over every 3 points
+    (distinct inputs) of the middle one's distance from the outer chord, in fractions."""
+    from fractions import Fraction as F
+    from itertools import combinations
 
-    def half_range(m):
-        r = y - m * u
-        return 0.5 * (r.max() - r.min())
-
-    return minimize_scalar(half_range, bounds=(-100, 100), method="bounded",
-                           options={"xatol": 1e-12}).fun
+    pts = sorted((F(float(a)), F(float(b)), F(float(c))) for a, b, c in zip(u, y, d,
+                                                                           strict=True))
+    best = F(0)
+    for (u1, y1, d1), (u2, y2, d2), (u3, y3, d3) in combinations(pts, 3):
+        if u1 < u2 < u3:
+            lam = (u3 - u2) / (u3 - u1)
+            best = max(best, abs(y2 - lam * y1 - (1 - lam) * y3) / (d2 + lam * d1 + (1 - lam) * d3))
+    return best
 
 
 def test_the_smallest_bound_the_data_allow_is_stated_and_is_a_lower_bound():
@@ -270,7 +273,9 @@ def test_the_smallest_bound_the_data_allow_is_stated_and_is_a_lower_bound():
     smallest bound at which a line explains both sides (never above the true one), and
     below it the fit is refused."""
     u, y = _valve_steady(np.linspace(0.8, 5.0, 10), np.random.default_rng(4))
-    need = max(_chebyshev(u[u > 0], y[u > 0]), _chebyshev(u[u < 0], y[u < 0]))
+    one = np.ones(u.size)
+    need = float(max(_exact_chebyshev(u[u > 0], y[u > 0], one[u > 0]),
+                     _exact_chebyshev(u[u < 0], y[u < 0], one[u < 0])))
     est = BacklashSetEstimator(0.05).fit(u, y)
     stated = est.smallest_bound_factor_ * 0.05
     assert need * (1 - 1e-5) <= stated <= need
@@ -300,22 +305,6 @@ def test_a_bound_far_below_the_errors_is_refused_not_answered_with_a_point():
     with pytest.raises(EmptyFeasibleSetError, match="left-side"):
         BacklashSetEstimator(3e-7).fit(u, y)
     BacklashSetEstimator(3.1e-6).fit(u, y)  # a bound that holds the errors: a set
-
-
-def _exact_chebyshev(u, y, d):
-    """The tests' own exact weighted minimax line value: the largest over every 3 points
-    (distinct inputs) of the middle one's distance from the outer chord, in fractions."""
-    from fractions import Fraction as F
-    from itertools import combinations
-
-    pts = sorted((F(float(a)), F(float(b)), F(float(c))) for a, b, c in zip(u, y, d,
-                                                                           strict=True))
-    best = F(0)
-    for (u1, y1, d1), (u2, y2, d2), (u3, y3, d3) in combinations(pts, 3):
-        if u1 < u2 < u3:
-            lam = (u3 - u2) / (u3 - u1)
-            best = max(best, abs(y2 - lam * y1 - (1 - lam) * y3) / (d2 + lam * d1 + (1 - lam) * d3))
-    return best
 
 
 @pytest.mark.parametrize("scale", [1e-8, 1.0, 1e8])

@@ -156,6 +156,44 @@ def _check_width(path, lineno, row, width, delimiter) -> None:
             "the file's own delimiter.")
 
 
+_INTEGER = re.compile(r"\s*[-+]?\d+")
+_DIGITS = re.compile(r"\d+\s*")
+
+
+def _check_shifts(path, rows, read, delimiter) -> None:
+    """A decimal comma can also shift values into a *named* column that is usually empty
+    (``u,y,note``: ``2,38,3.5`` reads y = 38, recheck 49). Refused: a row of a
+    comma-separated file with more non-empty fields than most rows, where at or before a
+    column that is read (``read``: their indices) an integer stands in a column whose
+    values are mostly not integers and a field of digits follows it. (A file of integer
+    counts with a sometimes-filled flag column is read as it is.)"""
+    if delimiter != "," or not rows:
+        return
+    counts = [sum(1 for f in r if f.strip()) for _, r in rows]
+    usual = max(set(counts), key=counts.count)
+    last = max(read)
+    typical = [r for (_, r), c in zip(rows, counts, strict=True) if c == usual]
+
+    def decimal(j):  # the column's values are mostly not integers
+        vals = [r[j] for r in typical if j < len(r) and r[j].strip()]
+        return sum(not _INTEGER.fullmatch(v) for v in vals) > len(vals) / 2
+
+    for (lineno, row), count in zip(rows, counts, strict=True):
+        if count <= usual:
+            continue
+        for i in range(min(last, len(row) - 2) + 1):
+            if _INTEGER.fullmatch(row[i]) and _DIGITS.fullmatch(row[i + 1]) \
+                    and decimal(i):
+                raise DataValidationError(
+                    f"{path}, line {lineno}: the row has {count} values where most rows "
+                    f"have {usual}, and {row[i]!r} followed by {row[i + 1]!r} looks like "
+                    f"one number with a decimal comma ({row[i]},{row[i + 1]}), which "
+                    f"would put values into the wrong columns: {','.join(row)!r}. Save "
+                    "the file with decimal points (e.g. from a spreadsheet with an "
+                    "English number format); if the row is right as it is, write its "
+                    "integers with a decimal point (e.g. 2.0).")
+
+
 def _delimiter(delimiter, names) -> str:
     if isinstance(delimiter, str) and delimiter in _TAB:
         return "\t"
@@ -222,11 +260,13 @@ def _read_columns(path, columns, delimiter, names):
             )
         idx = [header.index(actual[c]) for c in columns]
         width = _named_width(header)
-        out = {c: [] for c in columns}
-        for lineno, row in enumerate(reader, start=2):
-            if not row or all(not f.strip() for f in row):
-                continue
+        rows = [(lineno, row) for lineno, row in enumerate(reader, start=2)
+                if row and any(f.strip() for f in row)]
+        for lineno, row in rows:
             _check_width(path, lineno, row, width, delimiter)
+        _check_shifts(path, rows, idx, delimiter)
+        out = {c: [] for c in columns}
+        for lineno, row in rows:
             for c, i in zip(columns, idx, strict=True):
                 if i >= len(row):
                     raise DataValidationError(
@@ -347,9 +387,11 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
         )
     if not rows:
         raise DataValidationError(f"{path} has a header but no data rows.")
-    u, y, bad = [], [], []
     for ln, r in rows:
         _check_width(path, ln, r, width, delimiter)
+    _check_shifts(path, rows, (ju, jy), delimiter)
+    u, y, bad = [], [], []
+    for ln, r in rows:
         try:
             uv, yv = float(r[ju]), float(r[jy])
         except (IndexError, ValueError):

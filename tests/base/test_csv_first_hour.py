@@ -150,3 +150,35 @@ def test_a_shifted_first_row_of_a_headerless_file_is_refused(tmp_path):
     path = _write(tmp_path, "2,38,3\n1.5,2.25\n1.0,2.0\n0.5,1.0\n")
     with pytest.raises(DataValidationError, match="line 1: the row has 3 fields"):
         read_io_csv(path)
+
+
+@pytest.mark.parametrize("reader", ["from_csv", "read_io_csv"])
+def test_a_decimal_comma_shifting_into_a_named_empty_column_is_refused(tmp_path, reader):
+    """Recheck 49: with a header ``u,y,note`` the row ``2,38,3.5`` (u = 2.38) has no more
+    fields than named columns, and was read as u = 2, y = 38."""
+    from hammerbound.data.csv_reader import read_io_csv
+
+    body = "".join(f"{u},{y},\n" for u, y in zip(U, Y, strict=True))
+    path = _write(tmp_path, "u,y,note\n" + body + "2,38,3.5\n0.5,1.75,ok\n")
+    read = (lambda p: hb.IOData.from_csv(p, t=None)) if reader == "from_csv" else read_io_csv
+    with pytest.raises(DataValidationError, match=r"line 8: the row has 3 values where "
+                       r"most rows have 2, and '2' followed by '38' looks like one number "
+                       r"with a decimal comma"):
+        read(path)
+
+
+def test_integer_counts_with_a_flag_column_are_still_read(tmp_path):
+    """Integer data (ADC counts, a sample index) with a sometimes-filled numeric flag
+    column look like the shifted row above, but the columns hold integers in every row."""
+    rows = "".join(f"{k},{500 + k},{480 + 2 * k},{'1' if k % 4 == 0 else ''}\n"
+                   for k in range(12))
+    data = hb.IOData.from_csv(_write(tmp_path, "t,u,y,flag\n" + rows), t="t")
+    assert np.array_equal(data.u, 500 + np.arange(12.0))
+    assert np.array_equal(data.y, 480 + 2 * np.arange(12.0))
+
+
+def test_a_note_with_text_is_still_read(tmp_path):
+    body = "".join(f"{u},{y},{'calibrated' if k == 2 else ''}\n"
+                   for k, (u, y) in enumerate(zip(U, Y, strict=True)))
+    data = hb.IOData.from_csv(_write(tmp_path, "u,y,note\n" + body), t=None)
+    assert np.array_equal(data.u, U) and np.array_equal(data.y, Y)

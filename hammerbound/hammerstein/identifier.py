@@ -43,7 +43,7 @@ from .setup import (
     steady_bound,
 )
 
-__all__ = ["HammersteinBacklashIdentifier"]
+__all__ = ["HammersteinBacklashIdentifier", "central_system"]
 
 
 
@@ -70,7 +70,7 @@ def _inner_text(inner_signal, x, bound) -> str:
             f"their stage-1 bounds |dx| <= {up} (u = +u*) and {down} (u = -u*)")
 
 
-def _central_system(backlash, A, B, dt=None):
+def central_system(backlash, A, B, dt=None):
     """The central model; its A need not be stable (the centre of intervals that contain
     stable A's may lie outside the stability region): warn instead of failing the fit."""
     try:
@@ -249,7 +249,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             _theta_box_text(lin),
         )
         ml, cl, mr, cr = bl.gamma_center_
-        self.system_ = _central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, data.dt)
+        self.system_ = central_system(Backlash(ml, cl, mr, cr), lin.A_, lin.B_, data.dt)
 
     def _fit_one_record(self, bl, lin, data, steady_state, output_bound):
         from .one_record import fit_one_record, in_param_order
@@ -285,7 +285,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         self.system_ = None
         if np.all(np.isfinite(f.gamma_bounds)) and np.all(np.isfinite(f.theta_bounds)):
             ml, cl, mr, cr = f.gamma_bounds.mean(axis=1)
-            self.system_ = _central_system(Backlash(ml, cl, mr, cr), self.linear_.A_,
+            self.system_ = central_system(Backlash(ml, cl, mr, cr), self.linear_.A_,
                                            self.linear_.B_, data.dt)
 
     def to_frame(self):

@@ -11,6 +11,7 @@ import numpy as np
 from ...exceptions import HammerboundError, ParameterValidationError
 from ..paths import add_force_option, check_output_file
 from .console import cli_terms, cli_warnings, print_error
+from .fitted_model import fitted_model
 from .options import (
     CLI_NAMES,
     UsageError,
@@ -36,8 +37,15 @@ def add_arguments(p):
     from ...discrepancy import CANDIDATES
 
     p.add_argument("data", help="CSV file with input and output columns (optional header)")
-    p.add_argument("--num", required=True, help="numerator B in powers of q^-1, e.g. '0 0.5'")
-    p.add_argument("--den", required=True, help="denominator A in powers of q^-1, e.g. '1 -0.5'")
+    p.add_argument("--num", help="numerator B in powers of q^-1, e.g. '0 0.5' (with --den)")
+    p.add_argument("--den", help="denominator A in powers of q^-1, e.g. '1 -0.5' (with --num)")
+    p.add_argument("--backlash", default=None, metavar="'ML CL MR CR'",
+                   help="a backlash before --num/--den (slopes and widths, e.g. "
+                        "'0.25 0.6 0.25 0.4'; it starts from x0 = 0, clamped into its band)")
+    p.add_argument("--model", default=None, metavar="FIT.json",
+                   help="the model of a fit: the JSON of 'hammerbound identify --json' (its "
+                        "central model, every parameter at the centre of its interval; "
+                        "instead of --num/--den/--backlash)")
     p.add_argument("--output-bound", type=float, default=None, metavar="BOUND",
                    help="bound on the output errors |eta_t| <= BOUND (required: every "
                         "verdict rests on it)")
@@ -126,7 +134,6 @@ def read_record(args):
 def run(args) -> int:
     """0 when the (refined) model is consistent with the data, 1 when it is not."""
     from ...discrepancy import diagnose
-    from ...systems.models import as_polynomials
 
     bound = require(args.output_bound, "--output-bound",
                     "the bound on the output errors that every verdict rests on, e.g. "
@@ -134,13 +141,7 @@ def run(args) -> int:
     if args.plot is not None:
         check_output_file(args.plot, force=args.force, option="--plot")
     data = read_record(args)
-    num, den = _coeffs(args.num, "--num"), _coeffs(args.den, "--den")
-    A, B = as_polynomials((den, num))
-    import control
-
-    n = max(A.size, B.size)
-    # dt=True (not given): the diagnosis takes the record's dt
-    G = control.tf(np.r_[B, np.zeros(n - B.size)], np.r_[A, np.zeros(n - A.size)], True)
+    G = _model(args)
     cands = None if args.candidates is None else (
         "all" if args.candidates.strip() == "all" else
         [c.strip() for c in args.candidates.split(",") if c.strip()])
@@ -151,6 +152,36 @@ def run(args) -> int:
         _plot(rep, args.plot)
     print(json_text(rep.to_dict()) if args.json else cli_terms(rep.summary()))
     return 0 if rep.consistent_after else 1
+
+
+def _model(args):
+    """The model to diagnose: ``--model FIT.json`` (a fit's central model), or ``--num``
+    and ``--den`` (a transfer function; with ``--backlash`` a Hammerstein system)."""
+    from ...systems.models import Backlash, HammersteinSystem, as_polynomials
+
+    if args.model is not None:
+        if any(v is not None for v in (args.num, args.den, args.backlash)):
+            raise UsageError("--model FIT.json gives the whole model: drop --num, --den and "
+                             "--backlash (or drop --model)")
+        return fitted_model(args.model)
+    if args.num is None or args.den is None:
+        raise UsageError("the model is required: --num and --den (its linear block, e.g. "
+                         "--num '0 0.5' --den '1 -0.5'; add --backlash 'ML CL MR CR' for a "
+                         "backlash before it), or --model FIT.json (the JSON of "
+                         "'hammerbound identify --json')")
+    A, B = as_polynomials((_coeffs(args.den, "--den"), _coeffs(args.num, "--num")))
+    if args.backlash is not None:
+        gamma = _coeffs(args.backlash, "--backlash")
+        if gamma.size != 4:
+            raise ParameterValidationError(
+                f"--backlash takes four numbers 'ML CL MR CR' (slopes m_l, m_r and widths "
+                f"c_l, c_r), e.g. --backlash '0.25 0.6 0.25 0.4'; got {gamma.size}.")
+        return HammersteinSystem(Backlash(*gamma), (A, B))
+    import control
+
+    n = max(A.size, B.size)
+    # dt=True (not given): the diagnosis takes the record's dt
+    return control.tf(np.r_[B, np.zeros(n - B.size)], np.r_[A, np.zeros(n - A.size)], True)
 
 
 def _plot(rep, path):
@@ -169,7 +200,8 @@ def diagnose_cli_main(argv=None) -> int:
     Usage::
 
         hammerbound diagnose DATA.csv --num "0 0.5" --den "1 -0.5" --output-bound 0.02
-                             [--candidates offset,delay] [--refit linear|none] [--skip K]
+                             [--backlash "ML CL MR CR"] (or --model FIT.json instead
+                             of --num/--den) [--candidates offset,delay] [--refit linear|none] [--skip K]
                              [--max-delay D] [--max-effects {1,2,3}] [--u-col u]
                              [--y-col y] [--t-col auto] [--dt DT] [--delimiter ,]
                              [--plot out.png [--force]] [--json] [--progress]
@@ -177,7 +209,9 @@ def diagnose_cli_main(argv=None) -> int:
     ``DATA.csv`` holds the input and output columns (see
     :func:`hammerbound.data.csv_reader.read_io_csv`: with a header they are found by name,
     default ``u`` and ``y``; without one the first two columns are used). ``--num``/``--den``
-    are the model's coefficients in powers of ``q^-1``.
+    are the model's coefficients in powers of ``q^-1``, ``--backlash`` a backlash before
+    them; ``--model FIT.json`` takes the central model of a fit saved by ``hammerbound
+    identify --json`` instead (:mod:`.fitted_model`).
 
     Parameters
     ----------

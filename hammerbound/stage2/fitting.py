@@ -63,9 +63,14 @@ def _moment(est, problem):
 def with_hints(exc, est, problem, data):
     """``exc`` (empty or unbounded set) again, its message naming the assumptions, a badly
     scaled record and, for samples that are not an IOData, cross-validation cuts."""
-    wider = widened_box_hint(problem, exc.relaxation) \
-        if isinstance(exc, EmptyFeasibleSetError) else ""
-    hint = " ".join(h for h in (wider, box_hint(est, problem), assumptions(est, problem)) if h)
+    wider = smallest = ""
+    if isinstance(exc, EmptyFeasibleSetError):
+        from .smallest_bound import smallest_output_factor, smallest_output_text
+
+        smallest = smallest_output_text(problem, smallest_output_factor(problem))
+        wider = widened_box_hint(problem, exc.relaxation)
+    hint = " ".join(h for h in (smallest, wider, box_hint(est, problem),
+                                assumptions(est, problem)) if h)
     kw = {"side": exc.side, "first_index": exc.first_index, "relaxation": exc.relaxation} \
         if isinstance(exc, EmptyFeasibleSetError) else {}
     if isinstance(exc, EmptyFeasibleSetError) and data is None:

@@ -1,0 +1,90 @@
+"""The smallest output error bound an empty stage 2 leaves open: a certified lower figure.
+
+A smaller output bound can only shrink the set (22.34), so a bound at which the set is
+certified empty proves it empty for every smaller one. When stage 2 is empty at the bound
+given, the polytopic LP is solved at larger multiples of it (doubling, then bisection), and
+the largest multiple it certifies empty is stated: "the data allow no output bound below X"
+(new-user trial 17 and recheck 49: stage 1 said how close its data came to the bound,
+stage 2 did not). It is a lower figure: the LP set is an outer set, so the smallest bound
+at which a model explains the data can be larger; never smaller.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from ..exceptions import EmptyFeasibleSetError, SolverError
+
+__all__ = ["smallest_output_factor", "smallest_output_text"]
+
+#: at most this many doublings of the bound (2**10 times the bound given)
+MAX_DOUBLINGS = 10
+#: bisection steps after the doubling: the factor to 2**-7 of its bracket
+BISECTIONS = 7
+#: seconds the search may take in all (on the error path of a fit)
+TIME_BUDGET = 10.0
+
+
+def _empty(problem, factor) -> bool | None:
+    """Whether the LP certifies the set empty at ``factor`` times the output bounds (None:
+    the solver gave no decision)."""
+    from ..relaxations.lp import lp_bounds
+
+    scaled = dataclasses.replace(problem, output_bound=problem.deta * factor)
+    try:
+        lp_bounds(scaled, check_box=False)
+    except EmptyFeasibleSetError:
+        return True
+    except SolverError:
+        return None
+    return False
+
+
+def smallest_output_factor(problem, time_budget: float = TIME_BUDGET) -> float:
+    """The largest factor ``s >= 1`` found at which the LP certifies the set empty with the
+    output bounds multiplied by ``s`` (1.0 when the LP does not certify it above 1, or the
+    time is up at once): no output bound below ``s`` times the given ones lets a model of
+    these orders, input bounds and a priori box explain the data."""
+    stop = time.monotonic() + float(time_budget)
+    lo, hi = 1.0, None
+    for _ in range(MAX_DOUBLINGS):
+        if time.monotonic() > stop:
+            return lo
+        decision = _empty(problem, 2.0 * lo)
+        if decision is None:
+            return lo
+        if not decision:
+            hi = 2.0 * lo
+            break
+        lo *= 2.0
+    if hi is None:
+        return lo
+    for _ in range(BISECTIONS):
+        if time.monotonic() > stop:
+            break
+        mid = 0.5 * (lo + hi)
+        decision = _empty(problem, mid)
+        if decision is None:
+            break
+        lo, hi = (mid, hi) if decision else (lo, mid)
+    return lo
+
+
+def smallest_output_text(problem, factor) -> str:
+    """The sentence of an empty stage 2's message (empty when ``factor`` says nothing
+    beyond the bound given)."""
+    from ..tables import rounded_text
+
+    if not factor > 1.0:
+        return ""
+    deta = np.asarray(problem.deta, dtype=float)
+    if np.all(deta == deta.flat[0]):
+        low = rounded_text(factor * float(deta.flat[0]), down=True, digits=3)
+    else:
+        low = f"{rounded_text(factor, down=True, digits=3)} x these bounds"
+    return (f"The data allow no output error bound below {low} (the LP set is still "
+            "empty there, with the input error bound, the orders and the a priori box as "
+            "they are).")

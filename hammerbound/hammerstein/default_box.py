@@ -88,8 +88,8 @@ def _say(progress, text) -> None:
 def _in_default_box(exc, prior):
     """``exc`` with what its verdict rests on: the default box (a guess), named."""
     return EmptyFeasibleSetError(
-        f"{exc} This holds within the default backlash box ({prior.describe()}), which "
-        "is an assumption: a backlash beyond it (e.g. a state that starts on a line far "
-        "from the record's inputs) is not excluded. Give a gamma_box from what you know "
+        f"{exc} This holds within the default backlash box, an assumption ("
+        f"{prior.limits()}): a backlash beyond it (e.g. a state that starts on a line far "
+        "from the record's inputs) is not excluded; give a gamma_box from what you know "
         "of the actuator.", side=exc.side, first_index=exc.first_index,
         relaxation=exc.relaxation)

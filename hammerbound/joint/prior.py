@@ -179,11 +179,14 @@ class GammaPrior:
     def describe(self) -> str:
         """The box as an assumption, each limit rounded inward (the box shown is never
         wider than the one used)."""
+        who = "given" if self.user_given else "assumed (default; pass gamma_box to change)"
+        return (f"backlash box {who}: {self.limits()} (c_l, c_r >= 0: the dead band "
+                "[-c_l, c_r] holds u = 0)")
+
+    def limits(self) -> str:
+        """``m_l in [lo, hi], ...``: the box's rows, each limit rounded inward."""
         from ..tables import rounded_text
 
-        rows = [f"{name} in [{rounded_text(lo, down=False)}, {rounded_text(hi, down=True)}]"
-                for name, (lo, hi) in zip(("m_l", "c_l", "m_r", "c_r"), self.box,
-                                          strict=True)]
-        who = "given" if self.user_given else "assumed (default; pass gamma_box to change)"
-        return (f"backlash box {who}: {', '.join(rows)} (c_l, c_r >= 0: the dead band "
-                "[-c_l, c_r] holds u = 0)")
+        return ", ".join(
+            f"{name} in [{rounded_text(lo, down=False)}, {rounded_text(hi, down=True)}]"
+            for name, (lo, hi) in zip(("m_l", "c_l", "m_r", "c_r"), self.box, strict=True))

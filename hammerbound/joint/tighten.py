@@ -37,19 +37,16 @@ LEAF_SHRINK = 0.05
 # 0.05, method "lp", one core: 230 s without windows, 138 s with, the same widths to 1e-5)
 
 #: What an EmptyFeasibleSetError of the one-record search suggests.
-EMPTY_HINT = ("Check the output bound (every error within it?), the orders na, nb and the "
-              "delay nk, and any gamma_box you gave; an output bound too small for the "
-              "noise, or a model of the wrong order, leaves nothing to explain the record; "
-              "values rounded in the file add up to half their last digit to the error "
-              "(noise within 0.01 written with 6 decimals needs 0.0100005), and swapped "
-              "input and output columns explain nothing either. "
-              "The model also needs a backlash whose lines do not cross inside the "
-              "record's input range (m_l (u + c_l) >= m_r (u - c_r) at every input; unequal "
-              "slopes cross at u = (m_l c_l + m_r c_r) / (m_r - m_l)): a record that drives "
-              "an actuator past that point is explained by no backlash of this model. "
-              "And its dead band [-c_l, c_r] holds u = 0 (c_l, c_r >= 0): an actuator "
-              "whose dead band lies elsewhere (an offset, e.g. a valve's input in percent) "
-              "needs u shifted first, e.g. by the input at which the output rests.")
+EMPTY_HINT = ("Likely causes, commonest first: (1) an output bound too small for the noise "
+              "(values rounded in the file add up to half their last digit: noise within "
+              "0.01 written with 6 decimals needs 0.0100005); (2) orders na, nb or a delay "
+              "nk that do not fit the plant; (3) input and output columns swapped; (4) a "
+              "gamma_box you gave that misses the backlash; (5) backlash lines that cross "
+              "inside the record's input range (the model needs m_l (u + c_l) >= "
+              "m_r (u - c_r) at every input; unequal slopes cross at u = (m_l c_l + m_r c_r) / "
+              "(m_r - m_l)); (6) a dead band [-c_l, c_r] that does not "
+              "hold u = 0 (an offset, e.g. a valve's input in percent: shift u first, e.g. "
+              "by the input at which the output rests).")
 
 #: The first LP of a row's relaxation starts from the previous row's basis (carried over by
 #: keys where the relaxation changed, :mod:`.warm`), by the primal simplex; False: cold.

@@ -129,7 +129,7 @@ def test_a_swapped_record_is_told_it_may_be_swapped():
         with pytest.raises(EmptyFeasibleSetError, match="output columns swapped") as info:
             ident.fit(y, u)
     text = str(info.value)  # the likeliest cause before the general checklist
-    assert text.index("swapped") < text.index("Check the output bound")
+    assert text.index("swapped") < text.index("Likely causes")
 
 
 def test_a_not_identified_warning_blames_the_record_only_for_the_record_causes():

@@ -45,7 +45,8 @@ def test_an_empty_verdict_names_the_default_box_it_rests_on():
     plant, were then lost to a relaxation too weak to certify them)."""
     s = _Searches(EmptyFeasibleSetError("no backlash."))
     with pytest.raises(EmptyFeasibleSetError, match=r"no backlash\. This holds within the "
-                                                    r"default backlash box .*c_l in \[0, 2\]"
+                                                    r"default backlash box, an assumption "
+                                                    r"\(m_l in .*c_l in \[0, 2\]"
                                                     r".*a backlash beyond it .* not excluded"):
         search_default_box(s, GammaPrior(BOX, False), None)
     assert len(s.priors) == 1

@@ -70,6 +70,21 @@ def _inner_text(inner_signal, x, bound) -> str:
             f"their stage-1 bounds |dx| <= {up} (u = +u*) and {down} (u = -u*)")
 
 
+def _past_crossing_text(bl, u_star) -> tuple:
+    """The assumption a PRBS level past the crossing of some feasible backlash's lines
+    rests on (new-user trial 19: it was admitted without a word): the square waves reached
+    that far and showed each side's line there (``well_posed_on_data``)."""
+    limit = bl.crossing_limit()
+    if not u_star >= limit:
+        return ()
+    reach = min(-bl.input_range_[0], bl.input_range_[1])
+    which = "every" if bl.crossed_on_data_ is not None else "some"
+    return (f"u* = {u_star:g} lies past the crossing of the backlash lines of {which} "
+            f"feasible backlash (from |u| = {limit:.4g} on); admitted because the square "
+            f"waves reached +-{reach:g}: the inner values at +-u* lie on the lines their "
+            "steady states showed (well_posed_on_data)",)
+
+
 def central_system(backlash, A, B, dt=None):
     """The central model; its A need not be stable (the centre of intervals that contain
     stable A's may lie outside the stability region): warn instead of failing the fit."""
@@ -245,6 +260,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
             "settled: a transient left counts against the steady-state output bound",
             f"PRBS output errors |eta_t| <= {bound_text(lin.problem_.output_bound)}",
             _inner_text(self._inner_used(), self.xc_, lin.problem_.input_bound),
+            *_past_crossing_text(bl, f.u_star),
             GAIN_ASSUMPTION,
             _theta_box_text(lin),
         )

@@ -93,6 +93,10 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
     intervals_ : IntervalSet
         The tight intervals (22.24) as an :class:`~hammerbound.results.IntervalSet` over
         ``("ml", "cl", "mr", "cr")``: table, ``contains``, ``to_dict``, ``plot``.
+    crossed_on_data_ : float or None
+        The input at which the steady-state points lie past the crossing of the lines of
+        every feasible backlash (warned at the fit; they then do not show (22.1) well
+        posed there), or None.
     output_bound_ : ndarray of shape (n_samples,)
         The output error bound of every steady-state sample the sets rest on.
     n_features_in_ : int
@@ -195,12 +199,42 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         self.output_bound_ = deta
         self.smallest_bound_factor_ = smallest_bound_factor(X, y, deta)
         self.input_range_ = (float(X.min()), float(X.max()))
+        self.crossed_on_data_ = self._crossed_on_data()
         self.intervals_ = IntervalSet(GAMMA_NAMES, np.vstack(
             [self.left_.orthotope, self.right_.orthotope]), method=self.method)
         self.gamma_bounds_ = np.array(self.intervals_.bounds)
         self.gamma_center_ = self.intervals_.center
         self.gamma_radius_ = self.intervals_.radius
         return self
+
+    def _crossed_on_data(self) -> float | None:
+        """The input the steady-state points reached past the crossing of the two lines of
+        *every* backlash that explains them (None when some feasible backlash is well
+        posed at both tested amplitudes), with a :class:`DataWarning`. Such points do not
+        show (22.1) well posed up to the amplitudes tested (new-user trial 19: square
+        waves to +-3.5 of lines that cross at 1.95 got u* = 2.73 suggested, where the
+        package's own simulator refuses the central backlash)."""
+        L, R = self.left_.vertices_mb, self.right_.vertices_mb
+        lo, hi = self.input_range_
+        # R(u) - L(u) > 0 for every feasible pair: min over each polygon (at vertices)
+        past = [u for u in (hi, lo) if u != 0.0
+                and np.min(R[:, 0] * u - R[:, 1]) + np.min(-L[:, 0] * u - L[:, 1]) > 0.0]
+        if not past:
+            return None
+        import warnings
+
+        from ..exceptions import DataWarning
+
+        warnings.warn(
+            f"the steady-state points reach u = {past[0]:.4g}, past the crossing of the two "
+            "lines of every backlash that explains them (m_l (u + c_l) < m_r (u - c_r) "
+            "there for all of them), where model (22.1) is not well posed: the plant's "
+            "backlash does not act as (22.1) there. Each side's points still lie on one "
+            "line, whose intervals hold; a PRBS level past the crossing takes its inner "
+            "values on those lines (as the square waves showed them), which the two-stage "
+            "assumptions then state. suggest_prbs_level() stays before the crossing, and "
+            "the central model cannot be simulated past it.", DataWarning, stacklevel=3)
+        return float(past[0])
 
     def _fit_side(self, side, u, y, deta, idx):
         sigma = -1.0 if side == "right" else 1.0
@@ -263,7 +297,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         ``max_R (m_r u - b_r) + max_L (-m_l u - b_l) < 0`` and the mirrored condition; both
         maxima sit at vertices (linear in ``(m, beta)``), so the range is exact.
         With ``well_posed_on_data`` the upper end is at least ``min(U_R, U_L)``, the range
-        over which the experiment showed the system to be well posed.
+        over which the experiment showed each side's line (past the crossing of every
+        feasible backlash, ``crossed_on_data_``, the fit warns: (22.1) is then not well
+        posed there, and the levels rest on the lines the square waves showed).
         """
         check_is_fitted(self, "left_")
         u_lo = max(self.left_.orthotope[1, 1], self.right_.orthotope[1, 1])
@@ -273,6 +309,14 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             # closed at u_data: the data show (22.1) well posed *at* +-U (strictly)
             return (u_lo, float(np.nextafter(u_data, np.inf)))
         return (lo_g, hi_g)
+
+    def crossing_limit(self) -> float:
+        """The smallest PRBS level at which the two lines of some feasible backlash cross
+        (``inf`` when none do): below it Result 1 holds for every feasible backlash on
+        geometry alone, without ``well_posed_on_data``."""
+        check_is_fitted(self, "left_")
+        u_lo = max(self.left_.orthotope[1, 1], self.right_.orthotope[1, 1])
+        return float(self._geometric_prbs_range(u_lo)[1])
 
     def _geometric_prbs_range(self, u_lo):
         L, R = self.left_.vertices_mb, self.right_.vertices_mb
@@ -324,7 +368,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         where the experiment tested them: new-user trial 17 was suggested 9.64 V for a
         valve tested to +-5 V, from the lines' crossing); a
         :class:`~hammerbound.exceptions.DataWarning` when no admissible level lies within
-        them (``U <= u_lo``: the level then extrapolates the lines). With an unbounded range
+        them (``U <= u_lo``: the level then extrapolates the lines). ``top`` is also kept
+        below :meth:`crossing_limit` when that leaves room above ``u_lo``: a level past the
+        crossing of some feasible backlash rests on ``well_posed_on_data``. With an unbounded range
         (``m_l == m_r`` can be excluded on neither side, and ``U`` does not cap it) it
         returns ``(1 + margin) * 10 * u_lo``.
         """
@@ -337,6 +383,9 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             )
         tested = float(min(-self.input_range_[0], self.input_range_[1]))
         top = min(u_hi, tested) if tested > u_lo else u_hi
+        crossing = self.crossing_limit()
+        if u_lo < crossing < top:  # before every feasible crossing when there is room
+            top = crossing  # (trial 19: past it the central model cannot be simulated)
         if tested <= u_lo:  # review 49: this fell back to the old rule without a word
             import warnings
 

@@ -26,6 +26,11 @@ import hammerbound as hb
 from hammerbound.exceptions import EmptyFeasibleSetError
 from hammerbound.tolerances import FEASIBILITY_RTOL
 
+# random slopes: some truths' lines cross inside the tested inputs (the fit warns,
+# trial 19; those truths are the play operator max(R, min(L, x)), each side on its line)
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the steady-state points reach u:hammerbound.exceptions.DataWarning")
+
 METHODS = ("polygon", "algorithm")
 PATTERNS = ("alternating", "random", "constant", "over", "under")
 SCALES = (1e-6, 1e-3, 1.0, 1e3, 1e6)

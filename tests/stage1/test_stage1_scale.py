@@ -19,6 +19,10 @@ from scipy.optimize import linprog
 import hammerbound as hb
 from hammerbound.exceptions import UnboundedSetError
 
+# random slopes: some truths' lines cross inside the tested inputs (warned, trial 19)
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the steady-state points reach u:hammerbound.exceptions.DataWarning")
+
 HIGHS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 
 

@@ -18,11 +18,9 @@ from functools import partial
 
 import numpy as np
 
-from ..data.gain_sign import negative_gain_hint, record_gain
 from ..data.validation import warn_bound_covers_output
 from ..exceptions import (
     DataValidationError,
-    DataWarning,
     EmptyFeasibleSetError,
     NotIdentifiedWarning,
     ParameterValidationError,
@@ -41,7 +39,6 @@ from ..joint import (
     unidentified,
 )
 from ..joint.relaxation import gain_tolerance
-from ..joint.tighten import EMPTY_HINT
 from ..relaxations.problem import (
     b_lags_of,
     given_rows,
@@ -52,6 +49,12 @@ from ..relaxations.problem import (
 from ..status import BOX, INACCURATE, NOT_IDENTIFIED, RELAXATION
 from ..tables import bound_text, rounded_text
 from .default_box import search_default_box
+from .record_checks import (
+    warn_dead_band_covers_record,
+    warn_gain_sign,
+    warn_inputs_off_zero,
+    with_gain_sign,
+)
 from .setup import GAIN_ASSUMPTION
 
 __all__ = ["OneRecordFit", "fit_one_record"]
@@ -374,74 +377,6 @@ def _at_assumed_limit(problem, prior):
     return skip
 
 
-def _record_gain(problem) -> float:
-    """The record's least-squares gain (input -> output, the model's orders)."""
-    return record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
-                       b_lags_of(problem.nb, problem.nk))
-
-
-def _with_gain_sign(exc, problem):
-    """``exc`` again, with the hint of a reverse-acting plant when the record's
-    least-squares gain (input -> output, the model's orders) is negative."""
-    hint = negative_gain_hint(_record_gain(problem))
-    if not hint:
-        return exc
-    # the likeliest cause first, before the general checklist (recheck 49: it came last
-    # in a message of about 1300 characters)
-    text = str(exc)
-    text = (text.replace(EMPTY_HINT, f"{hint} {EMPTY_HINT}", 1) if EMPTY_HINT in text
-            else f"{text} {hint}")
-    return EmptyFeasibleSetError(text, side=exc.side, first_index=exc.first_index,
-                                 relaxation=exc.relaxation)
-
-
-def _warn_gain_sign(problem, res):
-    """A DataWarning when the time limit stopped a fit before it could certify the set
-    empty, no point of the set was verified, and the record's least-squares gain is
-    negative: the plant *may* be reverse-acting, which the model cannot explain (trial 11:
-    ``fit(u, -y)`` under a 30 s limit returned intervals without a word). A fit that ran to
-    the end, or verified a point, found the set non-empty: no warning then (a noisy record
-    of a plant with a small A(1) can have a negative least-squares gain, review)."""
-    d = res.details
-    if d is None or not d.stopped_by_time or any(i.witness is not None for i in res.infos):
-        return
-    gain = _record_gain(problem)
-    if gain < 0:
-        warnings.warn(
-            f"the time limit stopped the search before it found a point of the set or "
-            f"certified it empty, and the record's least-squares gain is negative "
-            f"({gain:.3g}): the plant may be reverse-acting (its output falls as its input "
-            "rises), which no parameters of the model explain (positive backlash slopes, "
-            "unit-gain linear block (22.8)). If it is, fit the negated output (-y); else "
-            "give the search more time (total_time_limit).", DataWarning,
-            # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
-            stacklevel=5)
-
-
-def _warn_dead_band_covers_record(u, gamma_bounds):
-    """A DataWarning when every backlash left has its dead band over all the inputs
-    (``c_l > -min u`` and ``c_r > max u``): its lines then stay on both sides of 0 over
-    the record, so the inner signal can move only one way (down from a start above 0, up
-    from one below). New-user trial 16: an output bound 5x too small left c_l >= 1.21 and
-    c_r >= 0.97 over inputs in [-0.98, 0.97] (the time limit stopped the search), with
-    only time-limit warnings. Not a verdict of "empty": a record whose output moves one
-    way is explained so."""
-    lo, hi = float(np.min(u)), float(np.max(u))
-    cl, cr = float(gamma_bounds[1, 0]), float(gamma_bounds[3, 0])
-    if not (cl > -lo and cr > hi):
-        return
-    warnings.warn(
-        f"every backlash left has its dead band [-c_l, c_r] over all the record's inputs "
-        f"[{rounded_text(lo, down=True, digits=6)}, {rounded_text(hi, down=False, digits=6)}] "
-        f"(c_l >= {rounded_text(cl, down=True, digits=6)}, c_r >= "
-        f"{rounded_text(cr, down=True, digits=6)}): its inner signal can then move only "
-        "one way over the whole record. If the output moves both ways, no "
-        "parameters explain it -- the output bound is probably too small for the noise, or "
-        "the orders too low -- and more time may certify the set empty.", DataWarning,
-        # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
-        stacklevel=5)
-
-
 def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                    output_bound=None) -> OneRecordFit:
     """Certified intervals of both blocks from the record ``data`` (an IOData)."""
@@ -457,11 +392,12 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     _check_length(lin, data.N, prior, steady)
     warn_bound_covers_output("HammersteinBacklashIdentifier.fit", data.output_name or "y",
                              data.y, ob, stacklevel=5)
+    warn_inputs_off_zero(data.u, data.input_name or "u")
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
     prior, problem, res = search_default_box(
         partial(_search, lin, data, steady=steady, steady_bound=steady_bound, ob=ob,
                 deadline=deadline), prior, deadline, bool(lin.progress))
-    _warn_gain_sign(problem, res)
+    warn_gain_sign(problem, res)
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
@@ -469,7 +405,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     tb, b_found = _unbounded_b(problem, gain_tightened(problem, res.bounds[: problem.p]), lin,
                                d is not None and d.stopped_by_time)
     _warn_stopped(res.infos, {name for name, _ in found} | set(b_found), lin.method)
-    _warn_dead_band_covers_record(problem.u, gb)
+    warn_dead_band_covers_record(problem.u, gb)
     res = replace(res, infos=_not_identified_infos(res.infos, tb, gb))
     _warn_inaccurate(res.infos, 0 if d is None else d.lps_stopped)
     statuses = tuple(i.status for i in res.infos)
@@ -488,7 +424,7 @@ def _search(lin, data, prior, *, steady, steady_bound, ob, deadline):
                             skip=_at_assumed_limit(problem, prior),
                             progress=bool(lin.progress))
     except EmptyFeasibleSetError as exc:
-        raise _with_gain_sign(exc, problem) from exc
+        raise with_gain_sign(exc, problem) from exc
     return problem, res
 
 

@@ -46,7 +46,8 @@ EMPTY_HINT = ("Likely causes, commonest first: (1) an output bound too small for
               "m_r (u - c_r) at every input; unequal slopes cross at u = (m_l c_l + m_r c_r) / "
               "(m_r - m_l)); (6) a dead band [-c_l, c_r] that does not "
               "hold u = 0 (an offset, e.g. a valve's input in percent: shift u first, e.g. "
-              "by the input at which the output rests).")
+              "by the input at which the output rests, and y by that rest value; the model "
+              "has no output offset either).")
 
 #: The first LP of a row's relaxation starts from the previous row's basis (carried over by
 #: keys where the relaxation changed, :mod:`.warm`), by the primal simplex; False: cold.

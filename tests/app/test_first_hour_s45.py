@@ -187,7 +187,7 @@ def test_the_reverse_acting_warning_needs_a_fit_that_found_nothing():
     can have a negative least-squares gain, review)."""
     from types import SimpleNamespace
 
-    from hammerbound.hammerstein.one_record import _warn_gain_sign
+    from hammerbound.hammerstein.record_checks import warn_gain_sign
 
     u, y, _ = one_record(60, 0.02, "uniform", 2)
     problem = SimpleNamespace(u=u, y=-y, na=2, nb=2, nk=1)
@@ -197,7 +197,7 @@ def test_the_reverse_acting_warning_needs_a_fit_that_found_nothing():
                               infos=[SimpleNamespace(witness=witness)])
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            _warn_gain_sign(problem, res)
+            warn_gain_sign(problem, res)
         return [w for w in caught if w.category is DataWarning]
 
     assert len(said(True, None)) == 1

@@ -179,20 +179,20 @@ def test_dead_bands_over_every_input_are_said_to_leave_one_way_moves():
     warnings. The warning's condition on the certified bounds, and its numbers rounded to
     the safe side."""
     from hammerbound.exceptions import DataWarning
-    from hammerbound.hammerstein.one_record import _warn_dead_band_covers_record
+    from hammerbound.hammerstein.record_checks import warn_dead_band_covers_record
 
     u = np.r_[-0.9757, 0.3, 0.966096]
     gb = np.array([[0.0, 11.0], [1.2136225, np.inf], [0.0, 11.0], [0.970898, np.inf]])
     with pytest.warns(DataWarning, match=r"over all the record's inputs \[-0.9757, 0.966096\] "
                       r"\(c_l >= 1.21362, c_r >= 0.970898\).*output bound is probably too "
                       r"small"):
-        _warn_dead_band_covers_record(u, gb)
+        warn_dead_band_covers_record(u, gb)
     for row, value in ((1, 0.97), (3, 0.96)):  # one side inside the inputs: no warning
         part = gb.copy()
         part[row, 0] = value
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            _warn_dead_band_covers_record(u, part)
+            warn_dead_band_covers_record(u, part)
 
 
 @pytest.mark.parametrize("name, read", [

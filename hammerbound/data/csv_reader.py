@@ -29,7 +29,7 @@ def _names(argument_names, **python):
     return {**PYTHON_NAMES, **python, **(argument_names or {})}
 
 
-def read_columns(path, columns, *, delimiter=",", argument_names=None
+def read_columns(path, columns, *, delimiter=",", argument_names=None, text=None
                  ) -> dict[str, np.ndarray]:
     """Read named numeric columns from a CSV file with a header row.
 
@@ -42,10 +42,13 @@ def read_columns(path, columns, *, delimiter=",", argument_names=None
         Field separator (e.g. ``";"``, ``"\\t"``).
     argument_names : dict, optional
         How messages name the settings (see :data:`PYTHON_NAMES`).
+    text : str, optional
+        One of ``columns`` read as text, not parsed (a time column of date-times:
+        :func:`~.timebase.time_seconds`).
 
     Returns
     -------
-    dict name -> float ndarray
+    dict name -> float ndarray (the ``text`` column: a list of str)
 
     Raises
     ------
@@ -67,7 +70,7 @@ def read_columns(path, columns, *, delimiter=",", argument_names=None
     _check_file(path)
     names = _names(argument_names, u="columns=[...]", y="columns=[...]")
     try:
-        return _read_columns(path, columns, _delimiter(delimiter, names), names)
+        return _read_columns(path, columns, _delimiter(delimiter, names), names, text)
     except UnicodeDecodeError as exc:
         raise DataValidationError(
             f"{path}: not a UTF-8 text CSV file ({exc.reason} at byte {exc.start}); save it "
@@ -241,7 +244,7 @@ def column_with_unit(header, name):
     return found[0] if len(found) == 1 else name
 
 
-def _read_columns(path, columns, delimiter, names):
+def _read_columns(path, columns, delimiter, names, text=None):
     with path.open(newline="", encoding="utf-8-sig") as fh:
         reader = csv.reader(fh, delimiter=delimiter)
         try:
@@ -273,6 +276,9 @@ def _read_columns(path, columns, delimiter, names):
                         f"{path}, line {lineno}: the row has {len(row)} field(s), column "
                         f"{c!r} is missing."
                     )
+                if c == text:
+                    out[c].append(row[i])
+                    continue
                 try:
                     v = float(row[i])
                 except ValueError:
@@ -286,7 +292,7 @@ def _read_columns(path, columns, delimiter, names):
                 out[c].append(v)
     if not out[columns[0]]:
         raise DataValidationError(f"{path}: no data rows after the header.")
-    return {c: np.asarray(v, dtype=float) for c, v in out.items()}
+    return {c: v if c == text else np.asarray(v, dtype=float) for c, v in out.items()}
 
 
 def load_chapter_tables(path=None) -> list[dict]:

@@ -125,15 +125,29 @@ class IOData:
         ``u [V]``, gives name ``u`` and unit ``V``, and ``u="u"`` finds it when no column
         is named ``u`` alone: :meth:`to_csv` writes units so).
         """
-        from .csv_reader import _names, column_with_unit, csv_header, read_columns
+        from .csv_reader import (
+            _header_hint,
+            _names,
+            _separator_hint,
+            column_with_unit,
+            csv_header,
+            read_columns,
+        )
+        from .timebase import time_seconds
 
         spell = _names(argument_names)
         header = csv_header(path, delimiter=delimiter)
         u, y = column_with_unit(header, u), column_with_unit(header, y)
-        t = cls._time_column(header, t, (u, y), str(path), dt, spell)
+        hint = _separator_hint(header, delimiter, spell) or _header_hint(header)
+        t = cls._time_column(header, t, (u, y), str(path), dt, spell, hint)
         data = read_columns(path, [u, y] + ([t] if t else []), delimiter=delimiter,
-                            argument_names=spell)
-        return cls._build(data[u], data[y], data.get(t), t, dt, str(path), u, y, names, spell)
+                            argument_names=spell, text=t)
+        tt = None
+        if t:  # numbers, or date-times as seconds from the first (trial 18)
+            tt, unit = time_seconds(data[t], str(path), t, spell)
+            if unit:
+                names.setdefault("time_unit", unit)
+        return cls._build(data[u], data[y], tt, t, dt, str(path), u, y, names, spell)
 
     @classmethod
     def from_frame(cls, frame, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
@@ -145,7 +159,7 @@ class IOData:
         t = cls._time_column(cols, t, (str(u), str(y)), "the frame", dt, PYTHON_NAMES)
         try:
             uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
-            tt = None if t is None else np.asarray(frame[t], dtype=float)
+            tt = None if t is None else _column_seconds(frame[t], t, names)
         except KeyError as exc:
             raise DataValidationError(
                 f"column {exc} not found; the frame has {list(frame)}.") from None
@@ -157,18 +171,19 @@ class IOData:
         return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names)
 
     @staticmethod
-    def _time_column(columns, t, used, where, dt, spell):
-        """The time column's name (or None) for ``t`` = a name, None or "auto"."""
+    def _time_column(columns, t, used, where, dt, spell, hint=""):
+        """The time column's name (or None) for ``t`` = a name, None or "auto" (``hint``:
+        a header that is one field names the separator it seems to use, trial 18)."""
         if t is None or t == "":
             return None
         if t != "auto":
             if str(t) not in columns:
                 raise DataValidationError(
-                    f"{where}: no time column {t!r}; the columns are {list(columns)}. Pass "
-                    f"{spell['t']}, {spell['auto_t']} (recognise t, time, 't [s]'...) or "
-                    f"{spell['no_t']} (none).")
+                    f"{where}: no time column {t!r}; the columns are {list(columns)}{hint}. "
+                    f"Pass {spell['t']}, {spell['auto_t']} (recognise t, time, 't [s]'...) "
+                    f"or {spell['no_t']} (none).")
             return t
-        found = find_time_column(columns, exclude=used, where=where)
+        found = find_time_column(columns, exclude=used, where=where, spell=spell)
         unused = [c for c in columns if c not in used]
         if found is None and dt is None and unused and all(c in columns for c in used):
             import warnings
@@ -366,6 +381,30 @@ def _columns_hint(X, func) -> str:
             "For a table holding both: IOData.from_frame(frame, u='<input column>', "
             f"y='<output column>'), or {func}(frame['<input column>'], "
             "frame['<output column>']).")
+
+
+def _column_seconds(column, name, names):
+    """A frame's time column as numbers: date-times (or their ISO text) as seconds from the
+    first, timedeltas as seconds, both setting ``time_unit`` "s" in ``names`` (a datetime
+    column was read as nanoseconds: dt = 1e7 for 10 s steps, trial 18's follow-up)."""
+    from .timebase import time_seconds
+
+    values = np.asarray(column)
+    if values.dtype.kind not in "mMOSU":
+        return np.asarray(values, dtype=float)
+    if values.dtype.kind == "M" or (values.dtype.kind == "O" and hasattr(column, "dt")):
+        values = np.asarray(getattr(column, "dt", None).tz_convert(None)
+                            if getattr(getattr(column, "dt", None), "tz", None) is not None
+                            else column, dtype="datetime64[ns]")
+        names.setdefault("time_unit", "s")
+        return ((values - values[0]) / np.timedelta64(1, "s")).astype(float)
+    if values.dtype.kind == "m":
+        names.setdefault("time_unit", "s")
+        return (values / np.timedelta64(1, "s")).astype(float)
+    secs, unit = time_seconds([str(v) for v in values], "the frame", name)
+    if unit:
+        names.setdefault("time_unit", unit)
+    return secs
 
 
 def _index_seconds(frame):

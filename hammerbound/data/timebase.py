@@ -18,8 +18,8 @@ import numpy as np
 from ..exceptions import DataValidationError
 from .validation import as_signal
 
-__all__ = ["TIME_NAMES", "find_time_column", "name_and_unit", "name_with_unit", "time_unit_of",
-           "uniform_step"]
+__all__ = ["TIME_NAMES", "find_time_column", "name_and_unit", "name_with_unit", "time_seconds",
+           "time_unit_of", "uniform_step"]
 
 #: base names recognised as a time column (case-insensitive)
 TIME_NAMES = ("t", "time", "times", "timestamp", "zeit", "tiempo", "temps")
@@ -61,15 +61,42 @@ def time_unit_of(name) -> str | None:
     return (m.group("u1") or m.group("u2") or "").strip()
 
 
-def find_time_column(columns, exclude=(), where="the data") -> str | None:
+def find_time_column(columns, exclude=(), where="the data", spell=None) -> str | None:
     """The one column of ``columns`` whose name is a usual time-column name (not one of
-    ``exclude``), or None. Several candidates: a DataValidationError asking to choose."""
+    ``exclude``), or None. Several candidates: a DataValidationError asking to choose
+    (``spell``: how the message names the settings, keys ``t`` and ``no_t``, as
+    :data:`hammerbound.data.csv_reader.PYTHON_NAMES`)."""
+    spell = {"t": "t='<name>'", "no_t": "t=None", **(spell or {})}
     found = [c for c in columns if c not in exclude and time_unit_of(c) is not None]
     if len(found) > 1:
         raise DataValidationError(
-            f"{where}: several columns look like a time base: {found}; pass t='<name>' for "
-            "the one to use (or t=None to use none).")
+            f"{where}: several columns look like a time base: {found}; pass {spell['t']} "
+            f"for the one to use (or {spell['no_t']} to use none).")
     return found[0] if found else None
+
+
+def time_seconds(texts, where, column, spell=None) -> tuple[np.ndarray, str | None]:
+    """A time column's values from its text: numbers as they are (unit None: the
+    column's name says it), or date-times in ISO 8601 form (``2024-03-05 08:00:00``, a
+    historian's export; new-user trial 18) as seconds from the first one (unit ``"s"``).
+    Anything else: a DataValidationError naming the value and how to read without it."""
+    spell = {"no_t": "t=None", "dt": "dt=<sampling time>", **(spell or {})}
+    try:
+        return np.array([float(v) for v in texts]), None
+    except ValueError:
+        pass
+    stamps = []
+    for k, text in enumerate(texts):
+        try:
+            stamps.append(np.datetime64(text.strip().replace(" ", "T", 1), "ns"))
+        except ValueError:
+            raise DataValidationError(
+                f"{where}: the time column {column!r} holds {text!r} (row {k + 1} of the "
+                "data), neither a number nor a date-time in ISO 8601 form (e.g. "
+                f"2024-03-05 08:00:00). Write it so, or pass {spell['no_t']} and "
+                f"{spell['dt']} to read the record without it.") from None
+    stamps = np.array(stamps)
+    return (stamps - stamps[0]) / np.timedelta64(1, "s"), "s"
 
 
 def _shortest_decimal(step, unc):

@@ -182,3 +182,62 @@ def test_a_note_with_text_is_still_read(tmp_path):
                    for k, (u, y) in enumerate(zip(U, Y, strict=True)))
     data = hb.IOData.from_csv(_write(tmp_path, "u,y,note\n" + body), t=None)
     assert np.array_equal(data.u, U) and np.array_equal(data.y, Y)
+
+
+def _stamped(tmp_path, stamps, name="rec.csv", sep=","):
+    rows = "".join(f"{s}{sep}{u}{sep}{y}\n" for s, u, y in zip(stamps, U, Y, strict=True))
+    return _write(tmp_path, f"timestamp{sep}OP [%]{sep}PV [m3/h]\n" + rows, name=name)
+
+
+def test_iso_timestamps_give_the_sampling_time(tmp_path):
+    """Trial 18: a historian's export ``timestamp,OP [%],PV [m3/h]`` with date-times was
+    refused as "not a number", with no way out named."""
+    stamps = [f"2024-03-05 08:00:{10 * k:02d}" for k in range(U.size)]
+    data = hb.IOData.from_csv(_stamped(tmp_path, stamps), u="OP", y="PV")
+    assert data.dt == 10.0 and data.time_unit == "s"
+    assert np.array_equal(data.u, U) and np.array_equal(data.y, Y)
+
+
+def test_other_date_formats_say_how_to_read_without_them(tmp_path, capsys):
+    stamps = [f"05.03.2024 08:00:{10 * k:02d}" for k in range(U.size)]
+    path = _stamped(tmp_path, stamps)
+    with pytest.raises(DataValidationError, match=r"'05\.03\.2024 08:00:00' \(row 1 of the "
+                       r"data\), neither a number nor a date-time in ISO 8601 form.*pass "
+                       r"t=None and dt=<sampling time>"):
+        hb.IOData.from_csv(path, u="OP", y="PV")
+    assert main(["identify", "--record", str(path), "--u-col", "OP", "--y-col", "PV",
+                 "--output-bound", "0.1"]) == 2
+    assert "pass --t-col '' and --dt SECONDS" in capsys.readouterr().err
+
+
+def test_two_time_columns_are_asked_in_command_line_terms(tmp_path, capsys):
+    path = _write(tmp_path, "timestamp,time,u,y\n" + "".join(
+        f"2024-03-05 08:00:0{k},{k},{u},{y}\n" for k, (u, y) in enumerate(zip(U, Y,
+                                                                              strict=True))))
+    assert main(["identify", "--record", str(path), "--output-bound", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert "pass --t-col NAME for the one to use (or --t-col '' to use none)" in err
+    assert "t='<name>'" not in err
+
+
+def test_a_named_time_column_in_a_semicolon_file_names_the_separator(tmp_path, capsys):
+    """Trial 18: "no time column 'time'; the columns are ['timestamp;time;OP [%];PV
+    [m3/h]']" gave no hint that the file is separated by semicolons."""
+    stamps = [f"2024-03-05 08:00:0{k}" for k in range(U.size)]
+    path = _stamped(tmp_path, stamps, sep=";")
+    assert main(["identify", "--record", str(path), "--t-col", "timestamp", "--u-col", "OP",
+                 "--y-col", "PV", "--output-bound", "0.1"]) == 2
+    assert "the header seems separated by ';'; pass --delimiter ';'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind", ["datetime", "text", "timedelta", "tz"])
+def test_a_frames_date_time_column_is_read_in_seconds(kind):
+    """A datetime column of a DataFrame was read as nanoseconds: dt = 1e7 for steps of
+    10 s, without a word."""
+    pd = pytest.importorskip("pandas")
+    stamps = pd.Series(pd.date_range("2024-03-05 08:00", periods=U.size, freq="10s"))
+    column = {"datetime": stamps, "text": stamps.astype(str),
+              "timedelta": stamps - stamps[0],
+              "tz": stamps.dt.tz_localize("Europe/Berlin")}[kind]
+    data = hb.IOData.from_frame(pd.DataFrame({"timestamp": column, "u": U, "y": Y}))
+    assert data.dt == 10.0 and data.time_unit == "s"

@@ -119,7 +119,7 @@ def read_record(args):
     header = _header(args.data, args.delimiter) if len(args.delimiter) == 1 else None
     if header is not None and args.t_col:
         u, y = _column(header, args.u_col), _column(header, args.y_col)
-        t = (find_time_column(header, exclude=(u, y), where=str(args.data))
+        t = (find_time_column(header, exclude=(u, y), where=str(args.data), spell=CLI_NAMES)
              if args.t_col == "auto" else args.t_col)
         if u and y and t:
             return IOData.from_csv(args.data, u=u, y=y, t=t, dt=args.dt,

@@ -192,7 +192,7 @@ class RecordReport(Result):
         fig.tight_layout()
         return fig
 
-    def write(self, outdir, *, overwrite=False) -> Path:
+    def write(self, outdir, *, overwrite=False, terms=None) -> Path:
         """Write ``report.md`` and its figures into ``outdir`` (see
         :func:`write_record_report`)."""
         from .report import linear_panels, write_panels
@@ -202,19 +202,22 @@ class RecordReport(Result):
         write_panels(out, (("backlash_characteristic.png", (1, 1), (6, 4.5),
                             self._draw_characteristic), *linear_panels(self)))
         path = out / "report.md"
-        path.write_text(self.summary())
+        text = self.summary()
+        path.write_text(text if terms is None else terms(text))
         return path
 
 
 def write_record_report(ident, u, y, outdir, *, gamma_true=None, theta_true=None,
                         title="hammerbound identification report (one record)",
-                        overwrite=False) -> Path:
+                        overwrite=False, terms=None) -> Path:
     """Write ``report.md`` and figures of a one-record fit into ``outdir``; return the path
     of the report. ``outdir`` as in :func:`hammerbound.app.report.write_report` (created if
     missing, its parent must exist, an existing report replaced only with
-    ``overwrite=True``, other files never touched; the paths are checked first)."""
+    ``overwrite=True``, other files never touched; the paths are checked first).
+    ``terms``: a function that rewrites the report's text (the command line's
+    :func:`~hammerbound.app.cli.console.cli_terms`: its advice then names flags)."""
     check_output_dir(outdir, RECORD_REPORT_FILES, force=overwrite,
                      force_hint="pass overwrite=True")
     rep = RecordReport.build(ident, u, y, gamma_true=gamma_true, theta_true=theta_true,
                              title=title)
-    return rep.write(outdir, overwrite=overwrite)
+    return rep.write(outdir, overwrite=overwrite, terms=terms)

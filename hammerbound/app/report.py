@@ -260,7 +260,7 @@ class IdentificationReport(Result):
         fig.tight_layout()
         return fig
 
-    def write(self, outdir, *, overwrite=False) -> Path:
+    def write(self, outdir, *, overwrite=False, terms=None) -> Path:
         """Write ``report.md`` and its figures into ``outdir`` (see :func:`write_report`)."""
         out = check_output_dir(outdir, REPORT_FILES, force=overwrite,
                                force_hint="pass overwrite=True")
@@ -269,18 +269,21 @@ class IdentificationReport(Result):
                             self._draw_characteristic),
                            *linear_panels(self)))
         path = out / "report.md"
-        path.write_text(self.summary())
+        text = self.summary()
+        path.write_text(text if terms is None else terms(text))
         return path
 
 
 def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_true=None,
                  theta_true=None, title="hammerbound identification report",
-                 overwrite=False) -> Path:
+                 overwrite=False, terms=None) -> Path:
     """Write ``report.md`` and figures into ``outdir``; return the path of the report.
 
     ``outdir`` is created if missing (its parent must exist). An existing report there
     (any of :data:`REPORT_FILES`) is replaced only with ``overwrite=True``; other files in
     ``outdir`` are never touched. The paths are checked before anything is computed.
+    ``terms``: a function that rewrites the report's text (the command line passes
+    :func:`~hammerbound.app.cli.console.cli_terms`, so its advice names flags).
 
     Raises
     ------
@@ -298,4 +301,4 @@ def write_report(ident, steady_u, steady_y, prbs_u, prbs_y, outdir, *, gamma_tru
     check_output_dir(outdir, REPORT_FILES, force=overwrite, force_hint="pass overwrite=True")
     rep = IdentificationReport.build(ident, steady_u, steady_y, prbs_u, prbs_y,
                                      gamma_true=gamma_true, theta_true=theta_true, title=title)
-    return rep.write(outdir, overwrite=overwrite)
+    return rep.write(outdir, overwrite=overwrite, terms=terms)

@@ -59,3 +59,23 @@ def test_the_warning_names_the_side_and_the_column():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         warn_inputs_off_zero(np.array([1.0, 4.0, 2.0]), "OP")  # nearer 0 than the spread
+
+
+def test_a_report_written_by_the_command_line_names_flags(tmp_path):
+    """Trial 18: report.md said "pass theta_box to LinearEIVSetEstimator" where the
+    console said --theta-box."""
+    from hammerbound.app.cli import main
+
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-2, 2, 12), 10)
+    y = lfilter([0, 0.2], [1, -0.8], play(u, 1.0, 0.1, 1.0, 0.1)) + rng.uniform(-0.02, 0.02,
+                                                                             u.size)
+    rec = tmp_path / "rec.csv"
+    rec.write_text("u,y\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(u, y, strict=True)))
+    code = main(["identify", "--record", str(rec), "--na", "1", "--nb", "1",
+                 "--output-bound", "0.02", "--method", "lp", "--total-time-limit", "20",
+                 "--gamma-box", "0.5", "2", "0", "0.5", "0.5", "2", "0", "0.5",
+                 "--report", str(tmp_path / "rep")])
+    assert code == 0
+    text = (tmp_path / "rep" / "report.md").read_text()
+    assert "theta_box" not in text and "--theta-box" in text

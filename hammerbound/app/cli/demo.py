@@ -6,7 +6,7 @@ import contextlib
 import sys
 
 from ..paths import FORCE_FLAG, add_force_option, check_output_dir, check_output_file
-from .console import Progress
+from .console import Progress, cli_terms
 from .options import add_stage2_options, deprecated, progress_wanted, total_budget
 
 __all__ = ["add_parser", "run"]
@@ -105,7 +105,7 @@ def _report(args, levels, seeds, report_dir, progress):
                             solver=args.solver, n_jobs=args.n_jobs)
     path = write_report(ident, ex.steady.u, ex.steady.y, ex.prbs.u, ex.prbs.y, report_dir,
                         gamma_true=ex.gamma_true, theta_true=ex.theta_true,
-                        overwrite=args.force,
+                        overwrite=args.force, terms=cli_terms,
                         title=f"Chapter example, delta_eta = {deta:g}, N = {args.N[0]}, "
                               f"seed {seeds[0]}")
     print(f"hammerbound demo: report with figures written to {path}", file=sys.stderr)

@@ -144,7 +144,8 @@ def _two_records(args) -> int:
     if out_dir is not None:
         from ..report import write_report
 
-        path = write_report(ident, *steady, data.u, data.y, out_dir, overwrite=args.force)
+        path = write_report(ident, *steady, data.u, data.y, out_dir, overwrite=args.force,
+                            terms=cli_terms)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
     return exit_status(model_set, written)
 

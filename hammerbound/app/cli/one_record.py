@@ -75,7 +75,8 @@ def run_one_record(args) -> int:
     if out_dir is not None:
         from ..record_report import write_record_report
 
-        path = write_record_report(ident, data.u, data.y, out_dir, overwrite=args.force)
+        path = write_record_report(ident, data.u, data.y, out_dir, overwrite=args.force,
+                                   terms=cli_terms)
         print(f"hammerbound identify: report written to {path}", file=sys.stderr)
     return exit_status(model_set, written)
 

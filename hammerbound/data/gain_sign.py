@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["NEGATED_HINT", "negative_gain_hint", "record_gain", "steady_slope"]
+__all__ = ["NEGATED_HINT", "negative_gain_hint", "record_a1", "record_gain", "steady_slope"]
 
 #: What to do about a reverse-acting plant (swapped columns named: new-user trial 16).
 NEGATED_HINT = ("the model's backlash slopes are positive and its linear block has unit "
@@ -21,22 +21,39 @@ NEGATED_HINT = ("the model's backlash slopes are positive and its linear block h
                 "(-y) and read the backlash in those terms.")
 
 
-def record_gain(u, y, lags_y, lags_u) -> float:
-    """Steady-state gain ``B(1) / A(1)`` of the least-squares equation-error fit of
-    ``y_t + sum_i a_i y_{t-i} = sum_j b_j u_{t-j}`` (``lags_y = 1..na``, ``lags_u`` the
-    input lags); NaN when it is not defined (too few samples, a singular fit, A(1) = 0)."""
+def _least_squares(u, y, lags_y, lags_u):
+    """``theta = (a, b)`` of the least-squares equation-error fit of ``y_t + sum_i a_i
+    y_{t-i} = sum_j b_j u_{t-j}`` and the number of ``a_i``; None when it is not defined
+    (too few samples, a singular fit)."""
     u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
     lags_y, lags_u = np.asarray(lags_y, dtype=int), np.asarray(lags_u, dtype=int)
     n0 = int(max(lags_y.max(initial=0), lags_u.max(initial=0)))
     t = np.arange(n0, y.size)
     if t.size <= lags_y.size + lags_u.size:
-        return float("nan")
+        return None
     phi = np.column_stack([-y[t - i] for i in lags_y] + [u[t - j] for j in lags_u])
     theta, _, rank, _ = np.linalg.lstsq(phi, y[t], rcond=None)
-    a1 = 1.0 + theta[: lags_y.size].sum()
-    if rank < phi.shape[1] or a1 == 0:
+    return None if rank < phi.shape[1] else (theta, lags_y.size)
+
+
+def record_gain(u, y, lags_y, lags_u) -> float:
+    """Steady-state gain ``B(1) / A(1)`` of the least-squares equation-error fit of
+    ``y_t + sum_i a_i y_{t-i} = sum_j b_j u_{t-j}`` (``lags_y = 1..na``, ``lags_u`` the
+    input lags); NaN when it is not defined (too few samples, a singular fit, A(1) = 0)."""
+    fit = _least_squares(u, y, lags_y, lags_u)
+    if fit is None:
         return float("nan")
-    return float(theta[lags_y.size:].sum() / a1)
+    theta, na = fit
+    a1 = 1.0 + theta[:na].sum()
+    return float("nan") if a1 == 0 else float(theta[na:].sum() / a1)
+
+
+def record_a1(u, y, lags_y, lags_u) -> float:
+    """``A(1) = 1 + sum_i a_i`` of the same least-squares fit (NaN when not defined): small
+    for a slow or lightly damped plant, whose unit-gain normalisation fixes the scale
+    between the backlash slopes and ``B`` only weakly."""
+    fit = _least_squares(u, y, lags_y, lags_u)
+    return float("nan") if fit is None else float(1.0 + fit[0][: fit[1]].sum())
 
 
 def steady_slope(u, y) -> float:

@@ -18,6 +18,7 @@ from functools import partial
 
 import numpy as np
 
+from ..data.gain_sign import record_a1
 from ..data.validation import warn_bound_covers_output
 from ..exceptions import (
     DataValidationError,
@@ -249,12 +250,12 @@ def _scale_hint(problem, bounds, names, stopped_by_time=False) -> str:
     nothing; with the a_i boxed so that A(1) >= 0.05 its backlash was bounded in 34 s).
     Not when the time limit stopped the search or an a_i end is still at its a priori
     limit: those intervals say nothing of the plant (review)."""
-    if not names & {"ml", "mr"} or problem.na == 0 or stopped_by_time:
+    if not names & {"ml", "mr"} or problem.na == 0:
         return ""
     a = bounds[: problem.na]
-    if any(at_prior_limit(a[i, j], problem.box, i, j) for i in range(problem.na)
-           for j in (0, 1)):
-        return ""
+    if stopped_by_time or any(at_prior_limit(a[i, j], problem.box, i, j)
+                              for i in range(problem.na) for j in (0, 1)):
+        return _slow_plant_hint(problem)
     low = 1.0 + float(np.sum(a[:, 0]))
     if not low <= 0.0:
         return ""
@@ -264,6 +265,27 @@ def _scale_hint(problem, bounds, names, stopped_by_time=False) -> str:
             "(a plant whose A(1) is small, e.g. slow or lightly damped). A theta_box on "
             "the a_i from what you know of the plant (keeping A(1) > 0) or a gamma_box "
             "bounding m_l, m_r fixes it. ")
+
+
+#: below this, the record's least-squares A(1) suggests a slow plant (trial 18: 0.06 and
+#: 0.2 bounded nothing in 300 s; trial 11: 0.15; the chapter's plant: 1.06)
+SLOW_A1 = 0.25
+
+
+def _slow_plant_hint(problem) -> str:
+    """When the search's own a_i intervals say nothing (stopped, or at their a priori
+    limits): a sentence if the record's least-squares fit has a small A(1), a *possible*
+    reason (new-user trial 18: second-order plants with A(1) = 0.06 and 0.2 bounded
+    nothing, and the warning blamed only the time limit)."""
+    a1 = record_a1(problem.u, problem.y, np.arange(1, problem.na + 1),
+                   b_lags_of(problem.nb, problem.nk))
+    if not a1 < SLOW_A1:
+        return ""
+    return (f"The record's least-squares fit has A(1) = 1 + a_1 + ... + a_na = {a1:.2g} (a "
+            "slow or lightly damped plant?): the unit-gain normalisation (22.8) then fixes "
+            "the scale between the backlash slopes and B only weakly, a possible reason the "
+            "slopes are not bounded. A theta_box on the a_i from what you know of the plant "
+            "(keeping A(1) well above 0) or a gamma_box bounding m_l, m_r helps. ")
 
 
 def _not_identified_infos(infos, theta_bounds, gamma_bounds) -> tuple:

@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pytest
 from oracles import one_record
+from scipy.signal import lfilter
 
 import hammerbound as hb
 from hammerbound.app.cli import main
@@ -145,7 +146,10 @@ def test_unbounded_slopes_name_a_free_scale_when_a1_can_reach_zero():
 
     box = np.vstack([[[-2.0, 2.0], [-1.0, 1.0]], [[-1e4, 1e4]] * 2, [[0, 30], [0, 4]] * 2,
                      [[-1, 1]]])
-    problem = SimpleNamespace(na=2, box=box)
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 30), 10)
+    fast = lfilter([0, 0.5, 0.2], [1, -0.3, 0.0], u)  # A(1) = 0.7: no slow-plant hint
+    problem = SimpleNamespace(na=2, nb=2, nk=1, box=box, u=u, y=fast)
     found = np.vstack([[[-1.79, -0.69], [-0.04, 0.83]], box[2:]])  # trial 11's a_i
     hint = _scale_hint(problem, found, {"ml", "mr"})
     assert "let A(1) = 1 + a_1 + ... + a_na reach 0 (down to -0.83)" in hint
@@ -155,6 +159,25 @@ def test_unbounded_slopes_name_a_free_scale_when_a1_can_reach_zero():
     tight[:2] = [[-1.35, -1.25], [0.40, 0.50]]  # A(1) >= 0.05
     assert _scale_hint(problem, tight, {"ml", "mr"}) == ""
     assert _scale_hint(problem, box, {"ml", "mr"}) == ""  # the a_i at their box
+
+
+def test_a_slow_record_is_named_when_the_search_says_nothing_of_the_a_i():
+    """Trial 18: second-order plants with A(1) = 0.06 and 0.2 bounded nothing in 300 s,
+    and the warning named only the time limit: the record's least-squares A(1) is named
+    as a possible reason then (stopped, or the a_i at their box)."""
+    from types import SimpleNamespace
+
+    from hammerbound.hammerstein.one_record import _scale_hint
+
+    box = np.vstack([[[-2.0, 2.0], [-1.0, 1.0]], [[-1e4, 1e4]] * 2, [[0, 30], [0, 4]] * 2,
+                     [[-1, 1]]])
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 30), 10)
+    slow = lfilter([0, 0.04, 0.02], [1, -1.5, 0.56], u)  # A(1) = 0.06
+    problem = SimpleNamespace(na=2, nb=2, nk=1, box=box, u=u, y=slow)
+    hint = _scale_hint(problem, box, {"ml", "mr"}, stopped_by_time=True)
+    assert "least-squares fit has A(1) = 1 + a_1 + ... + a_na = 0.06" in hint
+    assert _scale_hint(problem, box, {"cl"}, stopped_by_time=True) == ""  # slopes bounded
 
 
 def test_a_fit_stopped_by_time_does_not_blame_the_plant_scale():

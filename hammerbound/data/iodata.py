@@ -279,7 +279,9 @@ class IOData:
             "transformer such as StandardScaler. The error bounds are in the units of the "
             "signals, so scaled data need scaled bounds: to scale, build IOData(u / su, "
             "y / sy) yourself and divide the output bound by sy and the input bound by su "
-            "(the b_j then scale by su / sy; the a_i do not change). Use data.u and data.y "
+            "(the a_i do not change; a linear block's b_j scale by su / sy, while the "
+            "Hammerstein identifier's unit-gain normalisation keeps the b_j and scales the "
+            "backlash slopes by su / sy and its widths by 1 / su). Use data.u and data.y "
             "for the arrays.")
 
     def is_contiguous(self) -> bool:

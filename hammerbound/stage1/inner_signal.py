@@ -148,7 +148,9 @@ class InnerSignalBounds:
             i = int(np.flatnonzero(~(hi | lo))[0])
             raise DataValidationError(
                 f"u[{i}] = {u[i]:g} is not a PRBS level +-{self.u_star:g}; the inner-signal "
-                "bounds (22.31)-(22.33) hold only for a two-level input."
+                "bounds (22.31)-(22.33) hold only for a two-level input. For a record of "
+                "another input, fit the identifier with procedure='one-record' on it (its "
+                "output envelope takes any input)."
             )
         (ch, cl), (rh, rl) = self.center, self.radius
         radius = np.where(hi, rh, rl)

@@ -79,3 +79,14 @@ def test_a_report_written_by_the_command_line_names_flags(tmp_path):
     assert code == 0
     text = (tmp_path / "rep" / "report.md").read_text()
     assert "theta_box" not in text and "--theta-box" in text
+
+
+def test_a_non_prbs_record_for_a_two_stage_envelope_points_to_one_record():
+    """Trial 19: output_envelope of a two-stage fit refused an ordinary input with "not a
+    PRBS level" and no way forward."""
+    from hammerbound.stage1.inner_signal import InnerSignalBounds
+
+    bounds = InnerSignalBounds(1.0, (0.2, 0.3), (-0.3, -0.2), 0.3)
+    with pytest.raises(hb.DataValidationError, match=r"not a PRBS level \+-1.*"
+                                                     r"procedure='one-record'"):
+        bounds.transform(np.array([1.0, -1.0, 0.5]))

@@ -90,3 +90,19 @@ def test_a_non_prbs_record_for_a_two_stage_envelope_points_to_one_record():
     with pytest.raises(hb.DataValidationError, match=r"not a PRBS level \+-1.*"
                                                      r"procedure='one-record'"):
         bounds.transform(np.array([1.0, -1.0, 0.5]))
+
+
+def test_a_gain_plane_weight_of_order_two_follows_the_zero_at_steady_state():
+    """Trial 19: on a lightly damped plant (poles 0.7 +- 0.2j, dt = 0.01 s) the order-2
+    gain-plane weight had |W(1)| = 0.23 against a deviation bound of 0 there (the box's:
+    0.32), so every controller with integral action met ||W T|| >= 0.23; a start with a
+    zero near z = 1 gives 0.015."""
+    rng = np.random.default_rng(0)
+    x = np.where(rng.random(200) < 0.5, 1.2, -1.1)
+    y = lfilter([0, 0.10, 0.03], [1, -1.4, 0.53], x) + rng.uniform(-0.02, 0.02, 200)
+    lin = hb.LinearEIVSetEstimator(output_bound=0.02, method="exact", steady_state_gain=1.0)
+    lin.fit(hb.IOData(x + rng.uniform(-0.003, 0.003, 200), y, dt=0.01), input_bound=0.003)
+    box = lin.uncertainty_weight("multiplicative", order=2)
+    plane = lin.uncertainty_weight("multiplicative", order=2, on_gain_plane=True)
+    assert plane.deviation[0] <= 1e-9 * np.max(plane.deviation)  # vanishes at w = 0
+    assert abs(plane.W(1.0)) < 0.2 * abs(box.W(1.0))

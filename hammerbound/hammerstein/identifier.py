@@ -349,12 +349,14 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "bounds_")
         return self.intervals_.radius
 
-    def contains(self, gamma, theta=None) -> bool:
+    def contains(self, gamma, theta=None, tol=0.0) -> bool:
         """Whether the backlash ``gamma`` and linear ``theta`` lie in all intervals.
 
         ``gamma``: ``(ml, cl, mr, cr)`` or a :class:`Backlash`; ``theta``: a vector in
         ``linear_.param_names_`` order, a discrete ``control.TransferFunction`` or an
         ``(A, B)`` pair. ``contains(system)`` with a :class:`HammersteinSystem` checks both.
+        ``tol`` widens every end by ``tol max(1, |end|)``, as the other ``contains``
+        (new-user trial 19: this one had none).
         """
         check_is_fitted(self, "bounds_")
         if isinstance(gamma, HammersteinSystem) and theta is None:
@@ -367,7 +369,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         lin = self.linear_
         th = as_theta(theta if is_vector_like(theta) else lin.theta_of(theta),
                       len(lin.param_names_), lin.param_names_)
-        return self.intervals_.contains(np.concatenate([g, th]))
+        return self.intervals_.contains(np.concatenate([g, th]), tol=tol)
 
     def predict(self, X):
         """Output of the central model simulated on input ``X``.

@@ -106,3 +106,26 @@ def test_a_gain_plane_weight_of_order_two_follows_the_zero_at_steady_state():
     plane = lin.uncertainty_weight("multiplicative", order=2, on_gain_plane=True)
     assert plane.deviation[0] <= 1e-9 * np.max(plane.deviation)  # vanishes at w = 0
     assert abs(plane.W(1.0)) < 0.2 * abs(box.W(1.0))
+
+
+def test_the_identifiers_contains_takes_a_tolerance_as_the_others():
+    """Trial 19: HammersteinBacklashIdentifier.contains had no tol, unlike every other
+    contains of the package."""
+    from oracles import GAMMA_TRUE, THETA_TRUE, hammerstein
+
+    rng = np.random.default_rng(0)
+    levels = np.r_[np.linspace(0.3, 2.5, 10), -np.linspace(0.3, 2.5, 10)]
+    ys = [hammerstein(np.r_[0.0, np.full(300, v)], GAMMA_TRUE, [0, 2.15, -1.09],
+                      [1, -0.76, 0.82])[-1] for v in levels]
+    u = rng.choice([-1.0, 1.0], 80)
+    y = hammerstein(u, GAMMA_TRUE, [0, 2.15, -1.09], [1, -0.76, 0.82])
+    ident = hb.HammersteinBacklashIdentifier(
+        hb.BacklashSetEstimator(0.01), hb.LinearEIVSetEstimator(output_bound=0.01,
+                                                                method="lp"))
+    ident.fit(u, y + rng.uniform(-0.01, 0.01, u.size),
+              steady_state=(levels, np.array(ys) + rng.uniform(-0.01, 0.01, levels.size)))
+    assert ident.contains(GAMMA_TRUE, THETA_TRUE)
+    outside = np.array(GAMMA_TRUE) + [0.0, 0.0, 0.0, 0.0]
+    outside[0] = ident.gamma_bounds_[0, 1] + 1e-3  # just above m_l's upper end
+    assert not ident.contains(outside, THETA_TRUE)
+    assert ident.contains(outside, THETA_TRUE, tol=1e-2)

@@ -50,6 +50,7 @@ from ..relaxations.problem import (
 from ..status import BOX, INACCURATE, NOT_IDENTIFIED, RELAXATION
 from ..tables import bound_text, rounded_text
 from .default_box import search_default_box
+from .empty_bound import with_smallest_bound
 from .record_checks import (
     warn_dead_band_covers_record,
     warn_gain_sign,
@@ -416,9 +417,14 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
                              data.y, ob, stacklevel=5)
     warn_inputs_off_zero(data.u, data.input_name or "u")
     deadline = None if lin.total_time_limit is None else time.time() + float(lin.total_time_limit)
-    prior, problem, res = search_default_box(
-        partial(_search, lin, data, steady=steady, steady_bound=steady_bound, ob=ob,
-                deadline=deadline), prior, deadline, bool(lin.progress))
+    try:
+        prior, problem, res = search_default_box(
+            partial(_search, lin, data, steady=steady, steady_bound=steady_bound, ob=ob,
+                    deadline=deadline), prior, deadline, bool(lin.progress))
+    except EmptyFeasibleSetError as exc:
+        raise with_smallest_bound(
+            exc, partial(_scaled_problem, lin, data, prior, steady, steady_bound, ob), ob,
+            prior, lin, time.perf_counter() - t0) from exc
     warn_gain_sign(problem, res)
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
@@ -434,6 +440,11 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     return OneRecordFit(problem, res, prior, tb, gb, statuses,
                         _assumptions(problem, prior, lin, steady), found,
                         time.perf_counter() - t0)
+
+
+def _scaled_problem(lin, data, prior, steady, steady_bound, ob, factor):
+    """The record's problem with its output bound multiplied by ``factor``."""
+    return _problem(lin, data, prior, steady, steady_bound, ob * factor)
 
 
 def _search(lin, data, prior, *, steady, steady_bound, ob, deadline):

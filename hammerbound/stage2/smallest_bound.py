@@ -18,7 +18,8 @@ import numpy as np
 
 from ..exceptions import EmptyFeasibleSetError, SolverError
 
-__all__ = ["smallest_output_factor", "smallest_output_text"]
+__all__ = ["largest_empty_factor", "lower_bound_words", "smallest_output_factor",
+           "smallest_output_text"]
 
 #: at most this many doublings of the bound (2**10 times the bound given)
 MAX_DOUBLINGS = 10
@@ -48,12 +49,21 @@ def smallest_output_factor(problem, time_budget: float = TIME_BUDGET) -> float:
     output bounds multiplied by ``s`` (1.0 when the LP does not certify it above 1, or the
     time is up at once): no output bound below ``s`` times the given ones lets a model of
     these orders, input bounds and a priori box explain the data."""
+    return largest_empty_factor(lambda f: _empty(problem, f), time_budget)
+
+
+def largest_empty_factor(empty_at, time_budget: float = TIME_BUDGET) -> float:
+    """The largest factor ``s >= 1`` at which ``empty_at(s)`` certified the set empty
+    (True; False: not certified; None: no decision, the search stops), by doubling from 1
+    and then bisection, within ``time_budget`` seconds. Only certified factors are
+    returned, so the result is a lower figure of the smallest bound that explains the
+    data (emptiness at ``s`` proves it at every smaller bound)."""
     stop = time.monotonic() + float(time_budget)
     lo, hi = 1.0, None
     for _ in range(MAX_DOUBLINGS):
         if time.monotonic() > stop:
             return lo
-        decision = _empty(problem, 2.0 * lo)
+        decision = empty_at(2.0 * lo)
         if decision is None:
             return lo
         if not decision:
@@ -66,25 +76,32 @@ def smallest_output_factor(problem, time_budget: float = TIME_BUDGET) -> float:
         if time.monotonic() > stop:
             break
         mid = 0.5 * (lo + hi)
-        decision = _empty(problem, mid)
+        decision = empty_at(mid)
         if decision is None:
             break
         lo, hi = (mid, hi) if decision else (lo, mid)
     return lo
 
 
-def smallest_output_text(problem, factor) -> str:
-    """The sentence of an empty stage 2's message (empty when ``factor`` says nothing
-    beyond the bound given)."""
+def lower_bound_words(deta, factor) -> str:
+    """``X`` of "no output error bound below X": ``factor`` times a scalar bound, rounded
+    down, or "f x these bounds" for per-sample bounds ("" when ``factor`` is not above 1)."""
     from ..tables import rounded_text
 
     if not factor > 1.0:
         return ""
-    deta = np.asarray(problem.deta, dtype=float)
+    deta = np.asarray(deta, dtype=float)
     if np.all(deta == deta.flat[0]):
-        low = rounded_text(factor * float(deta.flat[0]), down=True, digits=3)
-    else:
-        low = f"{rounded_text(factor, down=True, digits=3)} x these bounds"
+        return rounded_text(factor * float(deta.flat[0]), down=True, digits=3)
+    return f"{rounded_text(factor, down=True, digits=3)} x these bounds"
+
+
+def smallest_output_text(problem, factor) -> str:
+    """The sentence of an empty stage 2's message (empty when ``factor`` says nothing
+    beyond the bound given)."""
+    low = lower_bound_words(problem.deta, factor)
+    if not low:
+        return ""
     return (f"The data allow no output error bound below {low} (the LP set is still "
             "empty there, with the input error bound, the orders and the a priori box as "
             "they are).")

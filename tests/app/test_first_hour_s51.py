@@ -129,3 +129,29 @@ def test_the_identifiers_contains_takes_a_tolerance_as_the_others():
     outside[0] = ident.gamma_bounds_[0, 1] + 1e-3  # just above m_l's upper end
     assert not ident.contains(outside, THETA_TRUE)
     assert ident.contains(outside, THETA_TRUE, tol=1e-2)
+
+
+@pytest.mark.parametrize("seed", [0, pytest.param(1, marks=pytest.mark.deep)])
+def test_an_empty_record_states_a_certified_smallest_bound(seed):
+    """Trial 18: "empty" with a bound too small said nothing of how far the record was
+    from it. Output errors exactly at +-0.05 (own simulation): the truth explains the
+    record at 0.05, so the figure stated may never exceed 0.05; fitted at 0.01 it says
+    more than the bound given."""
+    import re
+
+    from oracles import one_record
+
+    u, y, _ = one_record(150, 0.05, "bound", seed)
+    ident = hb.HammersteinBacklashIdentifier(
+        linear=hb.LinearEIVSetEstimator(output_bound=0.01, method="lp",
+                                        total_time_limit=60), procedure="one-record")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(hb.EmptyFeasibleSetError) as info:
+            ident.fit(u, y)
+    text = str(info.value)
+    found = re.search(r"The record allows no output error bound below ([0-9.]+) \(the "
+                      r"relaxation is still certified infeasible there", text)
+    assert found, text
+    assert 0.01 < float(found[1]) <= 0.05
+    assert text.index("allows no output error bound") < text.index("Likely causes")

@@ -213,7 +213,7 @@ def _lead(stopped_by_time, causes=()) -> str:
 
 
 def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stopped=0,
-                         method="exact"):
+                         method="exact", pace=(0, 0.0)):
     """Ends stuck at an assumed limit become infinite, with a warning naming the cause."""
     p = problem.p
     gb = bounds[p: p + 4].copy()
@@ -238,7 +238,7 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
     lead = _lead(stopped_by_time, [c for _, c in found])
     warnings.warn(f"{lead} {names}: {causes}. Those ends are {what}. "
                   + rests + _scale_hint(problem, bounds, {n for n, _ in found}, stopped_by_time)
-                  + _advice(stopped_by_time, lps_stopped, prior.user_given),
+                  + _advice(stopped_by_time, lps_stopped, prior.user_given, pace),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
     return gb, tuple(found)
@@ -366,14 +366,19 @@ def _unbounded_b(problem, theta_bounds, lin, stopped_by_time=False):
     return tb, hit
 
 
-def _advice(stopped_by_time, lps_stopped, box_given=False) -> str:
+def _advice(stopped_by_time, lps_stopped, box_given=False, pace=(0, 0.0)) -> str:
     """What to do about backlash ends the record did not bound, for the cause
     :func:`~hammerbound.joint.unidentified` names: more time when the time limit stopped
-    the search; another record when no limit did (the input is then a cause it names);
+    the search (with the leaves' pace when it cut some short: ``pace = (cut, mean
+    seconds)``); another record when no limit did (the input is then a cause it names);
     a (narrower) gamma_box."""
     fixes = []
     if stopped_by_time:  # (LPs stopped at their own cap: the cause says what helps)
-        fixes.append("give more time (total_time_limit)")
+        cut, sec = pace
+        more = (f"; the limit cut {cut} leaf box(es) of the partition short, which at "
+                f"the pace of the others ({sec:.2g} s each on this machine) need about "
+                f"{cut * sec:.0f} s more to finish the partition" if cut else "")
+        fixes.append(f"give more time (total_time_limit{more})")
     elif not lps_stopped:
         fixes.append("use a record whose input reverses by more than the dead band")
     fixes.append("narrow the gamma_box if what you know of the actuator allows it"
@@ -429,7 +434,9 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     d = res.details
     gb, found = _report_unidentified(problem, res.bounds, prior,
                                      d is not None and d.stopped_by_time,
-                                     0 if d is None else d.lps_stopped, lin.method)
+                                     0 if d is None else d.lps_stopped, lin.method,
+                                     (0, 0.0) if d is None else (d.leaves_cut,
+                                                                 d.leaf_seconds))
     tb, b_found = _unbounded_b(problem, gain_tightened(problem, res.bounds[: problem.p]), lin,
                                d is not None and d.stopped_by_time)
     _warn_stopped(res.infos, {name for name, _ in found} | set(b_found), lin.method)

@@ -45,6 +45,9 @@ class RecordDetails:
     leaves: int
     stopped_by_time: bool
     lps_stopped: int = 0
+    #: leaves the deadline cut short, and the mean seconds of those tightened in time
+    leaves_cut: int = 0
+    leaf_seconds: float = 0.0
 
 
 def _pool(problem, points, limit=8, deadline=None):
@@ -191,8 +194,13 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
     points = []
     stops = []
     bar = RecordProgress(progress)
+    pace = [0, 0.0]  # leaves cut by the deadline, mean seconds of the others
+
+    def on_pace(cut, seconds):
+        pace[:] = [cut, seconds]
+
     leaves = outer_leaves(problem, deadline=deadline, on_point=points.append, n_jobs=n_jobs,
-                          on_stop=stops.append, progress=bar)
+                          on_stop=stops.append, progress=bar, on_pace=on_pace)
     lps_stopped = sum(stops)
     if lps_stopped:
         skip = None  # an OBBT bound at a limit may be the stopped LPs', not the record's
@@ -206,7 +214,7 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
                               method="lp",
                               time=time.perf_counter() - t0, root_box=box,
                               details=RecordDetails(len(leaves), past(deadline),
-                                                    lps_stopped))
+                                                    lps_stopped, *pace))
     pool = _pool(problem, points, deadline=deadline)
     jobs = [(k, s) for k in range(problem.p + 4) for s in (1.0, -1.0)]
     kw = {"tol": tol, "max_nodes": max_nodes, "time_limit": time_limit, "deadline": deadline}
@@ -235,5 +243,6 @@ def _record_bounds(problem: RecordProblem, *, method, tol, max_nodes, time_limit
     return IntervalResult(tuple(names), bounds, infos=_at_prior(infos, problem.box),
                           method="exact",
                           time=time.perf_counter() - t0, root_box=box, pool=tuple(pool),
-                          details=RecordDetails(len(leaves), past(deadline), lps_stopped))
+                          details=RecordDetails(len(leaves), past(deadline), lps_stopped,
+                                                *pace))
 

@@ -79,9 +79,9 @@ def test_lines_after_the_deadline_do_not_claim_work():
     gone, ahead = time.time() - 1.0, time.time() + 600.0
     box = np.zeros((9, 2))
     # the last item: the deadline had passed when the leaf returned (in its worker)
-    assert _leaf_outcome((box, [], 0, False)) == "tightened"
-    assert _leaf_outcome((None, [], 0, True)) == "certified empty"
-    assert _leaf_outcome((box, [], 0, True)).startswith("time limit reached")
+    assert _leaf_outcome((box, [], 0, False, 1.0)) == "tightened"
+    assert _leaf_outcome((None, [], 0, True, 1.0)) == "certified empty"
+    assert _leaf_outcome((box, [], 0, True, 1.0)).startswith("time limit reached")
     idle = SimpleNamespace(status="limit", nodes=0)
     assert _end_outcome("a1 min", idle, gone) == (
         "a1 min: not searched, time limit reached (the tightened box's bound)")

@@ -160,7 +160,7 @@ def _check_width(path, lineno, row, width, delimiter) -> None:
 
 
 _INTEGER = re.compile(r"\s*[-+]?\d+")
-_DIGITS = re.compile(r"\d+\s*")
+_DIGITS = re.compile(r"\d+(?:[eE][-+]?\d+)?\s*")
 
 
 def _check_shifts(path, rows, read, delimiter) -> None:
@@ -186,7 +186,7 @@ def _check_shifts(path, rows, read, delimiter) -> None:
             continue
         for i in range(min(last, len(row) - 2) + 1):
             if _INTEGER.fullmatch(row[i]) and _DIGITS.fullmatch(row[i + 1]) \
-                    and decimal(i):
+                    and decimal(i) and _numbers_when_joined(row, i, read):
                 raise DataValidationError(
                     f"{path}, line {lineno}: the row has {count} values where most rows "
                     f"have {usual}, and {row[i]!r} followed by {row[i + 1]!r} looks like "
@@ -195,6 +195,18 @@ def _check_shifts(path, rows, read, delimiter) -> None:
                     "the file with decimal points (e.g. from a spreadsheet with an "
                     "English number format); if the row is right as it is, write its "
                     "integers with a decimal point (e.g. 2.0).")
+
+
+def _numbers_when_joined(row, i, read) -> bool:
+    """Whether the columns read are numbers once fields ``i`` and ``i + 1`` are joined by a
+    decimal point: a decimal comma would have split them so (review 51: a row whose note
+    is text, ``2,40,3.5,calibrated`` under ``t,u,y,note``, is a row of integers and a
+    note, not a shifted one)."""
+    joined = [*row[:i], f"{row[i].strip()}.{row[i + 1].strip()}", *row[i + 2:]]
+    try:
+        return all(j < len(joined) and float(joined[j]) == float(joined[j]) for j in read)
+    except ValueError:
+        return False
 
 
 def _delimiter(delimiter, names) -> str:

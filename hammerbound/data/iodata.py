@@ -142,12 +142,14 @@ class IOData:
         t = cls._time_column(header, t, (u, y), str(path), dt, spell, hint)
         data = read_columns(path, [u, y] + ([t] if t else []), delimiter=delimiter,
                             argument_names=spell, text=t)
-        tt = None
+        tt, stamps = None, False
         if t:  # numbers, or date-times as seconds from the first (trial 18)
             tt, unit = time_seconds(data[t], str(path), t, spell)
-            if unit:
-                names.setdefault("time_unit", unit)
-        return cls._build(data[u], data[y], tt, t, dt, str(path), u, y, names, spell)
+            stamps = unit is not None
+            if stamps:
+                tt = _in_time_unit(tt, names)
+        return cls._build(data[u], data[y], tt, t, dt, str(path), u, y, names, spell,
+                          stamps=stamps)
 
     @classmethod
     def from_frame(cls, frame, *, u="u", y="y", t="auto", dt=None, **names) -> IOData:
@@ -160,6 +162,7 @@ class IOData:
         try:
             uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
             tt = None if t is None else _column_seconds(frame[t], t, names)
+            stamps = t is not None and names.pop("_stamps", False)
         except KeyError as exc:
             raise DataValidationError(
                 f"column {exc} not found; the frame has {list(frame)}.") from None
@@ -168,7 +171,8 @@ class IOData:
             if tt is not None:
                 t = "the frame's index"
                 names.setdefault("time_unit", "s")
-        return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names)
+        return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names,
+                          stamps=stamps)
 
     @staticmethod
     def _time_column(columns, t, used, where, dt, spell, hint=""):
@@ -197,7 +201,7 @@ class IOData:
         return found
 
     @classmethod
-    def _build(cls, u, y, tt, t, dt, where, uname, yname, names, spell=None):
+    def _build(cls, u, y, tt, t, dt, where, uname, yname, names, spell=None, stamps=False):
         dt = _check_dt(dt)
         t0 = 0.0
         if tt is not None:
@@ -206,8 +210,8 @@ class IOData:
                 dt, t0 = step if dt is None else dt, float(tt[0])
                 if time_unit_of(t):  # e.g. "t [ms]"
                     names.setdefault("time_unit", time_unit_of(t))
-            elif step == 1.0 and np.all(tt == np.round(tt)):
-                t0 = float(tt[0]) * dt           # a sample counter
+            elif step == 1.0 and np.all(tt == np.round(tt)) and not stamps:
+                t0 = float(tt[0]) * dt           # a sample counter (never date-times)
             else:
                 raise DataValidationError(
                     f"{where}: the time column {t!r} has step {step:g} but dt={dt:g} was "
@@ -387,26 +391,47 @@ def _columns_hint(X, func) -> str:
 
 def _column_seconds(column, name, names):
     """A frame's time column as numbers: date-times (or their ISO text) as seconds from the
-    first, timedeltas as seconds, both setting ``time_unit`` "s" in ``names`` (a datetime
-    column was read as nanoseconds: dt = 1e7 for 10 s steps, trial 18's follow-up)."""
+    first and timedeltas as seconds, in the ``time_unit`` of ``names`` if one was given,
+    else "s" (a datetime column was read as nanoseconds: dt = 1e7 for 10 s steps, trial
+    18's follow-up); ``names["_stamps"]`` says that they were date-times."""
     from .timebase import time_seconds
 
     values = np.asarray(column)
     if values.dtype.kind not in "mMOSU":
         return np.asarray(values, dtype=float)
+    names["_stamps"] = True
     if values.dtype.kind == "M" or (values.dtype.kind == "O" and hasattr(column, "dt")):
         values = np.asarray(getattr(column, "dt", None).tz_convert(None)
                             if getattr(getattr(column, "dt", None), "tz", None) is not None
                             else column, dtype="datetime64[ns]")
-        names.setdefault("time_unit", "s")
-        return ((values - values[0]) / np.timedelta64(1, "s")).astype(float)
+        return _in_time_unit(((values - values[0]) / np.timedelta64(1, "s")).astype(float),
+                             names)
     if values.dtype.kind == "m":
-        names.setdefault("time_unit", "s")
-        return (values / np.timedelta64(1, "s")).astype(float)
+        return _in_time_unit((values / np.timedelta64(1, "s")).astype(float), names)
     secs, unit = time_seconds([str(v) for v in values], "the frame", name)
-    if unit:
-        names.setdefault("time_unit", unit)
-    return secs
+    if unit is None:
+        names.pop("_stamps")
+        return secs
+    return _in_time_unit(secs, names)
+
+
+#: seconds per time unit a column of date-times can be given in
+_SECONDS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "min": 60.0, "h": 3600.0}
+
+
+def _in_time_unit(seconds, names):
+    """Date-times (as ``seconds`` from the first) in the ``time_unit`` given in ``names``,
+    or in seconds (then ``time_unit`` "s"); a unit they cannot be put in is refused
+    (review 51: ``time_unit='min'`` was kept with dt in seconds)."""
+    unit = names.get("time_unit")
+    if not unit:
+        names["time_unit"] = "s"
+        return seconds
+    if unit not in _SECONDS:
+        raise DataValidationError(
+            f"time_unit={unit!r} for a time column of date-times: give one of "
+            f"{', '.join(_SECONDS)} (the date-times are converted to it), or none (s).")
+    return seconds / _SECONDS[unit]
 
 
 def _index_seconds(frame):

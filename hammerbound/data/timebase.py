@@ -21,6 +21,8 @@ from .validation import as_signal
 __all__ = ["TIME_NAMES", "find_time_column", "name_and_unit", "name_with_unit", "time_seconds",
            "time_unit_of", "uniform_step"]
 
+#: the start of an ISO 8601 date-time: a date ``YYYY-MM-DD``
+_ISO_DATE = re.compile(r"^[-+]?\d{4,}-\d{2}-\d{2}")
 #: base names recognised as a time column (case-insensitive)
 TIME_NAMES = ("t", "time", "times", "timestamp", "zeit", "tiempo", "temps")
 _UNIT = r"(?:\s*[\[(]\s*(?P<u1>[^\])]*?)\s*[\])]|[ _/](?P<u2>s|sec|secs|seconds|ms|us|min|h))?"
@@ -85,10 +87,16 @@ def time_seconds(texts, where, column, spell=None) -> tuple[np.ndarray, str | No
         return np.array([float(v) for v in texts]), None
     except ValueError:
         pass
+    import warnings
+
     stamps = []
     for k, text in enumerate(texts):
         try:
-            stamps.append(np.datetime64(text.strip().replace(" ", "T", 1), "ns"))
+            if not _ISO_DATE.match(text.strip()):  # "0" would be the year 0 (review 51)
+                raise ValueError(text)
+            with warnings.catch_warnings():  # numpy: "no explicit representation of
+                warnings.simplefilter("ignore")  # timezones" (an offset: read as UTC)
+                stamps.append(np.datetime64(text.strip().replace(" ", "T", 1), "ns"))
         except ValueError:
             raise DataValidationError(
                 f"{where}: the time column {column!r} holds {text!r} (row {k + 1} of the "

@@ -78,7 +78,8 @@ def _past_crossing_text(bl, u_star) -> tuple:
     if not u_star >= limit:
         return ()
     reach = min(-bl.input_range_[0], bl.input_range_[1])
-    which = "every" if bl.crossed_on_data_ is not None else "some"
+    which = ("every" if bl.crossed_for_every(u_star) or bl.crossed_for_every(-u_star)
+             else "some")  # of u* itself (review 51: "every" came from the data's reach)
     return (f"u* = {u_star:g} lies past the crossing of the backlash lines of {which} "
             f"feasible backlash (from |u| = {limit:.4g} on); admitted because the square "
             f"waves reached +-{reach:g}: the inner values at +-u* lie on the lines their "

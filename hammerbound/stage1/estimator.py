@@ -214,11 +214,8 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         show (22.1) well posed up to the amplitudes tested (new-user trial 19: square
         waves to +-3.5 of lines that cross at 1.95 got u* = 2.73 suggested, where the
         package's own simulator refuses the central backlash)."""
-        L, R = self.left_.vertices_mb, self.right_.vertices_mb
         lo, hi = self.input_range_
-        # R(u) - L(u) > 0 for every feasible pair: min over each polygon (at vertices)
-        past = [u for u in (hi, lo) if u != 0.0
-                and np.min(R[:, 0] * u - R[:, 1]) + np.min(-L[:, 0] * u - L[:, 1]) > 0.0]
+        past = [u for u in (hi, lo) if u != 0.0 and self.crossed_for_every(u)]
         if not past:
             return None
         import warnings
@@ -309,6 +306,15 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
             # closed at u_data: the data show (22.1) well posed *at* +-U (strictly)
             return (u_lo, float(np.nextafter(u_data, np.inf)))
         return (lo_g, hi_g)
+
+    def crossed_for_every(self, u) -> bool:
+        """Whether at input ``u`` the lines of *every* feasible backlash have crossed
+        (``m_l (u + c_l) < m_r (u - c_r)`` for all: the minimum of ``R(u) - L(u)`` over the
+        two polygons, at their vertices, is positive)."""
+        check_is_fitted(self, "left_")
+        L, R = self.left_.vertices_mb, self.right_.vertices_mb
+        u = float(u)
+        return bool(np.min(R[:, 0] * u - R[:, 1]) + np.min(-L[:, 0] * u - L[:, 1]) > 0.0)
 
     def crossing_limit(self) -> float:
         """The smallest PRBS level at which the two lines of some feasible backlash cross

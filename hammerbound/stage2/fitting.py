@@ -69,7 +69,7 @@ def with_hints(exc, est, problem, data):
 
         smallest = smallest_output_text(problem, smallest_output_factor(problem))
         wider = widened_box_hint(problem, exc.relaxation)
-    hint = " ".join(h for h in (smallest, wider, box_hint(est, problem),
+    hint = " ".join(h for h in (wider, smallest, box_hint(est, problem),
                                 assumptions(est, problem)) if h)
     kw = {"side": exc.side, "first_index": exc.first_index, "relaxation": exc.relaxation} \
         if isinstance(exc, EmptyFeasibleSetError) else {}

@@ -241,3 +241,45 @@ def test_a_frames_date_time_column_is_read_in_seconds(kind):
               "tz": stamps.dt.tz_localize("Europe/Berlin")}[kind]
     data = hb.IOData.from_frame(pd.DataFrame({"timestamp": column, "u": U, "y": Y}))
     assert data.dt == 10.0 and data.time_unit == "s"
+
+
+def test_a_row_of_integers_with_a_text_note_is_not_taken_for_a_shift(tmp_path):
+    """Review 51: ``t,u,y,note`` with t written as 2 (not 2.0), an integer u and a note on
+    that row was refused as a decimal comma; joined, its y would be the note's text."""
+    path = _write(tmp_path, "t,u,y,note\n0.1,40.5,3.25,\n0.2,41.5,3.5,\n2,40,3.5,calib\n"
+                            "0.3,39.5,3.25,\n")
+    data = hb.IOData.from_csv(path, t=None)
+    assert data.u.tolist() == [40.5, 41.5, 40.0, 39.5]
+
+
+def test_a_decimal_comma_in_scientific_notation_is_refused(tmp_path):
+    """Review 51: ``2,5E-03`` read u = 2, y = 0.005."""
+    path = _write(tmp_path, "u,y,note\n1.5,2.25,\n2,5E-03,3.5,\n0.5,1.75,\n")
+    with pytest.raises(DataValidationError, match=r"'2' followed by '5E-03' looks like one "
+                                                  r"number with a decimal comma"):
+        hb.IOData.from_csv(path, t=None)
+
+
+def test_date_times_are_never_a_sample_counter_and_follow_a_given_time_unit(tmp_path):
+    """Review 51: stamps 1 s apart with dt=0.5 given were taken as a sample counter
+    (dt 0.5, no word); time_unit='min' was kept with dt in seconds; a '0' among the
+    stamps was read as the year 0; an offset made numpy warn."""
+    import warnings
+
+    stamps = [f"2024-03-05 08:00:0{k}" for k in range(U.size)]
+    path = _stamped(tmp_path, stamps)
+    with pytest.raises(DataValidationError, match="has step 1 but dt=0.5 was given"):
+        hb.IOData.from_csv(path, u="OP", y="PV", dt=0.5)
+    data = hb.IOData.from_csv(path, u="OP", y="PV", time_unit="min")
+    assert data.time_unit == "min" and data.dt == pytest.approx(1 / 60)
+    with pytest.raises(DataValidationError, match="time_unit='days' for a time column of "
+                                                  "date-times"):
+        hb.IOData.from_csv(path, u="OP", y="PV", time_unit="days")
+    mixed = _stamped(tmp_path, ["0", *stamps[1:]], name="mixed.csv")
+    with pytest.raises(DataValidationError, match=r"holds '0' \(row 1 of the data\)"):
+        hb.IOData.from_csv(mixed, u="OP", y="PV")
+    offset = _stamped(tmp_path, [f"2024-03-05T08:00:0{k}+01:00" for k in range(U.size)],
+                      name="offset.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert hb.IOData.from_csv(offset, u="OP", y="PV").dt == 1.0

@@ -377,6 +377,14 @@ def test_points_past_every_crossing_are_warned_and_the_suggestion_stays_before()
         warnings.simplefilter("error")
         assert lo < bl.suggest_prbs_level() < bl.crossing_limit()
     bl.check_prbs_level(2.7)  # admitted: the inner values on the lines the points showed
+    # "every" only where u* itself is past every feasible crossing (review 51)
+    from hammerbound.hammerstein.identifier import _past_crossing_text
+
+    assert bl.crossed_for_every(3.5) and not bl.crossed_for_every(1.0)
+    between = 0.5 * (bl.crossing_limit() + crossing)
+    assert not bl.crossed_for_every(between)
+    assert "lines of some feasible" in _past_crossing_text(bl, between)[0]
+    assert "lines of every feasible" in _past_crossing_text(bl, 3.0)[0]
 
 
 def test_points_before_the_crossing_keep_the_data_argument_and_say_so():

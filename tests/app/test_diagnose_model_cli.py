@@ -75,12 +75,17 @@ def test_the_model_of_a_fit_explains_its_own_simulation(fit_json, tmp_path, caps
     assert rc == 0 and rep["consistent_before"] is True
 
 
-def test_a_wider_dead_band_in_the_record_is_found_inconsistent(fit_json, tmp_path, capsys):
+def _worn(fit_json, tmp_path):
+    """A record of the fit's central model with its dead band 8 times wider (own code)."""
     c = _centres(fit_json)
     u = _steps(np.random.default_rng(3))
     y = hammerstein(u, (c["ml"], 8 * c["cl"], c["mr"], 8 * c["cr"]), [0.0, c["b1"], c["b2"]],
                     [1.0, c["a1"], c["a2"]])
-    rec = _write(tmp_path / "new.csv", u, y)
+    return _write(tmp_path / "new.csv", u, y)
+
+
+def test_a_wider_dead_band_in_the_record_is_found_inconsistent(fit_json, tmp_path, capsys):
+    rec = _worn(fit_json, tmp_path)
     main(["diagnose", str(rec), "--model", str(fit_json), "--output-bound", "0.01",
           "--refit", "none", "--json", "--candidates", "backlash", "--max-effects", "1"])
     rep = json.loads(capsys.readouterr().out)
@@ -88,11 +93,7 @@ def test_a_wider_dead_band_in_the_record_is_found_inconsistent(fit_json, tmp_pat
 
 
 def test_a_verdict_against_the_fit_says_it_tested_the_centre(fit_json, tmp_path, capsys):
-    c = _centres(fit_json)
-    u = _steps(np.random.default_rng(3))
-    y = hammerstein(u, (c["ml"], 8 * c["cl"], c["mr"], 8 * c["cr"]), [0.0, c["b1"], c["b2"]],
-                    [1.0, c["a1"], c["a2"]])
-    rec = _write(tmp_path / "new.csv", u, y)
+    rec = _worn(fit_json, tmp_path)
     main(["diagnose", str(rec), "--model", str(fit_json), "--output-bound", "0.01",
           "--candidates", "offset", "--max-effects", "1"])
     out = capsys.readouterr().out

@@ -16,7 +16,7 @@ import warnings
 from ..exceptions import EmptyFeasibleSetError
 from ..joint import record_bounds
 from ..joint.tighten import EMPTY_HINT
-from ..stage2.smallest_bound import largest_empty_factor, lower_bound_words
+from ..stage2.smallest_bound import LazyText, largest_empty_factor, lower_bound_words
 
 __all__ = ["SMALLEST_BUDGET", "with_smallest_bound"]
 
@@ -27,7 +27,16 @@ SMALLEST_BUDGET = (5.0, 30.0)
 
 
 def with_smallest_bound(exc, problem_at, ob, prior, lin, spent):
-    """``exc`` with "the record allows no output bound below X": the relaxation
+    """``exc`` whose message gains the sentence of :func:`_smallest_bound_text` when it is
+    first shown (a verdict caught and dropped, e.g. in order selection, costs nothing)."""
+    text = str(exc)
+    return EmptyFeasibleSetError(
+        LazyText(lambda: _smallest_bound_text(text, problem_at, ob, prior, lin, spent)),
+        side=exc.side, first_index=exc.first_index, relaxation=exc.relaxation)
+
+
+def _smallest_bound_text(text, problem_at, ob, prior, lin, spent):
+    """``text`` with "the record allows no output bound below X": the relaxation
     (``method="lp"``) on ``problem_at(factor)`` (the record's problem with its output bound
     ``ob`` times ``factor``) at doubled, then bisected factors, each certified empty or not
     within the time left; only certified factors count, so X can only err low
@@ -55,13 +64,11 @@ def with_smallest_bound(exc, problem_at, ob, prior, lin, spent):
 
     low = lower_bound_words(ob, largest_empty_factor(empty_at, budget))
     if not low:
-        return exc
+        return text
     box = ("the gamma_box you gave" if prior.user_given else
            f"the backlash in {prior.limits()}")
     sentence = (f"The record allows no output error bound below {low} (the relaxation is "
                 f"still certified infeasible there, with {box} and the orders as they are).")
-    text = str(exc)  # before the checklist, whose first cause is the output bound
-    text = (text.replace(EMPTY_HINT, f"{sentence} {EMPTY_HINT}", 1) if EMPTY_HINT in text
+    # before the checklist, whose first cause is the output bound
+    return (text.replace(EMPTY_HINT, f"{sentence} {EMPTY_HINT}", 1) if EMPTY_HINT in text
             else f"{text} {sentence}")
-    return EmptyFeasibleSetError(text, side=exc.side, first_index=exc.first_index,
-                                 relaxation=exc.relaxation)

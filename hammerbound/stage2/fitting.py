@@ -65,19 +65,24 @@ def with_hints(exc, est, problem, data):
     scaled record and, for samples that are not an IOData, cross-validation cuts."""
     wider = smallest = ""
     if isinstance(exc, EmptyFeasibleSetError):
-        from .smallest_bound import smallest_output_factor, smallest_output_text
+        from .smallest_bound import LazyText, smallest_output_factor, smallest_output_text
 
-        smallest = smallest_output_text(problem, smallest_output_factor(problem))
+        # computed when the message is shown: a verdict caught and dropped costs nothing
+        smallest = LazyText(lambda: smallest_output_text(problem,
+                                                         smallest_output_factor(problem)))
         wider = widened_box_hint(problem, exc.relaxation)
-    hint = " ".join(h for h in (wider, smallest, box_hint(est, problem),
-                                assumptions(est, problem)) if h)
+    parts = [wider, smallest, box_hint(est, problem), assumptions(est, problem)]
     kw = {"side": exc.side, "first_index": exc.first_index, "relaxation": exc.relaxation} \
         if isinstance(exc, EmptyFeasibleSetError) else {}
     if isinstance(exc, EmptyFeasibleSetError) and data is None:
-        hint += (" If these samples were cut by a cross-validation splitter (e.g. "
-                 "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
-                 "IOData, which refuses such cuts.")
-    return type(exc)(f"{exc} {hint}", **kw)
+        parts.append("If these samples were cut by a cross-validation splitter (e.g. "
+                     "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
+                     "IOData, which refuses such cuts.")
+    first = str(exc)
+    if not isinstance(exc, EmptyFeasibleSetError):
+        return type(exc)(" ".join(h for h in (first, *map(str, parts)) if h), **kw)
+    return type(exc)(LazyText(lambda: " ".join(h for h in (first, *map(str, parts)) if h)),
+                     **kw)
 
 
 #: How much wider the a priori box is made (about its centre) to tell whether it, and not

@@ -52,3 +52,23 @@ def test_per_sample_bounds_are_stated_as_a_factor():
     data, _ = chapter_eiv_data(N=40, deta=0.05, dx=0.003, seed=0)
     problem = EIVProblem(**{**data, "output_bound": np.linspace(0.01, 0.02, 40)})
     assert "below 1.73 x these bounds" in smallest_output_text(problem, 1.7349)
+
+
+def test_the_figure_is_sought_only_when_the_message_is_shown(monkeypatch):
+    """Order selection drops the empty verdicts of its candidates: the search for the
+    figure (up to 10 s each) made a falsified grid 6x slower until it became lazy."""
+    import pickle
+
+    import hammerbound.stage2.smallest_bound as sb
+
+    calls = []
+    real = sb.smallest_output_factor
+    monkeypatch.setattr(sb, "smallest_output_factor",
+                        lambda problem: calls.append(1) or real(problem))
+    data, _ = chapter_eiv_data(N=80, deta=0.05, dx=0.003, seed=0, at_bound=True)
+    est = LinearEIVSetEstimator(output_bound=0.02, method="lp", steady_state_gain=1.0)
+    with pytest.raises(EmptyFeasibleSetError) as info:
+        est.fit(data["x"], data["y"], input_bound=0.003)
+    assert calls == []
+    assert re.search(PHRASE, str(info.value)) and calls == [1]
+    assert str(info.value) == str(pickle.loads(pickle.dumps(info.value))) and calls == [1]

@@ -375,9 +375,9 @@ def _advice(stopped_by_time, lps_stopped, box_given=False, pace=(0, 0.0)) -> str
     fixes = []
     if stopped_by_time:  # (LPs stopped at their own cap: the cause says what helps)
         cut, sec = pace
-        more = (f"; the limit cut {cut} leaf box(es) of the partition short, which at "
-                f"the pace of the others ({sec:.2g} s each on this machine) need about "
-                f"{cut * sec:.0f} s more to finish the partition" if cut else "")
+        more = (f"; the limit cut {cut} leaf box(es) of the partition short, and those "
+                f"tightened before it took about {sec:.2g} s each on this machine (more "
+                "time may also split the partition further)" if cut else "")
         fixes.append(f"give more time (total_time_limit{more})")
     elif not lps_stopped:
         fixes.append("use a record whose input reverses by more than the dead band")

@@ -134,3 +134,26 @@ def test_model_options_are_checked(fit_json, tmp_path, capsys, extra, said):
     rc = main(["diagnose", str(rec), "--output-bound", "0.1", *extra])
     assert rc == 2
     assert said in " ".join(capsys.readouterr().err.split())
+
+
+def test_an_unknown_initial_backlash_state_is_not_scored(fit_json, tmp_path, capsys):
+    """Re-check 51: a fit's own record was "certified" inconsistent with its central model,
+    which started the backlash at 0 where the record's state started elsewhere. The
+    samples any start can reach are not scored by default (said on stderr)."""
+    c = _centres(fit_json)
+    u = _steps(np.random.default_rng(6))
+    state = c["ml"] * (u[0] + c["cl"])  # the top of the first band, not 0
+    x = np.empty(u.size)
+    for t, v in enumerate(u):
+        state = max(c["mr"] * (v - c["cr"]), min(c["ml"] * (v + c["cl"]), state))
+        x[t] = state
+    y = lfilter([0.0, c["b1"], c["b2"]], [1.0, c["a1"], c["a2"]], x)
+    rec = _write(tmp_path / "new.csv", u, y)
+    args = ["diagnose", str(rec), "--model", str(fit_json), "--output-bound", "0.005",
+            "--refit", "none", "--json", "--candidates", "offset", "--max-effects", "1"]
+    main(args)
+    cap = capsys.readouterr()
+    assert json.loads(cap.out)["consistent_before"] is True
+    assert "the backlash's initial state is not known, so the first" in cap.err
+    main([*args, "--skip", "0"])
+    assert json.loads(capsys.readouterr().out)["consistent_before"] is False

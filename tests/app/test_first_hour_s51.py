@@ -92,6 +92,7 @@ def test_a_non_prbs_record_for_a_two_stage_envelope_points_to_one_record():
         bounds.transform(np.array([1.0, -1.0, 0.5]))
 
 
+@pytest.mark.deep
 def test_a_gain_plane_weight_of_order_two_follows_the_zero_at_steady_state():
     """Trial 19: on a lightly damped plant (poles 0.7 +- 0.2j, dt = 0.01 s) the order-2
     gain-plane weight had |W(1)| = 0.23 against a deviation bound of 0 there (the box's:

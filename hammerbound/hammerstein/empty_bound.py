@@ -23,7 +23,7 @@ __all__ = ["SMALLEST_BUDGET", "with_smallest_bound"]
 
 #: seconds the smallest-bound search of an empty verdict may take: twice the verdict's
 #: time, within these limits
-SMALLEST_BUDGET = (5.0, 30.0)
+SMALLEST_BUDGET = (2.0, 30.0)
 
 
 def with_smallest_bound(exc, problem_at, ob, prior, lin, spent):
@@ -42,7 +42,7 @@ def _smallest_bound_text(text, problem_at, ob, prior, lin, spent):
     within the time left; only certified factors count, so X can only err low
     (:func:`~hammerbound.stage2.smallest_bound.largest_empty_factor`). ``spent``: the
     seconds the verdict took (the search may take twice that, within
-    :data:`SMALLEST_BUDGET`, and each factor's relaxation twice that, at least 1 s: an
+    :data:`SMALLEST_BUDGET`, and each factor's relaxation twice that, at least 0.5 s: an
     emptiness the relaxation certifies comes about as fast as the verdict did)."""
     budget = min(SMALLEST_BUDGET[1], max(SMALLEST_BUDGET[0], 2.0 * spent))
     stop = time.time() + budget
@@ -57,7 +57,7 @@ def _smallest_bound_text(text, problem_at, ob, prior, lin, spent):
             warnings.simplefilter("ignore")  # (time limits ...) are not the user's
             try:
                 record_bounds(problem_at(factor), method="lp", n_jobs=lin.n_jobs,
-                              deadline=min(stop, time.time() + max(1.0, 2.0 * spent)))
+                              deadline=min(stop, time.time() + max(0.5, 2.0 * spent)))
             except EmptyFeasibleSetError:
                 return True
         return False  # not certified (a set, or the time ran out)

@@ -298,14 +298,26 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         feasible backlash, ``crossed_on_data_``, the fit warns: (22.1) is then not well
         posed there, and the levels rest on the lines the square waves showed).
         """
+        return self._admissible(*self._limits())
+
+    def _limits(self) -> tuple[float, float]:
+        """``(u_lo, crossing)``: the dead zone's largest edge and :meth:`crossing_limit`
+        (one search of the crossing for both)."""
         check_is_fitted(self, "left_")
         u_lo = max(self.left_.orthotope[1, 1], self.right_.orthotope[1, 1])
-        u_data = min(-self.input_range_[0], self.input_range_[1]) if self.well_posed_on_data else 0.0
-        lo_g, hi_g = self._geometric_prbs_range(u_lo)
-        if u_data > hi_g:
+        return u_lo, float(self._geometric_prbs_range(u_lo)[1])
+
+    def _tested(self) -> float:
+        """The largest amplitude the steady-state data reached on both sides."""
+        return float(min(-self.input_range_[0], self.input_range_[1]))
+
+    def _admissible(self, u_lo, crossing) -> tuple[float, float]:
+        """:meth:`admissible_prbs_range` from :meth:`_limits`."""
+        u_data = self._tested() if self.well_posed_on_data else 0.0
+        if u_data > crossing:
             # closed at u_data: the data show (22.1) well posed *at* +-U (strictly)
             return (u_lo, float(np.nextafter(u_data, np.inf)))
-        return (lo_g, hi_g)
+        return (u_lo, crossing)
 
     def crossed_for_every(self, u) -> bool:
         """Whether at input ``u`` the lines of *every* feasible backlash have crossed
@@ -320,9 +332,7 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         """The smallest PRBS level at which the two lines of some feasible backlash cross
         (``inf`` when none do): below it Result 1 holds for every feasible backlash on
         geometry alone, without ``well_posed_on_data``."""
-        check_is_fitted(self, "left_")
-        u_lo = max(self.left_.orthotope[1, 1], self.right_.orthotope[1, 1])
-        return float(self._geometric_prbs_range(u_lo)[1])
+        return self._limits()[1]
 
     def _geometric_prbs_range(self, u_lo):
         L, R = self.left_.vertices_mb, self.right_.vertices_mb
@@ -381,15 +391,15 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         returns ``(1 + margin) * 10 * u_lo``.
         """
         margin = as_real("margin", margin, lo=0.0, hi=1.0, example="0.25")
-        u_lo, u_hi = self.admissible_prbs_range()
+        u_lo, crossing = self._limits()
+        u_lo, u_hi = self._admissible(u_lo, crossing)
         if u_hi <= u_lo:
             raise ResultOneViolationError(
                 "no PRBS level satisfies Result 1 for every feasible backlash: the dead zone "
                 "and the line crossing overlap. Reduce the noise or add steady-state data."
             )
-        tested = float(min(-self.input_range_[0], self.input_range_[1]))
+        tested = self._tested()
         top = min(u_hi, tested) if tested > u_lo else u_hi
-        crossing = self.crossing_limit()
         if u_lo < crossing < top:  # before every feasible crossing when there is room
             top = crossing  # (trial 19: past it the central model cannot be simulated)
         if tested <= u_lo:  # review 49: this fell back to the old rule without a word

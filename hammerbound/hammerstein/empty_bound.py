@@ -15,7 +15,7 @@ import warnings
 
 from ..exceptions import EmptyFeasibleSetError
 from ..joint import record_bounds
-from ..joint.tighten import EMPTY_HINT
+from ..joint.tighten import before_checklist
 from ..stage2.smallest_bound import LazyText, largest_empty_factor, lower_bound_words
 
 __all__ = ["SMALLEST_BUDGET", "with_smallest_bound"]
@@ -69,6 +69,4 @@ def _smallest_bound_text(text, problem_at, ob, prior, lin, spent):
            f"the backlash in {prior.limits()}")
     sentence = (f"The record allows no output error bound below {low} (the relaxation is "
                 f"still certified infeasible there, with {box} and the orders as they are).")
-    # before the checklist, whose first cause is the output bound
-    return (text.replace(EMPTY_HINT, f"{sentence} {EMPTY_HINT}", 1) if EMPTY_HINT in text
-            else f"{text} {sentence}")
+    return before_checklist(text, sentence)  # whose first cause is the output bound

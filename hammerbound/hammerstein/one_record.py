@@ -18,7 +18,6 @@ from functools import partial
 
 import numpy as np
 
-from ..data.gain_sign import record_a1
 from ..data.validation import warn_bound_covers_output
 from ..exceptions import (
     DataValidationError,
@@ -52,6 +51,7 @@ from ..tables import bound_text, rounded_text
 from .default_box import search_default_box
 from .empty_bound import with_smallest_bound
 from .record_checks import (
+    record_a1_of,
     warn_dead_band_covers_record,
     warn_gain_sign,
     warn_inputs_off_zero,
@@ -249,8 +249,9 @@ def _scale_hint(problem, bounds, names, stopped_by_time=False) -> str:
     ``A(1) = 1 + sum a_i`` reach 0: the unit-gain normalisation (22.8) then leaves the scale
     between the slopes and ``B`` free (new-user trial 11: a plant with A(1) = 0.15 bounded
     nothing; with the a_i boxed so that A(1) >= 0.05 its backlash was bounded in 34 s).
-    Not when the time limit stopped the search or an a_i end is still at its a priori
-    limit: those intervals say nothing of the plant (review)."""
+    When the time limit stopped the search or an a_i end is still at its a priori limit,
+    those intervals say nothing of the plant (review): the record's least-squares A(1)
+    may be named instead (:func:`_slow_plant_hint`)."""
     if not names & {"ml", "mr"} or problem.na == 0:
         return ""
     a = bounds[: problem.na]
@@ -278,8 +279,7 @@ def _slow_plant_hint(problem) -> str:
     limits): a sentence if the record's least-squares fit has a small A(1), a *possible*
     reason (new-user trial 18: second-order plants with A(1) = 0.06 and 0.2 bounded
     nothing, and the warning blamed only the time limit)."""
-    a1 = record_a1(problem.u, problem.y, np.arange(1, problem.na + 1),
-                   b_lags_of(problem.nb, problem.nk))
+    a1 = record_a1_of(problem)
     if not a1 < SLOW_A1:
         return ""
     return (f"The record's least-squares fit has A(1) = 1 + a_1 + ... + a_na = {a1:.2g} (a "

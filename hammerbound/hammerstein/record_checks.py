@@ -9,20 +9,29 @@ import warnings
 
 import numpy as np
 
-from ..data.gain_sign import negative_gain_hint, record_gain
+from ..data.gain_sign import negative_gain_hint, record_a1, record_gain
 from ..exceptions import DataWarning, EmptyFeasibleSetError
-from ..joint.tighten import EMPTY_HINT
+from ..joint.tighten import before_checklist
 from ..relaxations.problem import b_lags_of
 from ..tables import rounded_text
 
-__all__ = ["record_gain_of", "warn_dead_band_covers_record", "warn_gain_sign",
+__all__ = ["record_a1_of", "record_gain_of", "warn_dead_band_covers_record", "warn_gain_sign",
            "warn_inputs_off_zero", "with_gain_sign"]
+
+
+def _lags(problem):
+    """The output and input lags of the model's orders (``1..na``, the ``b_j``'s)."""
+    return np.arange(1, problem.na + 1), b_lags_of(problem.nb, problem.nk)
 
 
 def record_gain_of(problem) -> float:
     """The record's least-squares gain (input -> output, the model's orders)."""
-    return record_gain(problem.u, problem.y, np.arange(1, problem.na + 1),
-                       b_lags_of(problem.nb, problem.nk))
+    return record_gain(problem.u, problem.y, *_lags(problem))
+
+
+def record_a1_of(problem) -> float:
+    """The record's least-squares ``A(1)`` (the model's orders)."""
+    return record_a1(problem.u, problem.y, *_lags(problem))
 
 
 def with_gain_sign(exc, problem):
@@ -33,11 +42,8 @@ def with_gain_sign(exc, problem):
         return exc
     # the likeliest cause first, before the general checklist (recheck 49: it came last
     # in a message of about 1300 characters)
-    text = str(exc)
-    text = (text.replace(EMPTY_HINT, f"{hint} {EMPTY_HINT}", 1) if EMPTY_HINT in text
-            else f"{text} {hint}")
-    return EmptyFeasibleSetError(text, side=exc.side, first_index=exc.first_index,
-                                 relaxation=exc.relaxation)
+    return EmptyFeasibleSetError(before_checklist(str(exc), hint), side=exc.side,
+                                 first_index=exc.first_index, relaxation=exc.relaxation)
 
 
 def warn_gain_sign(problem, res):

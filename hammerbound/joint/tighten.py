@@ -24,7 +24,7 @@ from .relaxation import build_relaxation, solve_lp
 from .warm import keyed_basis, start_from
 from .windows import window_problem, windows
 
-__all__ = ["obbt", "outer_leaves"]
+__all__ = ["before_checklist", "obbt", "outer_leaves"]
 
 # OBBT of the leaves: at most this many rounds, and stop when a round shrinks no width by
 # more than this fraction (measured on the chapter's record at N = 120: to the 1 % fixed
@@ -48,6 +48,15 @@ EMPTY_HINT = ("Likely causes, commonest first: (1) an output bound too small for
               "hold u = 0 (an offset, e.g. a valve's input in percent: shift u first, e.g. "
               "by the input at which the output rests, and y by that rest value; the model "
               "has no output offset either).")
+
+def before_checklist(text: str, sentence: str) -> str:
+    """``text`` (an empty verdict's message) with ``sentence`` put before its checklist
+    :data:`EMPTY_HINT` (the likelier or more telling statement first, recheck 49), or at
+    its end when it has none."""
+    if EMPTY_HINT in text:
+        return text.replace(EMPTY_HINT, f"{sentence} {EMPTY_HINT}", 1)
+    return f"{text} {sentence}"
+
 
 #: The first LP of a row's relaxation starts from the previous row's basis (carried over by
 #: keys where the relaxation changed, :mod:`.warm`), by the primal simplex; False: cold.

@@ -163,6 +163,15 @@ _INTEGER = re.compile(r"\s*[-+]?\d+")
 _DIGITS = re.compile(r"\d+(?:[eE][-+]?\d+)?\s*")
 
 
+def _check_rows(path, rows, width, read, delimiter) -> None:
+    """Every check of shifted values on the rows ``(lineno, row)``: more fields than
+    ``width`` (:func:`_check_width`) and a decimal comma into a usually empty column
+    (:func:`_check_shifts`; ``read``: the indices of the columns read)."""
+    for lineno, row in rows:
+        _check_width(path, lineno, row, width, delimiter)
+    _check_shifts(path, rows, read, delimiter)
+
+
 def _check_shifts(path, rows, read, delimiter) -> None:
     """A decimal comma can also shift values into a *named* column that is usually empty
     (``u,y,note``: ``2,38,3.5`` reads y = 38, recheck 49). Refused: a row of a
@@ -277,9 +286,7 @@ def _read_columns(path, columns, delimiter, names, text=None):
         width = _named_width(header)
         rows = [(lineno, row) for lineno, row in enumerate(reader, start=2)
                 if row and any(f.strip() for f in row)]
-        for lineno, row in rows:
-            _check_width(path, lineno, row, width, delimiter)
-        _check_shifts(path, rows, idx, delimiter)
+        _check_rows(path, rows, width, idx, delimiter)
         out = {c: [] for c in columns}
         for lineno, row in rows:
             for c, i in zip(columns, idx, strict=True):
@@ -405,9 +412,7 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
         )
     if not rows:
         raise DataValidationError(f"{path} has a header but no data rows.")
-    for ln, r in rows:
-        _check_width(path, ln, r, width, delimiter)
-    _check_shifts(path, rows, (ju, jy), delimiter)
+    _check_rows(path, rows, width, (ju, jy), delimiter)
     u, y, bad = [], [], []
     for ln, r in rows:
         try:

@@ -161,8 +161,7 @@ class IOData:
         t = cls._time_column(cols, t, (str(u), str(y)), "the frame", dt, PYTHON_NAMES)
         try:
             uu, yy = np.asarray(frame[u], dtype=float), np.asarray(frame[y], dtype=float)
-            tt = None if t is None else _column_seconds(frame[t], t, names)
-            stamps = t is not None and names.pop("_stamps", False)
+            tt, stamps = (None, False) if t is None else _column_seconds(frame[t], t, names)
         except KeyError as exc:
             raise DataValidationError(
                 f"column {exc} not found; the frame has {list(frame)}.") from None
@@ -390,29 +389,27 @@ def _columns_hint(X, func) -> str:
 
 
 def _column_seconds(column, name, names):
-    """A frame's time column as numbers: date-times (or their ISO text) as seconds from the
-    first and timedeltas as seconds, in the ``time_unit`` of ``names`` if one was given,
-    else "s" (a datetime column was read as nanoseconds: dt = 1e7 for 10 s steps, trial
-    18's follow-up); ``names["_stamps"]`` says that they were date-times."""
+    """A frame's time column as numbers, and whether it held date-times: date-times (or
+    their ISO text) as seconds from the first and timedeltas as seconds, in the
+    ``time_unit`` of ``names`` if one was given, else "s" (a datetime column was read as
+    nanoseconds: dt = 1e7 for 10 s steps, trial 18's follow-up)."""
     from .timebase import time_seconds
 
     values = np.asarray(column)
     if values.dtype.kind not in "mMOSU":
-        return np.asarray(values, dtype=float)
-    names["_stamps"] = True
+        return np.asarray(values, dtype=float), False
     if values.dtype.kind == "M" or (values.dtype.kind == "O" and hasattr(column, "dt")):
         values = np.asarray(getattr(column, "dt", None).tz_convert(None)
                             if getattr(getattr(column, "dt", None), "tz", None) is not None
                             else column, dtype="datetime64[ns]")
-        return _in_time_unit(((values - values[0]) / np.timedelta64(1, "s")).astype(float),
-                             names)
-    if values.dtype.kind == "m":
-        return _in_time_unit((values / np.timedelta64(1, "s")).astype(float), names)
-    secs, unit = time_seconds([str(v) for v in values], "the frame", name)
-    if unit is None:
-        names.pop("_stamps")
-        return secs
-    return _in_time_unit(secs, names)
+        secs = ((values - values[0]) / np.timedelta64(1, "s")).astype(float)
+    elif values.dtype.kind == "m":
+        secs = (values / np.timedelta64(1, "s")).astype(float)
+    else:
+        secs, unit = time_seconds([str(v) for v in values], "the frame", name)
+        if unit is None:
+            return secs, False
+    return _in_time_unit(secs, names), True
 
 
 #: seconds per time unit a column of date-times can be given in

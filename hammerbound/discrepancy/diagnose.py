@@ -29,7 +29,7 @@ def diagnose(
     *,
     candidates=None,
     refit: str = "linear",
-    skip: int = 0,
+    skip: int | str = "auto",
     max_delay: int = 10,
     grid_size: int = 24,
     window: int = 5,
@@ -49,8 +49,9 @@ def diagnose(
         returned by a previous :func:`diagnose` (to look for a second effect), or any
         object with ``.predict(u) -> y`` (a black box).
     u, y : array_like, or an IOData and None
-        Measured input and output, same length; the data are assumed to start from rest
-        (zero initial state) unless the first ``skip`` samples are excluded. Or an
+        Measured input and output, same length; the model is started at rest (zero
+        initial state) at the first sample, and the first ``skip`` samples are not scored.
+        Or an
         :class:`~hammerbound.IOData` in place of ``u`` (and no ``y``):
         ``diagnose(model, data, output_bound=0.02)``; its ``dt`` becomes the refined
         model's sampling time (it must agree with a model's own), its signal names and
@@ -70,8 +71,14 @@ def diagnose(
         black-box model - refitted by minimax with and without each candidate.
         ``"none"``: the model is taken as exact; only the candidate's parameter (and the
         offset for ``offset``) is fitted.
-    skip : int
+    skip : int or "auto"
         Number of initial samples excluded from every error (unknown initial state).
+        ``"auto"`` (default): 0, except for a model with a backlash (a
+        :class:`~hammerbound.HammersteinSystem` or a fitted identifier), whose initial
+        state is not known: then the samples up to where a start anywhere in its first
+        band moves the output by more than 1 % of ``output_bound`` (at most half the
+        record; :func:`~hammerbound.discrepancy.checks.initial_state_skip`). The report
+        says which (``skip``, ``skip_note``, the summary's ``scored samples`` line).
     max_delay : int
         Largest extra delay tried by ``delay`` (and lag examined in step 1).
     grid_size : int
@@ -124,7 +131,8 @@ def diagnose(
     """
     output_bound = renamed_value("diagnose", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, data = validate(model, u, y, output_bound, refit, skip)
+    s, u, y, bound, do_refit, skip, data, skip_note = validate(model, u, y, output_bound,
+                                                               refit, skip)
     names = candidate_names(candidates)
     max_delay = int_param("max_delay", max_delay, 1)
     max_delay = min(max_delay, u.size - skip - 2)
@@ -139,7 +147,7 @@ def diagnose(
                            window, coef_box, min_improvement, max_effects, bar)
     finally:
         bar.close()
-    return _of_central_model(model, report, do_refit)
+    return _of_central_model(model, replace(report, skip_note=skip_note), do_refit)
 
 
 #: What a verdict against a fitted set's central model does not say (new-user trial 17: a

@@ -78,7 +78,7 @@ def _best_lag(y, yh, max_lag):
     return best
 
 
-def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: int = 0,
+def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: int | str = "auto",
            window: int = 5, max_lag: int = 10, noise_bound=DEPRECATED) -> Disagreement:
     """Step 1: where and by how much does the model disagree with the data?
 
@@ -97,8 +97,8 @@ def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: 
     """
     output_bound = renamed_value("locate", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, _ = validate(model, u, y, output_bound, refit, skip,
-                                                 "locate")
+    s, u, y, bound, do_refit, skip, _, _ = validate(model, u, y, output_bound, refit, skip,
+                                                    "locate")
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin

@@ -275,6 +275,7 @@ class DiagnosisReport(Result):
     prediction_before: np.ndarray = field(repr=False, default=None)
     prediction_after: np.ndarray = field(repr=False, default=None)
     skip: int = 0
+    skip_note: str = ""
     effects_added: tuple = ()
     closest: tuple = ()
     closest_gap_removed: tuple = ()
@@ -328,6 +329,7 @@ class DiagnosisReport(Result):
         d = self.disagreement
         lines = [
             f"output bound             : {self.output_bound:.6g}",
+            f"scored samples           : {self._scored_text()}",
             f"nominal model max |error|: {d.nominal_gap:.6g} "
             f"({100 * d.nominal_fraction_outside:.1f}% of samples outside the band)",
             f"gap before (refit)       : {self.gap_before:.6g} "
@@ -365,6 +367,14 @@ class DiagnosisReport(Result):
         lines.append(self.message)
         return "\n".join(lines)
 
+    def _scored_text(self) -> str:
+        """Which samples every error counts, and the initial state they rest on."""
+        n = len(self.y) if self.y is not None else None
+        if not self.skip:
+            return f"all{'' if n is None else f' {n}'} (the model starts at rest, zero state)"
+        return (f"{self.skip}..{'' if n is None else n - 1} "
+                f"({self.skip_note or f'skip={self.skip}'})")
+
     def to_dict(self) -> dict:
         """JSON-serialisable summary (no signals; NaN and inf become None)."""
         d = self.disagreement
@@ -380,6 +390,8 @@ class DiagnosisReport(Result):
             "search_cost": {"seconds": self.search_seconds, "n_fits": self.n_fits,
                             "n_classes": self.n_combinations},
             "output_bound": self.output_bound,
+            "skip": self.skip,
+            "skip_note": self.skip_note,
             "gap_before": self.gap_before,
             "gap_before_certified_lower": d.gap_lower,
             "gap_after": self.gap_after,

@@ -21,7 +21,7 @@ from scipy.signal import lfilter
 from hammerbound import IOData
 from hammerbound.discrepancy import diagnose, locate
 from hammerbound.exceptions import DataValidationError, ParameterValidationError
-from hammerbound.systems import HammersteinSystem
+from hammerbound.systems import Backlash, HammersteinSystem
 from hammerbound.systems.experiments import chapter_system
 from hammerbound.tolerances import FEASIBILITY_RTOL
 
@@ -66,7 +66,9 @@ def _clipped(mode, seed=0):
 @pytest.mark.parametrize("mode", ["uniform", "at_bound"])
 def test_output_saturation_found_when_the_noise_exceeds_the_old_margin(mode):
     y = _clipped(mode)
-    rep = diagnose(chapter_system(), SAT_U, y, SAT_NB, candidates=["output_saturation"])
+    # the record starts at rest (u = 0 from x0 = 0): every sample is scored
+    rep = diagnose(chapter_system(), SAT_U, y, SAT_NB, candidates=["output_saturation"],
+                   skip=0)
     assert not rep.consistent_before
     assert rep.effect == "output_saturation", rep.summary()
     lo, hi = rep.candidate("output_saturation").value
@@ -387,3 +389,42 @@ def test_a_verdict_on_a_fitted_set_says_it_tests_the_central_model():
     assert "ident.output_envelope(u_prbs, y_prbs)" in of_set.message
     assert "procedure='one-record'" in of_set.message
     assert "fitted set's central model" not in of_model.message
+
+
+# --------------------------------------------------------------------------------------
+# the backlash's unknown initial state (skip="auto", the default)
+# --------------------------------------------------------------------------------------
+def _started_at_band_top():
+    """The chapter's system started at the top of its first band (not at 0), small steps
+    near u = 0 first (the state lingers there), then larger ones; exact output."""
+    rng = np.random.default_rng(3)
+    u = np.r_[np.full(30, 0.3), np.repeat(rng.uniform(-2, 2, 30), 8)]
+    ml, cl = GAMMA_TRUE[0], GAMMA_TRUE[1]
+    return u, hammerstein(u, GAMMA_TRUE, B_TRUE, A_TRUE, x0=ml * (u[0] + cl))
+
+
+def test_auto_skip_scores_no_sample_an_unknown_backlash_start_can_move():
+    """Python's diagnose scored a backlash model from x0 = 0 (only the CLI skipped): the
+    true model was called inconsistent with its own exact output started elsewhere."""
+    u, y = _started_at_band_top()
+    H = HammersteinSystem(Backlash(*GAMMA_TRUE), (A_TRUE, B_TRUE))
+    kw = dict(output_bound=0.01, refit="none", candidates=["offset"], max_effects=1)
+    rep = diagnose(H, u, y, **kw)
+    assert rep.consistent_before
+    assert 0 < rep.skip <= u.size // 2
+    assert f"so the first {rep.skip} samples are not scored" in rep.skip_note
+    assert f"scored samples           : {rep.skip}..{u.size - 1} (the backlash's" \
+        in rep.summary()
+    forced = diagnose(H, u, y, skip=0, **kw)
+    assert not forced.consistent_before
+    assert "scored samples           : all 270 (the model starts at rest" in forced.summary()
+    assert locate(H, u, y, output_bound=0.01, refit="none").gap_lower <= 0.01
+
+
+def test_auto_skip_is_zero_for_a_linear_model():
+    u = np.repeat(np.random.default_rng(4).uniform(-1, 1, 30), 8)
+    G = control.tf([0, 0.5], [1, -0.5], True)
+    y = lfilter([0, 0.5], [1, -0.5], u)
+    rep = diagnose(G, u, y, output_bound=0.01)
+    assert rep.skip == 0 and rep.skip_note == ""
+    assert diagnose(G, u, y, output_bound=0.01, skip=5).skip_note == "skip=5 given"

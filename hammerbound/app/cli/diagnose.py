@@ -144,7 +144,7 @@ def run(args) -> int:
         check_output_file(args.plot, force=args.force, option="--plot")
     data = read_record(args)
     G = _model(args)
-    skip = args.skip if args.skip is not None else _initial_state_skip(G, data.u, bound)
+    skip = "auto" if args.skip is None else args.skip
     cands = None if args.candidates is None else (
         "all" if args.candidates.strip() == "all" else
         [c.strip() for c in args.candidates.split(",") if c.strip()])
@@ -185,44 +185,6 @@ def _model(args):
     n = max(A.size, B.size)
     # dt=True (not given): the diagnosis takes the record's dt
     return control.tf(np.r_[B, np.zeros(n - B.size)], np.r_[A, np.zeros(n - A.size)], True)
-
-
-#: the backlash's unknown start may move the output by this fraction of the output bound
-#: in the samples that are scored
-START_EFFECT = 0.01
-
-
-def _initial_state_skip(model, u, bound) -> int:
-    """Samples not scored by default for a model with a backlash, whose initial state is
-    not known (a one-record fit leaves it free): the model's output from the two ends of
-    its first band (the play operator is monotone in its start, so every start lies
-    between) differs by more than :data:`START_EFFECT` of the output bound up to there; at
-    most half the record; said on stderr. Re-check 51: a fit's own record was "certified"
-    inconsistent with its central model started at x0 = 0 (error 0.084 against 0.0501;
-    from x0 = 0.046 it fitted)."""
-    from scipy.signal import lfilter
-
-    from ...systems.models import play_lines
-
-    system = getattr(model, "system_", model)
-    backlash = getattr(system, "backlash", None)
-    if backlash is None:
-        return 0
-    ml, cl, mr, cr = backlash.gamma
-    R, L = mr * (u - cr), ml * (u + cl)
-    effect = np.abs(lfilter(system.B, system.A, play_lines(R, L, L[0]) - play_lines(R, L, R[0])))
-    late = np.flatnonzero(effect > START_EFFECT * float(bound))
-    need = 0 if late.size == 0 else int(late[-1]) + 1
-    skip = min(need, u.size // 2)
-    if skip:
-        capped = (f" (capped at half the record: its start still moves the output by "
-                  f"{float(np.max(effect[skip:])):.3g} after it)" if skip < need else "")
-        print(f"hammerbound diagnose: note: the backlash's initial state is not known, so "
-              f"the first {skip} samples are not scored{capped}: up to there a start "
-              f"elsewhere in its first band moves the output by more than "
-              f"{START_EFFECT:g} of the output bound. Pass --skip 0 to score every sample "
-              "from x0 = 0.", file=sys.stderr)
-    return skip
 
 
 def _plot(rep, path):

@@ -395,6 +395,8 @@ def _column_seconds(column, name, names):
     nanoseconds: dt = 1e7 for 10 s steps, trial 18's follow-up)."""
     from .timebase import time_seconds
 
+    if hasattr(getattr(column, "dt", None), "to_timestamp"):  # periods: their start times
+        column = column.dt.to_timestamp()  # (cast directly, they were cut to days)
     values = np.asarray(column)
     if values.dtype.kind not in "mMOSU":
         return np.asarray(values, dtype=float), False

@@ -230,15 +230,16 @@ def test_a_named_time_column_in_a_semicolon_file_names_the_separator(tmp_path, c
     assert "the header seems separated by ';'; pass --delimiter ';'" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("kind", ["datetime", "text", "timedelta", "tz"])
+@pytest.mark.parametrize("kind", ["datetime", "text", "timedelta", "tz", "period"])
 def test_a_frames_date_time_column_is_read_in_seconds(kind):
     """A datetime column of a DataFrame was read as nanoseconds: dt = 1e7 for steps of
-    10 s, without a word."""
+    10 s, without a word; a column of periods was cut to days (review 51)."""
     pd = pytest.importorskip("pandas")
     stamps = pd.Series(pd.date_range("2024-03-05 08:00", periods=U.size, freq="10s"))
     column = {"datetime": stamps, "text": stamps.astype(str),
               "timedelta": stamps - stamps[0],
-              "tz": stamps.dt.tz_localize("Europe/Berlin")}[kind]
+              "tz": stamps.dt.tz_localize("Europe/Berlin"),
+              "period": stamps.dt.to_period("10s")}[kind]
     data = hb.IOData.from_frame(pd.DataFrame({"timestamp": column, "u": U, "y": Y}))
     assert data.dt == 10.0 and data.time_unit == "s"
 

@@ -326,14 +326,30 @@ def certify_weight(W, bounds, na, b_lags, dt=1.0, kind="multiplicative",
     return _certify(W, grid, _REFINE_FACTOR * int(n_grid))[0]
 
 
-def _unbounded_message(kind):
-    why = ("some A in the parameter box vanishes on the unit circle (0 is in its value set)"
-           if kind == "additive" else
-           "some A in the parameter box, or the central numerator B0, vanishes on (or too "
-           "near) the unit circle, where G/G0 - 1 is unbounded")
-    fix = "" if kind == "additive" else " or use kind='additive'"
-    return (f"the {kind} uncertainty cannot be bounded: {why}, so no finite weight exists. "
-            f"Narrow the set (more data, method='exact'){fix}.")
+def _unbounded_message(kind, grid):
+    """Why no finite weight exists, at which frequency, and what helps (new-user trial 20:
+    a fit 2e-7 wide with its central zero at z = -1.0000001 was told to narrow the set)."""
+    bad = ~np.isfinite(grid.dev)
+    bad[:-1] |= ~np.isfinite(grid.between())
+    i = int(np.flatnonzero(bad)[0]) if bad.any() else 0
+    w, d = grid.omega[i], grid.data
+    at = f"near w = {w:.4g} rad/{'s' if grid.dt != 1.0 else 'sample'}"
+    # which polynomial is nearer 0 there, relative to its size
+    a_near = d["amin"][i] / max(d["amax"][i], 1e-300) <= d["b0"][i] / max(d["bmax"][i], 1e-300)
+    if kind == "additive" or d["amin"][i] == 0 or a_near:
+        return (f"the {kind} uncertainty cannot be bounded: some A in the parameter box "
+                f"vanishes on (or too near) the unit circle {at} (0 is in its value set), "
+                "so no finite weight exists. Narrow the set (more data, method='exact').")
+    z = np.exp(1j * w * grid.dt)
+    zs = "z = -1, the Nyquist frequency" if np.isclose(z.real, -1) else \
+        ("z = 1" if np.isclose(z.real, 1) else f"z = {z.real:.4g}{z.imag:+.4g}j")
+    return (f"the multiplicative uncertainty cannot be bounded: the central numerator B0 "
+            f"vanishes on (or too near) the unit circle {at} ({zs}; |B0| = "
+            f"{d['b0'][i]:.3g} there, while every A of the box stays at least "
+            f"{d['amin'][i]:.3g} from 0), where G/G0 - 1 is unbounded or too large to "
+            "certify; a narrower set does not move that zero. A zero there is common in "
+            "sampled plants (equal b_j put it at z = -1). "
+            "Use kind='additive': |G - G0| stays bounded there.")
 
 
 def _check_fit_args(order, margin, n_grid):
@@ -423,7 +439,7 @@ def fit_weight(bounds, na, b_lags, central_tf, dt=1.0, kind="multiplicative", or
     dev = deviation_bound(bounds, na, b_lags, w, dt, kind, gain=gain)
     grid = _ProofGrid.uniform(bounds, na, b_lags, dt, kind, n_grid, gain)
     if not (np.all(np.isfinite(dev)) and grid.finite()):
-        raise UnboundedSetError(_unbounded_message(kind))
+        raise UnboundedSetError(_unbounded_message(kind, grid))
     floor = 1e-6 * max(float(np.max(dev)), 1e-300)
     fit = {"w": w, "target": np.maximum(dev * (1 + margin), floor),
            "floored": np.maximum(dev, floor)}

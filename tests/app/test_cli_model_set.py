@@ -139,8 +139,11 @@ def test_finite_intervals_without_a_finite_weight_still_give_the_set(tmp_path, c
     out = tmp_path / "set.json"
     rc = _run("eiv", str(_wide_csv(tmp_path)), "--na", "1", "--nb", "1", "--output-bound",
               "0.3", "--method", "lp", "--model-set", str(out))
-    capsys.readouterr()
+    err = " ".join(capsys.readouterr().err.split())
     assert rc == 0
+    # said on stderr too (new-user trial 20: only the file's no_weight said it)
+    assert "the model set's multiplicative weight is null: the multiplicative" in err
+    assert "the model set's additive weight is null" in err
     ms = json.loads(out.read_text())
     assert ms["lower"][0] == pytest.approx(-1.0)
     assert ms["box"]["uncertainty_weights"] == {"multiplicative": None, "additive": None}

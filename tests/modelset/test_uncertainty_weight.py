@@ -193,3 +193,24 @@ def test_poles_near_the_circle_are_certified(fits):
     assert np.all(np.diff(cert.omega) > 0) and cert.omega[-1] == pytest.approx(np.pi / DT)
     small = uw.W * 0.9
     assert not certify_weight(small, est.bounds_, 2, [1, 2], DT, "multiplicative").holds
+
+
+def test_a_central_zero_at_nyquist_names_itself_and_the_additive_weight():
+    """New-user trial 20: b1 = b2 puts the central zero at z = -1; the multiplicative weight
+    was refused with "narrow the set", although the set was 2e-7 wide."""
+    import control
+
+    from hammerbound.exceptions import UnboundedSetError
+    from hammerbound.modelset.uncertainty import fit_weight
+
+    theta = np.array([-1.5, 0.7, 0.1, 0.1])
+    bounds = np.column_stack([theta - 1e-7, theta + 1e-7])
+    G0 = control.tf([0, 0.1, 0.1], [1, -1.5, 0.7], DT)
+    with pytest.raises(UnboundedSetError) as err:
+        fit_weight(bounds, 2, [1, 2], G0, dt=DT, kind="multiplicative")
+    text = str(err.value)
+    assert "the central numerator B0 vanishes on (or too near) the unit circle" in text
+    assert "z = -1, the Nyquist frequency" in text and "kind='additive'" in text
+    assert "Narrow the set" not in text
+    W = fit_weight(bounds, 2, [1, 2], G0, dt=DT, kind="additive")
+    assert W.certificate.holds

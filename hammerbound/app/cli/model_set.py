@@ -57,6 +57,9 @@ def _sets(lin, on_gain_plane) -> dict:
             weights[kind] = lin.uncertainty_weight(kind, on_gain_plane=on_gain_plane).to_dict()
         except UnboundedSetError as exc:  # no finite weight of this kind: its own reason
             weights[kind], why[kind] = None, str(exc)
+            plane = " on the gain plane" if on_gain_plane else ""
+            warnings.warn(f"the model set's {kind} weight{plane} is null: {exc}",
+                          UserWarning, stacklevel=2)  # said on stderr, not only in the file
     out = {"frequency_envelope": env.to_dict(), "uncertainty_weights": weights}
     if why:
         out["no_weight"] = why

@@ -30,19 +30,26 @@ class RecordProgress:
         self.t0 = time.perf_counter()
         self.bar = None
         self.name, self.total, self.count = "", 0, 0
+        self.every, self.last, self.last_line = 0.0, True, self.t0
 
     def line(self, text: str) -> None:
         """One line: ``one-record: <text> [<seconds since the start> s]``."""
         if self.enabled:
-            print(f"one-record: {text} [{time.perf_counter() - self.t0:.1f} s]",
+            self.last_line = time.perf_counter()
+            print(f"one-record: {text} [{self.last_line - self.t0:.1f} s]",
                   file=self.file, flush=True)
 
-    def start(self, name: str, total: int) -> None:
-        """A stage of ``total`` items (closing the previous one)."""
+    def start(self, name: str, total: int, *, every: float = 0.0, last: bool = True) -> None:
+        """A stage of ``total`` items (closing the previous one). In line mode an item's
+        line is written only ``every`` seconds after the last line (the stage's last item
+        always, unless not ``last``: a summary line follows then): a generation of the
+        partition ran 91 s without a word, and 71 leaves cut by the deadline took 71 lines
+        in the same instant (new-user trial 20)."""
         if not self.enabled:
             return
         self.close()
         self.name, self.total, self.count = name, int(total), 0
+        self.every, self.last = float(every), bool(last)
         if self.bars:
             from tqdm.auto import tqdm
 
@@ -56,7 +63,10 @@ class RecordProgress:
         self.count += 1
         if self.bar is not None:
             self.bar.update(1)
-        else:
+            return
+        final = self.count >= self.total
+        due = time.perf_counter() - self.last_line >= self.every
+        if (final and self.last) or (due and not final):
             self.line(f"{self.name} {self.count}/{self.total}" + (f": {what}" if what else ""))
 
     def close(self) -> None:

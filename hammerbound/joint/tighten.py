@@ -31,6 +31,8 @@ __all__ = ["before_checklist", "obbt", "outer_leaves"]
 # point took 1745 LPs, most of them shrinking boxes by a few per cent per round)
 LEAF_ROUNDS = 6
 LEAF_SHRINK = 0.05
+#: seconds between two progress lines of a stage's items when not on a terminal
+PROGRESS_EVERY = 5.0
 # on a long record, the partition tightens its boxes over the windows only (one round) and
 # the leaves get LEAF_ROUNDS rounds over the windows before those over the whole record
 # (:mod:`.windows`; measured on the chapter's random-step record, N = 1000, Delta eta =
@@ -259,9 +261,13 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
                 progress.line(f"partition stopped by the time limit, {len(out + queue)} "
                               "part(s) kept as they are")
             return out + queue
-        done = map_jobs(part, [(problem, b, rows, deadline) for b in queue], n_jobs,
-                        deadline=deadline)
         generation += 1
+        if progress is not None:  # its summary line follows
+            progress.start(f"partition generation {generation}, part", len(queue),
+                           every=PROGRESS_EVERY, last=False)
+        done = map_jobs(part, [(problem, b, rows, deadline) for b in queue], n_jobs,
+                        deadline=deadline, each=None if progress is None
+                        else lambda _r: progress.done())
         n_tightened, n_done = len(done), len(out)
         queue = []
         for b, _points, n_stopped in done:
@@ -278,6 +284,7 @@ def _partition(problem, prior, parts, deadline, n_jobs=1, on_stop=None, progress
             else:
                 out.append(b)
         if progress is not None:
+            progress.close()
             empty = sum(b is None for b, _, _ in done)
             progress.line(f"partition generation {generation}: {n_tightened} part(s) "
                           f"tightened, {empty} certified empty, {len(out) - n_done} kept, "
@@ -335,15 +342,20 @@ def outer_leaves(problem: RecordProblem, box=None, *, parts=8, deadline=None,
         parts = 1  # one line only is ever active: nothing can tell the dead bands apart
     todo = _partition(problem, prior, parts, deadline, n_jobs, on_stop, progress)
     if progress is not None:
-        progress.start("leaf", len(todo))
+        progress.start("leaf", len(todo), every=PROGRESS_EVERY)
     done = map_jobs(_leaf_obbt, [(problem, b, deadline) for b in todo], n_jobs,
                     deadline=deadline,
                     each=None if progress is None
                     else lambda r: progress.done(_leaf_outcome(r)))
-    if progress is not None:
-        progress.close()
     in_time = [sec for *_, late, sec in done if not late]
     cut = len(done) - len(in_time)
+    if progress is not None:
+        progress.close()
+        said = [_leaf_outcome(r) for r in done]
+        progress.line(f"leaves: {said.count('tightened')} tightened, "
+                      f"{said.count('certified empty')} certified empty, "
+                      f"{len(said) - said.count('tightened') - said.count('certified empty')}"
+                      " cut short by the time limit")
     if on_pace is not None and cut and in_time:
         on_pace(cut, float(np.mean(in_time)))
     out = []

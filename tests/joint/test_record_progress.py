@@ -34,7 +34,12 @@ def test_lp_fit_shows_partition_and_leaves_on_stderr_only(capsys):
     assert gens and gens[0].startswith("one-record: partition generation 1: 1 part(s)")
     leaves = [ln for ln in lines if re.match(r"one-record: leaf \d+/\d+", ln)]
     n = int(re.match(r"one-record: leaf \d+/(\d+)", leaves[0]).group(1))
-    assert len(leaves) == n and leaves[-1].startswith(f"one-record: leaf {n}/{n}")
+    # a line at most every few seconds, the last leaf always, then what they came to
+    assert 1 <= len(leaves) <= n and leaves[-1].startswith(f"one-record: leaf {n}/{n}")
+    said = [ln for ln in lines if ln.startswith("one-record: leaves: ")]
+    counts = re.match(r"one-record: leaves: (\d+) tightened, (\d+) certified empty, (\d+) "
+                      r"cut short by the time limit", said[0]).groups()
+    assert len(said) == 1 and sum(map(int, counts)) == n
     _fit(u, y, "lp", False)
     assert capsys.readouterr() == ("", "")  # default: silent
 
@@ -64,7 +69,7 @@ def test_cli_progress_goes_to_stderr_and_json_stays_clean(capsys, tmp_path):
                "--nb", "2", "--nk", "1", "--method", "lp", "--progress", "--json"])
     out, err = capsys.readouterr()
     assert rc == 0 and json.loads(out)["procedure"] == "one-record"
-    assert "one-record: partition generation 1" in err and "one-record: leaf 1/" in err
+    assert "one-record: partition generation 1" in err and "one-record: leaves: " in err
 
 
 def test_lines_after_the_deadline_do_not_claim_work():
@@ -88,3 +93,28 @@ def test_lines_after_the_deadline_do_not_claim_work():
     assert _end_outcome("a1 min", idle, ahead) == "a1 min, status limit, 0 nodes"
     assert _end_outcome("a1 min", SimpleNamespace(status="limit", nodes=5), gone) == (
         "a1 min, status limit, 5 nodes")
+
+
+def test_item_lines_come_every_few_seconds_and_the_last_always(monkeypatch):
+    """New-user trial 20: a generation of the partition ran 91 s without a line, and 71
+    leaves cut by the deadline took 71 lines in the same instant."""
+    import io
+
+    from hammerbound.joint import progress as P
+
+    now = [0.0]
+    monkeypatch.setattr(P.time, "perf_counter", lambda: now[0])
+    out = io.StringIO()
+    bar = P.RecordProgress(True, file=out)  # not a terminal: plain lines
+    bar.start("leaf", 4, every=5.0)
+    for t in (1.0, 2.0, 7.0, 8.0):  # only the one due (5 s after the start) and the last
+        now[0] = t
+        bar.done("tightened")
+    assert out.getvalue().splitlines() == ["one-record: leaf 3/4: tightened [7.0 s]",
+                                           "one-record: leaf 4/4: tightened [8.0 s]"]
+    out.truncate(0), out.seek(0)
+    bar.start("partition generation 2, part", 3, every=5.0, last=False)
+    for t in (9.0, 14.0, 30.0):  # the last has its summary line instead
+        now[0] = t
+        bar.done()
+    assert out.getvalue() == "one-record: partition generation 2, part 2/3 [14.0 s]\n"

@@ -281,7 +281,8 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         # a partial of a module-level function (not a closure): the fitted identifier
         # pickles (joblib.dump, pickle), as the two-stage one does
         sampler = partial(joint_samples, f.problem, f.result.root_box,
-                          [i.point for i in f.result.infos])
+                          [i.point for i in f.result.infos],
+                          progress=bool(getattr(lin, "progress", False)))
 
         ends_theta, ends_gamma = in_param_order(f.result.infos, f.problem.p)
         self.linear_ = LinearBlockView(

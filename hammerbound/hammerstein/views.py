@@ -11,6 +11,8 @@ the compensator and the report work on it unchanged. Samples are drawn *jointly*
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..data.validation import as_bound
@@ -168,26 +170,78 @@ class BacklashBoxView:
         return self._sampler(n, random_state)
 
 
+@dataclass(frozen=True)
 class JointSamples:
-    """Certified points of the one-record set: rows of ``theta``, ``gamma``, ``z0``."""
+    """Certified points of the one-record set, each with its witness: the fields of
+    :class:`~hammerbound.modelset.sampling.CertifiedSamples` (new-user trial 20: the model
+    set's docs read ``max_violation``, ``tol`` and ``eta``, which a one-record fit's samples
+    lacked), and the backlash that goes with each row.
 
-    def __init__(self, witnesses):
-        self.theta = np.array([w.theta for w in witnesses])
-        self.gamma = np.array([w.gamma for w in witnesses])
-        self.z0 = np.array([w.z0 for w in witnesses])
-        self.max_rel_violation = np.array([w.max_rel_violation for w in witnesses])
+    Attributes
+    ----------
+    theta : ndarray (n, p)
+        The linear block, columns in :attr:`param_names` order.
+    param_names : tuple of str
+    gamma : ndarray (n, 4)
+        The backlash ``(m_l, c_l, m_r, c_r)`` of each row.
+    z0 : ndarray (n,)
+        The first inner value ``x_0`` (in the band ``[R_0, L_0]``).
+    x : ndarray (n, N)
+        The inner signal: the play operator from ``z0`` (the witness's backlash output).
+    eta : ndarray (n, N)
+        Witness output errors (``|eta| <= output_bound``).
+    dx : ndarray (n, 0)
+        No input errors: the input of a one-record fit is known exactly.
+    max_violation : ndarray (n,)
+        Largest equation residual at the witness over that equation's terms; ``<= tol``.
+    max_rel_violation : ndarray (n,)
+        The same over its tolerance (``max_violation / tol``, ``<= 1``).
+    gain_residual : ndarray (n,)
+        ``|B(1) - A(1)|`` (the unit gain (22.8)).
+    tol : float
+        The relative feasibility tolerance (``FEASIBILITY_RTOL``).
+    n_tries : int
+        Random starts taken to the set (the seeds not counted).
+    """
+
+    theta: np.ndarray
+    param_names: tuple
+    gamma: np.ndarray
+    z0: np.ndarray
+    x: np.ndarray
+    eta: np.ndarray
+    dx: np.ndarray
+    max_violation: np.ndarray
+    max_rel_violation: np.ndarray
+    gain_residual: np.ndarray
+    tol: float
+    n_tries: int = 0
+
+    @classmethod
+    def of(cls, witnesses, param_names, na, n_tries=0):
+        from ..tolerances import FEASIBILITY_RTOL
+
+        theta = np.array([w.theta for w in witnesses])
+        rel = np.array([w.max_rel_violation for w in witnesses])
+        a_one = 1.0 + np.sum(theta[:, :na], axis=1)
+        return cls(theta, tuple(param_names), np.array([w.gamma for w in witnesses]),
+                   np.array([w.z0 for w in witnesses]), np.array([w.x for w in witnesses]),
+                   np.array([w.eta for w in witnesses]), np.zeros((len(witnesses), 0)),
+                   rel * FEASIBILITY_RTOL, rel,
+                   np.abs(np.sum(theta[:, na:], axis=1) - a_one), FEASIBILITY_RTOL, n_tries)
 
     def __len__(self):
         return self.theta.shape[0]
 
 
-def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None):
+def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None, progress=False):
     """``n`` verified points of the one-record set inside ``box``.
 
     Random points of the box (and the seeds, the interval ends' witnesses) are taken to the
     set by the local search (:func:`hammerbound.joint.local.restore`); only points that
     :func:`hammerbound.joint.verify_point` accepts are kept. Spread over the set, neither
-    uniform nor independent.
+    uniform nor independent. Each random start costs a local search (about a second at
+    N = 350, new-user trial 20); ``progress`` counts them on stderr.
 
     Raises
     ------
@@ -196,17 +250,22 @@ def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None):
     """
     from ..exceptions import SolverError
     from ..joint.local import restore
+    from ..joint.progress import RecordProgress
 
     rng = np.random.default_rng(random_state)
     out = [w for w in seeds if w is not None][:n]
     tries, max_tries = 0, (max_tries or 20 * n)
+    bar = RecordProgress(progress)
+    bar.start("sample", n - len(out), every=5.0)
     while len(out) < n and tries < max_tries:
         tries += 1
         v = box[:, 0] + (box[:, 1] - box[:, 0]) * rng.random(box.shape[0])
         w = restore(problem, v, box, max_iter=12)
         if w is not None:
             out.append(w)
+            bar.done(f"{tries} start(s)")
+    bar.close()
     if len(out) < n:
         raise SolverError(f"only {len(out)} of {n} points of the one-record set were "
                           f"verified in {tries} attempts; ask for fewer samples.")
-    return JointSamples(out)
+    return JointSamples.of(out, problem.theta_names, problem.na, tries)

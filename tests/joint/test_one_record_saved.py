@@ -60,6 +60,27 @@ def test_a_fitted_one_record_identifier_is_saved_and_used_again(fitted, how):
     np.testing.assert_array_equal(a.gamma, b.gamma)
 
 
+def test_one_record_samples_carry_the_model_sets_fields_and_check_out(fitted):
+    """New-user trial 20: the model set's docs read max_violation, tol and eta, which a
+    one-record fit's samples lacked. Each row is checked here with the tests' own play
+    operator and recursion: its inner signal, errors within the bound, equations met."""
+    f, u, y = fitted
+    gamma_s, theta_s = f.sample(4, random_state=1)
+    assert gamma_s is theta_s and len(theta_s) == 4
+    assert theta_s.param_names == ("a1", "b1", "b2")
+    assert np.all(theta_s.max_violation <= theta_s.tol) and theta_s.dx.shape == (4, 0)
+    for th, g, z0, x, eta in zip(theta_s.theta, theta_s.gamma, theta_s.z0, theta_s.x,
+                                 theta_s.eta, strict=True):
+        np.testing.assert_allclose(x, play(u, *g, x0=z0), rtol=0, atol=1e-12)
+        assert np.max(np.abs(eta)) <= 0.02 * (1 + 1e-9)
+        w = y - eta  # (y_t - eta_t) + a1 (y_{t-1} - eta_{t-1}) = b1 x_{t-1} + b2 x_{t-2}
+        res = w[2:] + th[0] * w[1:-1] - th[1] * x[1:-1] - th[2] * x[:-2]
+        assert np.max(np.abs(res)) <= 1e-6
+    np.testing.assert_allclose(theta_s.gain_residual,
+                               np.abs(theta_s.theta[:, 1:].sum(1) - 1 - theta_s.theta[:, 0]),
+                               rtol=0, atol=1e-12)
+
+
 def test_a_reverse_acting_plant_is_named_in_the_one_record_empty_verdict():
     u, y = _record(sign=-1.0)
     with pytest.raises(EmptyFeasibleSetError) as err:

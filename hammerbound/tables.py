@@ -141,30 +141,36 @@ def outward_text(v: float, fmt: str, side: int) -> str:
 
 
 def interval_text(names, bounds, status=None, *, title=None, digits=4) -> str:
-    """Fixed-width text table of the intervals (the ``summary()`` of estimators)."""
+    """Fixed-width text table of the intervals (the ``summary()`` of estimators); the
+    number columns widen to their longest entry (new-user trial 20: intervals 1e-7 wide,
+    printed with 9 decimals, shifted the columns)."""
     recs = interval_records(names, bounds, status)
     w = max([len(r["parameter"]) for r in recs] + [9])
-    cw = digits + 7
+    cells = [_number_cells(r, digits) for r in recs]
+    cw = max([digits + 7] + [len(c) for row in cells for c in row])
     lines = [] if title is None else [title]
     lines.append(f"{'parameter':<{w}} {'lower':>{cw}} {'centre':>{cw}} {'upper':>{cw}} "
                  f"{'half-width':>{cw}}  status")
-    for r in recs:
-        # a row whose numbers are all below 0.01 (e.g. a slope in m3/s per %) in
-        # scientific notation: fixed decimals would print it as 0.0000
-        mag = max(abs(r["lower"]), abs(r["upper"]))
-        fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
-        hw = r["half_width"]
-        if fmt.endswith("f") and np.isfinite(hw) and 0 < hw < 10.0 ** (1 - digits):
-            # a narrow interval keeps two digits of its half-width (up to 10 decimals):
-            # rounded outward to 4 decimals, a width of 3e-7 read 0.9999 .. 1.0001
-            # (recheck 49)
-            fmt = f"{max(digits, min(10, 1 - int(np.floor(np.log10(hw)))))}f"
-        # an unbounded interval has no centre: "-", not "nan" or "inf"; the ends round
-        # outward and the half-width up, so the printed interval holds the certified one
-        # (to nearest, a lower end 0.24636 read 0.2464: a truth at 0.24638 looked outside)
-        nums = " ".join(f"{'-':>{cw}}" if np.isnan(r[c]) else
-                        f"{outward_text(r[c], fmt, side):>{cw}}"
-                        for c, side in (("lower", -1), ("centre", 0), ("upper", 1),
-                                        ("half_width", 1)))
+    for r, row in zip(recs, cells, strict=True):
+        nums = " ".join(f"{c:>{cw}}" for c in row)
         lines.append(f"{r['parameter']:<{w}} {nums}  {r['status']}")
     return "\n".join(lines)
+
+
+def _number_cells(r, digits) -> list[str]:
+    """Lower, centre, upper and half-width of one interval record as text."""
+    # a row whose numbers are all below 0.01 (e.g. a slope in m3/s per %) in
+    # scientific notation: fixed decimals would print it as 0.0000
+    mag = max(abs(r["lower"]), abs(r["upper"]))
+    fmt = f"{digits - 1}e" if np.isfinite(mag) and 0 < mag < 0.01 else f"{digits}f"
+    hw = r["half_width"]
+    if fmt.endswith("f") and np.isfinite(hw) and 0 < hw < 10.0 ** (1 - digits):
+        # a narrow interval keeps two digits of its half-width (up to 10 decimals):
+        # rounded outward to 4 decimals, a width of 3e-7 read 0.9999 .. 1.0001
+        # (recheck 49)
+        fmt = f"{max(digits, min(10, 1 - int(np.floor(np.log10(hw)))))}f"
+    # an unbounded interval has no centre: "-", not "nan" or "inf"; the ends round
+    # outward and the half-width up, so the printed interval holds the certified one
+    # (to nearest, a lower end 0.24636 read 0.2464: a truth at 0.24638 looked outside)
+    return ["-" if np.isnan(r[c]) else outward_text(r[c], fmt, side)
+            for c, side in (("lower", -1), ("centre", 0), ("upper", 1), ("half_width", 1))]

@@ -149,10 +149,14 @@ class LinearModelMixin:
         mask = np.ones(B.size, bool)
         mask[keep] = False
         if np.any(extra_a != 0) or np.any(B[mask] != 0):
+            # new-user trial 20 gave [b1, b2] for [0, b1, b2]
+            lead = ("" if self._nk() == 0 or B.size == 0 or B[0] == 0 else
+                    f" B is in powers of q^-1 from q^0: B[0] is b0, which a delay "
+                    f"nk={self._nk()} makes 0: B = [0, ..., b{lags[0]}, ...].")
             raise ParameterValidationError(
                 f"the model has coefficients outside this structure (na={na}, nb={self.nb}, "
-                f"nk={self._nk()}: A = {A.tolist()}, B = {B.tolist()}); pass theta in order "
-                f"{self.param_names_} instead.")
+                f"nk={self._nk()}: A = {A.tolist()}, B = {B.tolist()}).{lead} Or pass theta "
+                f"in order {self.param_names_}.")
         return np.concatenate([a, b])
 
     def contains(self, theta, tol=0.0) -> bool:

@@ -400,3 +400,18 @@ def test_a_narrow_interval_keeps_two_digits_of_its_width():
     lo, centre, hi, hw = (float(t) for t in row.split()[1:5])
     assert lo <= 0.99999985 and hi >= 1.00000015 and hi - lo <= 4e-7
     assert hw == pytest.approx(1.5e-7, rel=0.1)
+
+
+def test_the_columns_stay_aligned_when_a_narrow_interval_needs_more_digits():
+    """New-user trial 20: intervals 1e-7 wide printed with 9 decimals shifted the columns
+    of their rows."""
+    from hammerbound.tables import interval_text
+
+    b = np.array([[1.19999980, 1.20000017], [-1.500000032, -1.499999957], [0.1, 0.2],
+                  [-np.inf, np.inf]])
+    lines = interval_text(["ml", "a1", "b1", "b2"], b).splitlines()
+    # every number column ends where its header ends
+    for head in ("lower", "centre", "upper", "half-width"):
+        end = lines[0].index(head) + len(head)
+        for ln in lines[1:]:
+            assert ln[end - 1] != " " and ln[end] == " ", (head, ln)

@@ -111,3 +111,15 @@ def test_a_transfer_function_keeps_true_and_the_data_sampling_time(est):
     assert est.to_transfer_function(dt=True).dt is True
     assert est.to_transfer_function(dt=0.2).dt == 0.2
     assert hb.HammersteinSystem(hb.Backlash(1.0, 0.1, 1.0, 0.1), (A, B)).to_transfer_function().dt is True
+
+
+def test_a_numerator_without_its_leading_zero_is_explained(est):
+    """New-user trial 20 gave B = [b1, b2] for [0, b1, b2] and was told only that the model
+    had coefficients outside the structure."""
+    with pytest.raises(ParameterValidationError) as err:
+        est.contains((A, B[1:]))
+    text = str(err.value)
+    assert "B[0] is b0, which a delay nk=1 makes 0: B = [0, ..., b1, ...]" in text
+    with pytest.raises(ParameterValidationError) as err:  # another cause: no such hint
+        est.contains(([1.0, -1.2, 0.5, 0.1], B))
+    assert "B[0] is b0" not in str(err.value)

@@ -112,14 +112,14 @@ def _box_words(theta_box, na, nb, nk) -> str:
             + (", stable A (|a_i| <= binom(na, i)) for the other a_i" if default_a else ""))
 
 
-def _assumptions(problem, prior, lin, steady) -> tuple:
+def _assumptions(problem, prior, lin, steady, found=()) -> tuple:
     deta = np.asarray(problem.deta, dtype=float)
     every = " on every sample" if np.all(deta == deta.flat[0]) else ""
     out = [f"output errors |eta_t| <= {bound_text(deta)}{every}",  # (per sample: review)
            "the input is known exactly",
            GAIN_ASSUMPTION
            + _box_words(lin.theta_box, problem.na, problem.nb, problem.nk),
-           prior.describe(),
+           prior.describe(reached=sorted({n for n, _ in found})),
            f"the backlash lines do not cross over the record's inputs "
            f"[{rounded_text(float(np.min(problem.u)), down=True)}, "
            f"{rounded_text(float(np.max(problem.u)), down=False)}] "
@@ -445,7 +445,7 @@ def fit_one_record(lin, data, *, gamma_box=None, steady=None, steady_bound=None,
     _warn_inaccurate(res.infos, 0 if d is None else d.lps_stopped)
     statuses = tuple(i.status for i in res.infos)
     return OneRecordFit(problem, res, prior, tb, gb, statuses,
-                        _assumptions(problem, prior, lin, steady), found,
+                        _assumptions(problem, prior, lin, steady, found), found,
                         time.perf_counter() - t0)
 
 

@@ -176,12 +176,20 @@ class GammaPrior:
             box[i, 1] = box[i, 0] + WIDEN_FACTOR * (box[i, 1] - box[i, 0])
         return GammaPrior(box, user_given=False)
 
-    def describe(self) -> str:
+    def describe(self, reached=()) -> str:
         """The box as an assumption, each limit rounded inward (the box shown is never
-        wider than the one used)."""
+        wider than the one used). ``reached``: names of the ends the search left at a
+        default limit; then the finite intervals hold only inside the box, which is said
+        here too (adversary 52: a true c_l above its default limit left m_l's finite
+        interval off the truth, with the warning's word alone)."""
         who = "given" if self.user_given else "assumed (default; pass gamma_box to change)"
-        return (f"backlash box {who}: {self.limits()} (c_l, c_r >= 0: the dead band "
+        text = (f"backlash box {who}: {self.limits()} (c_l, c_r >= 0: the dead band "
                 "[-c_l, c_r] holds u = 0)")
+        if not reached or self.user_given:
+            return text
+        return (f"{text}; the search reached its limit of {', '.join(reached)} (reported as "
+                "not identified), so every finite interval holds only if the true backlash "
+                "lies in this box")
 
     def limits(self) -> str:
         """``m_l in [lo, hi], ...``: the box's rows, each limit rounded inward."""

@@ -269,9 +269,12 @@ class BacklashSetEstimator(RegressorMixin, BaseEstimator):
         which = ", ".join(cert[0]) if cert is not None else "?"
         return EmptyFeasibleSetError(
             f"no backlash parameters (m, c) > 0 explain the {side}-side steady-state data within "
-            f"the output bound: the set becomes empty at measurement index {k}. Check that "
-            "sample, output_bound (too small?), that the data are at steady state and that "
-            "the input and output columns are not swapped. "
+            f"the output bound: the set becomes empty at measurement index {k} "
+            f"(u = {problem.u[lo]:.4g}). Check that sample, output_bound (too small?), that "
+            "the data are at steady state, that every amplitude takes the input past the "
+            "dead band (a square wave inside it leaves the state where it was, off the "
+            "lines: drop the smallest amplitudes) and that the input and output columns are "
+            "not swapped. "
             f"(Certified in exact arithmetic by the constraints {which}, with the tolerance "
             "of docs/tolerances.md.)"
             + _sign_hint(problem.u, problem.y),

@@ -317,6 +317,24 @@ def test_a_dead_band_beyond_the_default_box_does_not_push_the_slope_out():
         ident.fit(u, y)
     assert ident.contains((ml, cl, mr, cr), [-0.5, 0.5])
     assert ident.gamma_bounds_[0, 0] <= ml
+    # the summary's assumptions say it too (adversary 52)
+    assert "so every finite interval holds only if the true backlash lies in this box" \
+        in ident.summary()
+
+
+def test_the_box_assumption_says_when_the_search_reached_a_default_limit():
+    """Adversary 52: a true c_l above its default limit, and too little time for the fit
+    with the wider box, left m_l's finite interval off the truth; only the warning said
+    that the intervals rest on the box."""
+    from hammerbound.joint.prior import GammaPrior
+
+    box = [[0, 11.7], [0, 1.82], [0, 11.7], [0, 1.82]]
+    text = GammaPrior(box, user_given=False).describe(reached=["cl", "mr"])
+    assert text.endswith("; the search reached its limit of cl, mr (reported as not "
+                         "identified), so every finite interval holds only if the true "
+                         "backlash lies in this box")
+    assert "reached" not in GammaPrior(box, user_given=False).describe()
+    assert "reached" not in GammaPrior(box, user_given=True).describe(reached=["cl"])
 
 
 def test_a_per_sample_output_bound_is_stated_as_used():

@@ -226,7 +226,20 @@ def test_empty_set_names_first_bad_measurement():
         BacklashSetEstimator(0.01).fit(u, y)
     assert info.value.side == "right"
     assert info.value.first_index == right[7]
-    assert "index" in str(info.value)
+    assert f"index {right[7]} (u = {u[right[7]]:.4g})" in str(info.value)
+
+
+def test_an_amplitude_inside_the_dead_band_is_in_the_empty_checklist():
+    """Adversary 52: square waves of 0.01 .. 2.5 with a dead band of 0.3 -- the smallest
+    leave the state where it was, off the lines -- got a checklist without that cause."""
+    rng = np.random.default_rng(2)
+    a = np.linspace(0.5, 2.5, 8)
+    u = np.concatenate([a, -a, [0.05, -0.05]])
+    y = np.where(u > 0, 2.1 * (u - 0.3), 2.0 * (u + 0.4)) + rng.uniform(-0.002, 0.002, u.size)
+    y[-2:] = [0.4, 0.4]  # held where the last large move left the state (not on a line)
+    with pytest.raises(EmptyFeasibleSetError) as info:
+        BacklashSetEstimator(0.002).fit(u, y)
+    assert "every amplitude takes the input past the dead band" in str(info.value)
 
 
 def _valve_steady(amplitudes, rng):

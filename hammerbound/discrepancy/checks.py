@@ -11,7 +11,7 @@ from ..data.iodata import IOData
 from ..data.validation import as_real, as_signal, check_scale
 from ..exceptions import DataValidationError, ParameterValidationError
 from . import effects as _effects
-from .model import as_structure
+from .model import RefinedModel, as_structure
 
 __all__ = ["START_EFFECT", "candidate_names", "initial_state_skip", "int_param",
            "max_effects_param", "positive", "validate"]
@@ -131,11 +131,14 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
         raise ParameterValidationError(
             f"refit must be 'linear' (refit B / output gain) or 'none'; got {refit!r}."
         )
-    skip, skip_note = _skip(model, u, bound, skip)
+    s = _with_dt(as_structure(model), data)
+    s, skip, skip_note, allowance = _skip(s, u, bound, skip)
     if u.size - skip < 10:
+        auto = " by skip='auto'; skip=0 scores every sample" if skip_note.startswith("the") \
+            else ""
         raise DataValidationError(
-            f"only {u.size - skip} scored samples (length {u.size}, skip {skip}); at least 10 "
-            "are needed - record longer data."
+            f"only {u.size - skip} scored samples (length {u.size}, skip {skip}{auto}); at "
+            "least 10 are needed - record longer data."
         )
     if not np.any(u[skip:] != 0):
         raise DataValidationError(
@@ -144,49 +147,60 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
             "varying input."
         )
     check_scale(func, {"u": u, "y": y}, {"output_bound": bound})
-    s = _with_dt(as_structure(model), data)
-    return s, u, y, bound, refit == "linear", skip, data, skip_note
+    return s, u, y, bound, refit == "linear", skip, data, (skip_note, allowance)
 
 
-def _skip(model, u, bound, skip) -> tuple[int, str]:
-    """``(skip, why)``: ``skip="auto"`` is :func:`initial_state_skip`, an int is the
-    user's (``why`` then says so)."""
-    if isinstance(skip, str) and skip == "auto":
-        return initial_state_skip(model, u, bound)
-    skip = int_param("skip", skip, 0)
-    return skip, f"skip={skip} given" if skip else ""
+def _skip(s, u, bound, skip) -> tuple:
+    """``(structure, skip, why, allowance)``. ``skip="auto"``: :func:`initial_state_skip`, and the
+    backlash's start is free in every certified bound (``inner_start_free``); an int is the
+    user's, and the model's own start is taken as known."""
+    auto = isinstance(skip, str) and skip == "auto"
+    if isinstance(skip, str) and not auto:
+        raise ParameterValidationError(f"skip must be 'auto' or an integer >= 0; got {skip!r}.")
+    if not auto:
+        skip = int_param("skip", skip, 0)
+    free = auto and s.inner is not None
+    origin = s.origin
+    s = replace(s, inner_start_free=free,
+                origin=None if origin is None else replace(origin, inner_start_free=free))
+    if not auto:
+        return s, skip, f"skip={skip} given" if skip else "", 0.0
+    return (s, *initial_state_skip(s, u, bound))
 
 
-def initial_state_skip(model, u, bound) -> tuple[int, str]:
-    """``(skip, why)``: the samples not scored for a model with a backlash, whose initial
-    state is not known (a one-record fit leaves it free), and why (empty when none).
+def initial_state_skip(s, u, bound) -> tuple[int, str, float]:
+    """``(skip, why, allowance)``: the samples not scored for the model ``s`` (or its structure, from
+    :func:`~.model.as_structure`) when its backlash's initial state is not known (a
+    one-record fit leaves it free), and why (empty when none).
 
-    The model's output from the two ends of its first band (the play operator is monotone
-    in its start, so every start lies between) differs by more than
-    :data:`START_EFFECT` of the output bound up to ``skip``; at most half the record.
-    Re-check 51: a fit's own record was "certified" inconsistent with its central model
-    started at x0 = 0 (error 0.084 against 0.0501; from x0 = 0.046 it fitted)."""
-    from scipy.signal import lfilter
+    ``skip`` is where the start's largest possible effect on the output
+    (:func:`~.fitting.start_spread`, with the absolute impulse response: review 52 found
+    the gap's own response no bound) stays below :data:`START_EFFECT` of the output bound
+    for good; at most half the record. What a start can still do after it
+    (``allowance``) is said, and every verdict allows for it: consistency is decided
+    against ``output_bound + allowance``, and certified bounds hold for every start."""
+    from .fitting import design
 
-    from ..systems.models import play_lines
-
-    system = getattr(model, "system_", model)
-    backlash = getattr(system, "backlash", None)
-    if backlash is None:
-        return 0, ""
-    ml, cl, mr, cr = backlash.gamma
-    R, L = mr * (u - cr), ml * (u + cl)
-    effect = np.abs(lfilter(system.B, system.A, play_lines(R, L, L[0]) - play_lines(R, L, R[0])))
+    if not isinstance(s, RefinedModel):
+        s = as_structure(s)
+    if s.inner is None or s.base is not None:
+        return 0, "", 0.0
+    origin = s if s.origin is None else s.origin
+    combo = tuple((_effects.get(n), th) for n, th, _ in s.effect_params) if s.origin else ()
+    effect = design(replace(origin, inner_start_free=True), u, False, combo).spread[0]
     late = np.flatnonzero(effect > START_EFFECT * float(bound))
     need = 0 if late.size == 0 else int(late[-1]) + 1
     skip = min(need, u.size // 2)
+    left = float(np.max(effect[skip:], initial=0.0))
+    rest = (f"every verdict allows for the at most {left:.3g} it moves the "
+            f"{'scored samples' if skip else 'output'} (consistent: within "
+            f"{float(bound) + left:.6g}); skip=0: every sample, from the model's own start")
     if not skip:
-        return 0, ""
-    capped = (f" (capped at half the record: its start still moves the output by "
-              f"{float(np.max(effect[skip:])):.3g} after it)" if skip < need else "")
-    return skip, (f"the backlash's initial state is not known, so the first {skip} samples "
-                  f"are not scored{capped}: up to there a start elsewhere in its first band "
-                  f"moves the output by more than {START_EFFECT:g} of the output bound")
+        return 0, f"the backlash's start is not known: {rest}" if left > 0 else "", left
+    capped = ", capped at half the record" if skip < need else ""
+    return skip, (f"the backlash's start is not known: the first {skip} samples are not "
+                  f"scored (a start elsewhere in its first band moves them by more than "
+                  f"{100 * START_EFFECT:g} % of the output bound{capped}) and {rest}"), left
 
 
 def candidate_names(candidates):

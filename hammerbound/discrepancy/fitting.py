@@ -18,7 +18,8 @@ from ..tolerances import feasibility_tol
 from . import effects as _effects
 from .model import RefinedModel, _shift, black_box_predict, inner_backlash
 
-__all__ = ["Design", "Fit", "certified_above", "design", "minimax", "outside", "rebuild"]
+__all__ = ["Design", "Fit", "certified_above", "design", "minimax", "outside", "rebuild",
+           "start_spread"]
 
 _LP_OPTIONS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 
@@ -96,8 +97,28 @@ def _fast_lp(c, A_ub, b_ub, bounds, k):
     return x
 
 
+def _lower_any_start(r0, Ps, fs, Pss, T, Z) -> float:
+    """Certified lower bound of ``min_z max_t |r_t - (Ps z)_t - start effect_t|`` over every
+    start of the model's backlash, whose effect is bounded by ``fs_t + sum_j Pss_tj |z_j|``
+    (:func:`start_spread`): the LP with that allowance on each sample (``w >= |z|``) is a
+    relaxation, so its certified bound holds for every start."""
+    m, k = Ps.shape
+    if k == 0:
+        return max(float(np.max(np.abs(r0) - fs)), 0.0)
+    one, eye = np.ones((m, 1)), np.eye(k)
+    A_ub = np.vstack([np.hstack([Ps, -Pss, -one]), np.hstack([-Ps, -Pss, -one]),
+                      np.hstack([eye, -eye, np.zeros((k, 1))]),
+                      np.hstack([-eye, -eye, np.zeros((k, 1))])])
+    b_ub = np.concatenate([r0 + fs, -r0 + fs, np.zeros(2 * k)])
+    bounds = np.array([[-Z, Z]] * k + [[0.0, Z]] * k + [[0.0, T]])
+    c = np.zeros(2 * k + 1)
+    c[-1] = 1.0
+    res = safe_minimize(c, A_ub, b_ub, bounds=bounds)
+    return float(res.bound) if res.status == "optimal" else 0.0
+
+
 def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
-            fast=False) -> Fit:
+            fast=False, spread=None) -> Fit:
     """Chebyshev fit ``min_z max_{t>=skip} |y_t - f_t - (Phi z)_t|`` as a linear program.
 
     The free coefficients are boxed, ``|z_j| max_t |Phi_tj| <= coef_box (max|y - f| + 2)``
@@ -114,6 +135,9 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
     model output before the achieved error is computed (output nonlinearities).
     ``fast``: solve by constraint generation without a certified lower bound (``lower``
     is 0; used inside parameter searches, whose final point is re-solved certified).
+    ``spread`` (``(fs, Pss)``, :func:`start_spread`): the model's backlash start is not
+    known; the achieved error is the one from its own start (a witness), ``lower`` holds
+    for every start (:func:`_lower_any_start`).
     """
     def achieved(z):
         p = f + (Phi @ z if Phi.shape[1] else 0.0)
@@ -125,7 +149,11 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
     k = Phi.shape[1]
     e0 = achieved(np.zeros(k))
     if k == 0:
-        return Fit(e0, e0 if post is None else 0.0, np.zeros(0), f, Phi, post)
+        low = e0 if post is None else 0.0
+        if spread is not None and post is None:
+            low = min(low, _lower_any_start(r0, np.zeros((r0.size, 0)), spread[0][skip:],
+                                            None, 0.0, 0.0))
+        return Fit(e0, low, np.zeros(0), f, Phi, post)
     P = Phi[skip:]
     scale = np.max(np.abs(P), axis=0)
     scale[scale == 0] = 1.0
@@ -172,6 +200,9 @@ def minimax(y, f, Phi, skip, coef_box, target=None, *, sides=None, post=None,
         # the LP fits the prediction before the output map: its bound is not one of the
         # model class's error, so nothing is certified (tolerances point outward)
         lower = 0.0
+    elif spread is not None and lower > 0:
+        lower = min(lower, _lower_any_start(r0, Ps, spread[0][skip:],
+                                            spread[1][skip:] / scale, T, Z))
     return Fit(e, max(min(lower, e), 0.0), z, f, Phi, post)
 
 
@@ -188,6 +219,7 @@ class Design:
     post: object
     num: np.ndarray
     den: np.ndarray
+    spread: tuple | None = None  # (fs, Pss): the unknown backlash start, see start_spread
 
 
 def _overrides(e, hook) -> bool:
@@ -217,15 +249,23 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None, bound=None) -> Des
     n = xx.size
     cols = []
     f = np.zeros(n)
+    spread = None
     if s.base is None:
         extend = bool(s.input_ops) or any(_overrides(e, "transform_input") for e, _ in combo)
         x = xx if s.inner is None else inner_backlash(s.inner, xx, s.inner_x0, extend)
         A = np.convolve(s.A, den)
+        free = s.inner is not None and s.inner_start_free
         if refit:
             v = lfilter(num, A, x)
             cols.extend(_shift(v, j) for j in range(s._j0, s.B.size))
+            if free:
+                unit = start_spread(s.inner, xx, extend, num, A)
+                spread = (np.zeros(xx.size), np.column_stack(
+                    [_shift(unit, j) for j in range(s._j0, s.B.size)] or [np.zeros((n, 0))]))
         else:
             f = lfilter(np.convolve(s.B, num), A, x)
+            if free:
+                spread = (start_spread(s.inner, xx, extend, np.convolve(s.B, num), A), None)
     else:
         yh = black_box_predict(s.base, _shift(xx, s.delay))
         for p in s.post_poles:
@@ -249,11 +289,18 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None, bound=None) -> Des
             cols.extend(c.T)
         slices.append(slice(k0, len(cols)))
     Phi = np.column_stack(cols) if cols else np.zeros((n, 0))
+    if spread is not None:  # the effects' columns do not depend on the start
+        fs, Pss = spread
+        Pss = np.zeros_like(Phi) if Pss is None else np.column_stack(
+            [Pss, np.zeros((n, Phi.shape[1] - Pss.shape[1]))])
+        spread = (fs, Pss)
     for e, theta in combo:  # time-varying output gains keep the LP linear and exact
         w = e.output_gain(n, theta)
         if w is not None:
             w = np.asarray(w, dtype=float).reshape(n)
             f, Phi = f * w, Phi * w[:, None]
+            if spread is not None:
+                spread = (spread[0] * np.abs(w), spread[1] * np.abs(w)[:, None])
     outs = [(e, th) for e, th in combo
             if _overrides(e, "transform_output") and not _overrides(e, "output_gain")]
     post, sides = None, None
@@ -269,13 +316,26 @@ def design(s: RefinedModel, u, refit: bool, combo=(), y=None, bound=None) -> Des
                 sd = e.one_sided(y, th, bound)
                 if sd is not None:
                     sides = np.where(sides == 0, np.asarray(sd, int), sides)
-    return Design(f, Phi, n_model, tuple(slices), sides, post, num, den)
+    return Design(f, Phi, n_model, tuple(slices), sides, post, num, den, spread)
+
+
+def start_spread(bl, x, extend, num, den) -> np.ndarray:
+    """Per-sample bound of how much the start of the backlash ``bl`` moves ``num/den``
+    applied to its output: ``(|h| * d)_t``, ``h`` the impulse response and ``d`` the gap
+    between the backlash outputs from the two ends of its first band (the play operator is
+    monotone in its start, so every start's output lies between them). Review 52: the
+    gap's own response, ``|h * d|``, is no bound when ``h`` changes sign."""
+    R0, L0 = bl.mr * (x[0] - bl.cr), bl.ml * (x[0] + bl.cl)
+    d = np.abs(inner_backlash(bl, x, L0, extend) - inner_backlash(bl, x, R0, extend))
+    imp = np.zeros(x.size)
+    imp[0] = 1.0
+    return np.convolve(np.abs(lfilter(num, den, imp)), d)[: x.size]
 
 
 def fit_design(y, d: Design, skip, coef_box, target=None, fast=False) -> Fit:
     """Minimax fit of a :class:`Design`."""
     return minimax(y, d.f, d.Phi, skip, coef_box, target, sides=d.sides, post=d.post,
-                   fast=fast)
+                   fast=fast, spread=d.spread)
 
 
 def rebuild(s: RefinedModel, refit: bool, combo, d: Design, fit: Fit) -> RefinedModel:

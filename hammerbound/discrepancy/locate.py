@@ -97,8 +97,9 @@ def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: 
     """
     output_bound = renamed_value("locate", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, _, _ = validate(model, u, y, output_bound, refit, skip,
-                                                    "locate")
+    s, u, y, bound, do_refit, skip, _, (skip_note, allowance) = validate(
+        model, u, y, output_bound, refit, skip, "locate")
+    bound = bound + allowance  # what the backlash's unknown start can still do (outward)
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin
@@ -110,7 +111,7 @@ def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: 
     d = design(origin, u, do_refit, combo, y, bound)
     dis, fit, _, tagged = locate_design(s, d, u, y, bound, skip, window, max_lag)
     return replace(dis, hints=check_hints(origin, combo, u, y, bound, do_refit, skip, max_lag,
-                                          fit.error, tagged))
+                                          fit.error, tagged), skip=skip, skip_note=skip_note)
 
 
 def check_hints(origin, combo, u, y, bound, refit, skip, max_delay, gap, tagged):

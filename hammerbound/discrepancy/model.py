@@ -112,6 +112,9 @@ class RefinedModel:
         Backlash of the original :class:`~hammerbound.systems.models.HammersteinSystem`.
     inner_x0 : float
         Its initial state.
+    inner_start_free : bool
+        Its initial state is not known (``diagnose(skip="auto")``): certified bounds
+        allow every start in its first band, not only ``inner_x0``.
     base : object or None
         Black-box base model with ``.predict(u)``.
     gain : float
@@ -149,6 +152,7 @@ class RefinedModel:
     input_ops: tuple = ()
     inner: Backlash | None = None
     inner_x0: float = 0.0
+    inner_start_free: bool = field(default=False, repr=False)
     base: object | None = field(default=None, repr=False)
     gain: float = 1.0
     post_poles: tuple = ()

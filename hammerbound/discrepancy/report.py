@@ -182,6 +182,9 @@ class Disagreement:
         prediction delayed by ``k`` (``> 0``: the data lag the model).
     hints : tuple of str
         Human-readable observations (heuristics; the decision is made in step 2).
+    skip, skip_note : int, str
+        Initial samples not scored, and why (:func:`~.diagnose`'s ``skip``; review 52:
+        ``locate`` skipped samples without saying so).
     """
 
     gap: float
@@ -199,6 +202,8 @@ class Disagreement:
     direction_correlation: float = 0.0
     best_lag: int = 0
     hints: tuple = ()
+    skip: int = 0
+    skip_note: str = ""
 
 
 @dataclass(frozen=True, repr=False)
@@ -370,10 +375,12 @@ class DiagnosisReport(Result):
     def _scored_text(self) -> str:
         """Which samples every error counts, and the initial state they rest on."""
         n = len(self.y) if self.y is not None else None
-        if not self.skip:
-            return f"all{'' if n is None else f' {n}'} (the model starts at rest, zero state)"
-        return (f"{self.skip}..{'' if n is None else n - 1} "
-                f"({self.skip_note or f'skip={self.skip}'})")
+        which = (f"all{'' if n is None else f' {n}'}" if not self.skip
+                 else f"{self.skip}..{'' if n is None else n - 1}")
+        note = self.skip_note or (f"skip={self.skip}" if self.skip else "")
+        if not note:
+            return f"{which} (the model starts at rest, zero state)"
+        return f"{which} (its linear block starts at rest, zero state; {note})"
 
     def to_dict(self) -> dict:
         """JSON-serialisable summary (no signals; NaN and inf become None)."""

@@ -197,7 +197,7 @@ class JointSamples:
     max_rel_violation : ndarray (n,)
         The same over its tolerance (``max_violation / tol``, ``<= 1``).
     gain_residual : ndarray (n,)
-        ``|B(1) - A(1)|`` (the unit gain (22.8)).
+        ``|B(1) - g A(1)|`` (``g = 1``: the unit gain (22.8)).
     tol : float
         The relative feasibility tolerance (``FEASIBILITY_RTOL``).
     n_tries : int
@@ -218,12 +218,12 @@ class JointSamples:
     n_tries: int = 0
 
     @classmethod
-    def of(cls, witnesses, param_names, na, n_tries=0):
+    def of(cls, witnesses, param_names, na, gain=1.0, n_tries=0):
         from ..tolerances import FEASIBILITY_RTOL
 
         theta = np.array([w.theta for w in witnesses])
         rel = np.array([w.max_rel_violation for w in witnesses])
-        a_one = 1.0 + np.sum(theta[:, :na], axis=1)
+        a_one = gain * (1.0 + np.sum(theta[:, :na], axis=1))
         return cls(theta, tuple(param_names), np.array([w.gamma for w in witnesses]),
                    np.array([w.z0 for w in witnesses]), np.array([w.x for w in witnesses]),
                    np.array([w.eta for w in witnesses]), np.zeros((len(witnesses), 0)),
@@ -250,13 +250,13 @@ def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None, pro
     """
     from ..exceptions import SolverError
     from ..joint.local import restore
-    from ..joint.progress import RecordProgress
+    from ..joint.progress import PROGRESS_EVERY, RecordProgress
 
     rng = np.random.default_rng(random_state)
     out = [w for w in seeds if w is not None][:n]
     tries, max_tries = 0, (max_tries or 20 * n)
     bar = RecordProgress(progress)
-    bar.start("sample", n - len(out), every=5.0)
+    bar.start("sample", n - len(out), every=PROGRESS_EVERY)
     while len(out) < n and tries < max_tries:
         tries += 1
         v = box[:, 0] + (box[:, 1] - box[:, 0]) * rng.random(box.shape[0])
@@ -268,4 +268,5 @@ def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None, pro
     if len(out) < n:
         raise SolverError(f"only {len(out)} of {n} points of the one-record set were "
                           f"verified in {tries} attempts; ask for fewer samples.")
-    return JointSamples.of(out, problem.theta_names, problem.na, tries)
+    return JointSamples.of(out, problem.theta_names, problem.na,
+                           1.0 if problem.gain is None else float(problem.gain), tries)

@@ -16,7 +16,10 @@ import time
 
 from ..terminal import is_terminal
 
-__all__ = ["RecordProgress"]
+__all__ = ["PROGRESS_EVERY", "RecordProgress"]
+
+#: seconds between two progress lines of a stage's items when not on a terminal
+PROGRESS_EVERY = 5.0
 
 
 class RecordProgress:

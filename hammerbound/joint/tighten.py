@@ -20,6 +20,7 @@ from ..exceptions import EmptyFeasibleSetError
 from ..solvers.highs_process import past
 from .prior import reversal_summary
 from .problem import RecordProblem
+from .progress import PROGRESS_EVERY
 from .relaxation import build_relaxation, solve_lp
 from .warm import keyed_basis, start_from
 from .windows import window_problem, windows
@@ -31,8 +32,6 @@ __all__ = ["before_checklist", "obbt", "outer_leaves"]
 # point took 1745 LPs, most of them shrinking boxes by a few per cent per round)
 LEAF_ROUNDS = 6
 LEAF_SHRINK = 0.05
-#: seconds between two progress lines of a stage's items when not on a terminal
-PROGRESS_EVERY = 5.0
 # on a long record, the partition tightens its boxes over the windows only (one round) and
 # the leaves get LEAF_ROUNDS rounds over the windows before those over the whole record
 # (:mod:`.windows`; measured on the chapter's random-step record, N = 1000, Delta eta =

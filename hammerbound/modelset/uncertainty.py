@@ -332,21 +332,31 @@ def _unbounded_message(kind, grid):
     bad = ~np.isfinite(grid.dev)
     bad[:-1] |= ~np.isfinite(grid.between())
     i = int(np.flatnonzero(bad)[0]) if bad.any() else 0
-    w, d = grid.omega[i], grid.data
+    d = grid.data
+    j = min(i + 1, grid.size - 1)  # the failing interval's ends: the nearer one is named
+    # which polynomial is nearer 0 there, as a distance in frequency (value / Lipschitz
+    # constant; review 52: the ratio to its size named A for a box 1e-7 wide)
+    a_far = d["amin"][[i, j]] / max(grid.LA, 1e-300)
+    b_far = d["b0"][[i, j]] / max(grid.LB0, 1e-300)
+    a_near = float(np.min(a_far)) <= float(np.min(b_far))
+    k = [i, j][int(np.argmin(a_far if a_near or kind == "additive" else b_far))]
+    w = grid.omega[k]
     at = f"near w = {w:.4g} rad/{'s' if grid.dt != 1.0 else 'sample'}"
-    # which polynomial is nearer 0 there, relative to its size
-    a_near = d["amin"][i] / max(d["amax"][i], 1e-300) <= d["b0"][i] / max(d["bmax"][i], 1e-300)
-    if kind == "additive" or d["amin"][i] == 0 or a_near:
+    if kind == "additive" or d["amin"][k] == 0 or a_near:
+        grid_words = ("" if d["amin"][k] == 0 else
+                      f"; |A| >= {d['amin'][k]:.3g} at the proof grid's points there, too "
+                      "little for the proof between them: a larger n_grid may do")
         return (f"the {kind} uncertainty cannot be bounded: some A in the parameter box "
-                f"vanishes on (or too near) the unit circle {at} (0 is in its value set), "
-                "so no finite weight exists. Narrow the set (more data, method='exact').")
+                f"vanishes on (or too near) the unit circle {at} (0 is in, or too near, its "
+                f"value set{grid_words}), so no finite weight is certified. Narrow the set "
+                "(more data, method='exact').")
     z = np.exp(1j * w * grid.dt)
     zs = "z = -1, the Nyquist frequency" if np.isclose(z.real, -1) else \
         ("z = 1" if np.isclose(z.real, 1) else f"z = {z.real:.4g}{z.imag:+.4g}j")
     return (f"the multiplicative uncertainty cannot be bounded: the central numerator B0 "
             f"vanishes on (or too near) the unit circle {at} ({zs}; |B0| = "
-            f"{d['b0'][i]:.3g} there, while every A of the box stays at least "
-            f"{d['amin'][i]:.3g} from 0), where G/G0 - 1 is unbounded or too large to "
+            f"{d['b0'][k]:.3g} there, while every A of the box stays at least "
+            f"{d['amin'][k]:.3g} from 0), where G/G0 - 1 is unbounded or too large to "
             "certify; a narrower set does not move that zero. A zero there is common in "
             "sampled plants (equal b_j put it at z = -1). "
             "Use kind='additive': |G - G0| stays bounded there.")

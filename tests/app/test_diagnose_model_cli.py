@@ -155,6 +155,6 @@ def test_an_unknown_initial_backlash_state_is_not_scored(fit_json, tmp_path, cap
     rep = json.loads(capsys.readouterr().out)
     assert rep["consistent_before"] is True
     assert rep["skip"] > 0
-    assert f"so the first {rep['skip']} samples are not scored" in rep["skip_note"]
+    assert f"the first {rep['skip']} samples are not scored" in rep["skip_note"]
     main([*args, "--skip", "0"])
     assert json.loads(capsys.readouterr().out)["consistent_before"] is False

@@ -214,3 +214,10 @@ def test_a_central_zero_at_nyquist_names_itself_and_the_additive_weight():
     assert "Narrow the set" not in text
     W = fit_weight(bounds, 2, [1, 2], G0, dt=DT, kind="additive")
     assert W.certificate.holds
+    # review 52: next to a lightly damped A (|A(-1)| = 0.05) the ratio to each
+    # polynomial's size named A; the distance in frequency names B0
+    theta = np.array([1.9, 0.95, 0.1, 0.1])
+    bounds = np.column_stack([theta - 1e-7, theta + 1e-7])
+    with pytest.raises(UnboundedSetError, match="the central numerator B0 vanishes"):
+        fit_weight(bounds, 2, [1, 2], control.tf([0, 0.1, 0.1], [1, 1.9, 0.95], 1.0),
+                   kind="multiplicative")

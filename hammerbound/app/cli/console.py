@@ -54,7 +54,7 @@ _TERMS = [
     (r"refit='linear' refits only B", "--refit linear refits only B"),
     (r"\(candidates='all' tries every", "(--candidates all tries every"),
     (r"the factor min_improvement = ", "the factor "),
-    # diagnose's note on a fitted set (discrepancy.diagnose.CENTRAL_CHECK)
+    # diagnose's note on a fitted set (discrepancy.verdict.CENTRAL_CHECK)
     (r"\(ident\.output_envelope\((\w+), (\w+)\)\)", r"(in Python: ident.output_envelope(\1, \2))"),
     (r"needs a one-record fit \(procedure='one-record'\)",
      "needs a one-record fit (hammerbound identify --record DATA.csv)"),

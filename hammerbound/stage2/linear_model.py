@@ -155,8 +155,8 @@ class LinearModelMixin:
                     f"nk={self._nk()} makes 0: B = [0, ..., b{lags[0]}, ...].")
             raise ParameterValidationError(
                 f"the model has coefficients outside this structure (na={na}, nb={self.nb}, "
-                f"nk={self._nk()}: A = {A.tolist()}, B = {B.tolist()}).{lead} Or pass theta "
-                f"in order {self.param_names_}.")
+                f"nk={self._nk()}: A = {A.tolist()}, B = {B.tolist()}).{lead} "
+                f"{'Or pass' if lead else 'Pass'} theta in order {self.param_names_}.")
         return np.concatenate([a, b])
 
     def contains(self, theta, tol=0.0) -> bool:

@@ -328,7 +328,7 @@ def load_chapter_tables(path=None) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
-def _column_index(spec, header, ncols, which, default, path, names):
+def _column_index(spec, header, ncols, which, default, path, names, delimiter=","):
     """Position of column ``spec`` (a header name or a 0-based index)."""
     spec = str(spec).strip()
     cols = None if header is None else [h.strip() for h in header]
@@ -346,7 +346,8 @@ def _column_index(spec, header, ncols, which, default, path, names):
     else:
         raise DataValidationError(
             f"column {spec!r} (the {which} column) not found in the header of {path}; columns "
-            f"are {cols}. Rename it or pass {names[which]}."
+            f"are {cols}{_separator_hint(cols, delimiter, names)}. Rename it or pass "
+            f"{names[which]}."
         )
     if j >= ncols:
         found = f"{ncols} column(s)" + ("" if cols is None else f" {cols}")
@@ -403,8 +404,8 @@ def read_io_csv(path, u_column="u", y_column="y", delimiter=",", *, argument_nam
         header, rows = rows[0][1], rows[1:]
     ncols = len(header) if header is not None else len(rows[0][1])
     width = _named_width(header) if header is not None else _usual_width(rows)
-    ju = _column_index(u_column, header, ncols, "u", 0, path, names)
-    jy = _column_index(y_column, header, ncols, "y", 1, path, names)
+    ju = _column_index(u_column, header, ncols, "u", 0, path, names, delimiter)
+    jy = _column_index(y_column, header, ncols, "y", 1, path, names, delimiter)
     if ju == jy:
         raise DataValidationError(
             f"the u and y columns of {path} are the same column (index {ju}); pass "

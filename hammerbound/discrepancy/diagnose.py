@@ -319,7 +319,23 @@ class _Diagnosis:
         if not added and not self.consistent_before and untried:
             msg += (f" Not tried: {', '.join(untried)} (candidates='all' tries every "
                     "registered effect).")
+        if not added and not self.consistent_before:
+            msg += self._start_words()
         return msg
+
+    def _start_words(self) -> str:
+        """A sentence when the record starts far from where the model starts (new-user
+        trial 21: absolute values around 50 %, or a plant not at rest, got "none of the
+        candidates explains the data" and advice that missed the cause)."""
+        k = self.skip
+        miss = float(self.y[k] - self.pred_before[k])
+        if not abs(miss) >= 0.5 * self.gap_before > 0.5 * self.bound:
+            return ""
+        return (f" The record starts far from where the model does (sample {k}: y = "
+                f"{self.y[k]:.4g} against the model's {self.pred_before[k]:.4g}, started at "
+                "rest): if u and y are absolute values around an operating point, subtract "
+                "it from both (deviation variables); if the plant was not at rest, leave "
+                "its transient out (skip=K, --skip K).")
 
     def _hints(self, fits, added, closest):
         """Step 1's hints about the effects the report names (all untagged ones)."""

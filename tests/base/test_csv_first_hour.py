@@ -52,6 +52,16 @@ def test_the_separator_is_guessed_in_the_hint(tmp_path, capsys, sep, said):
     assert rc == 2 and f"seems separated by {said}; pass --delimiter {said}" in err
 
 
+def test_the_separator_is_guessed_when_columns_are_named(tmp_path, capsys):
+    """New-user trial 21: with --u-col/--y-col given, a semicolon file was told only
+    "columns are ['time;OP;PV']" (the hint came without the names)."""
+    path = _write(tmp_path, "time;OP;PV\n" + _rows(";"))
+    rc = main(["diagnose", str(path), "--num", "0 0.2", "--den", "1 -0.8",
+               "--output-bound", "0.2", "--u-col", "OP", "--y-col", "PV"])
+    err = " ".join(capsys.readouterr().err.split())
+    assert rc == 2 and "seems separated by ';'; pass --delimiter ';'" in err
+
+
 def test_decimal_comma_and_missing_header_and_directory(tmp_path):
     path = _write(tmp_path, "t;u;y\n" + _rows(";", ","))
     with pytest.raises(DataValidationError, match="Decimal commas are not read"):

@@ -148,3 +148,13 @@ def test_a_period_index_is_a_time_base_and_an_uneven_index_is_named():
     stamps = pd.date_range("2026-01-01 08:00", periods=u.size, freq="10s").delete(3)
     with pytest.raises(DataValidationError, match="the frame's index"):
         hb.IOData.from_frame(pd.DataFrame({"u": u[:-1], "y": y[:-1]}, index=stamps))
+
+
+def test_a_missing_sample_is_named_where_it_is():
+    """New-user trial 21: with one row deleted the message named time[1] - time[0] = 1
+    against the mean step 1.00125, not the gap."""
+    t = np.delete(np.arange(800.0), 100)
+    with pytest.raises(DataValidationError,
+                       match=r"time\[100\] - time\[99\] = 2, expected 1 \(the most common "
+                             r"step\) \(1 sample\(s\) missing there\?\)"):
+        uniform_step(t, "time")

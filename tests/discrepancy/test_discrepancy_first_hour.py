@@ -477,3 +477,19 @@ def test_skip_words_name_auto():
         diagnose(H, u, y, output_bound=0.01, skip="none")
     with pytest.raises(DataValidationError, match="by skip='auto'; skip=0 scores every"):
         diagnose(H, u[:18], y[:18], output_bound=0.01)
+
+
+def test_a_record_around_an_operating_point_is_told_to_use_deviations():
+    """New-user trial 21: OP and PV near 50 % against a model started at rest got "none of
+    the candidates explains the data" and advice that missed the cause."""
+    rng = np.random.default_rng(7)
+    u = 50 + np.repeat(rng.uniform(-2, 2, 40), 10)
+    y = lfilter([0, 0.2], [1, -0.8], u, zi=[50.0])[0]  # at rest at 50 (unit gain), not at 0
+    y = y + rng.uniform(-0.2, 0.2, u.size)
+    G = control.tf([0, 0.22], [1, -0.8], True)
+    rep = diagnose(G, u, y, output_bound=0.2, candidates=["delay"], max_effects=1)
+    assert not rep.consistent_before and rep.effect is None
+    assert "The record starts far from where the model does (sample 0" in rep.message
+    assert "subtract it from both (deviation variables)" in rep.message
+    dev = diagnose(G, u - 50, y - 50, output_bound=0.2, candidates=["delay"], max_effects=1)
+    assert "starts far from" not in dev.message

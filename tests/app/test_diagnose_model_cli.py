@@ -158,3 +158,18 @@ def test_an_unknown_initial_backlash_state_is_not_scored(fit_json, tmp_path, cap
     assert f"the first {rep['skip']} samples are not scored" in rep["skip_note"]
     main([*args, "--skip", "0"])
     assert json.loads(capsys.readouterr().out)["consistent_before"] is False
+
+
+def test_a_denominator_not_starting_with_one_is_said(tmp_path, capsys):
+    """New-user trial 21: continuous-time coefficients "4.5 1" were read as 4.5 + q^-1
+    without a word."""
+    u = _steps(np.random.default_rng(8))
+    rec = _write(tmp_path / "d.csv", u, lfilter([0.0, 0.5], [1.0, -0.5], u))
+    main(["diagnose", str(rec), "--num", "0 1", "--den", "4.5 1", "--output-bound", "0.1",
+          "--candidates", "offset", "--max-effects", "1"])
+    err = " ".join(capsys.readouterr().err.split())
+    assert "--den starts with 4.5, not 1: the model is read in powers of q^-1 and divided " \
+        "by it (A = [1.0, 0.222222])" in err
+    main(["diagnose", str(rec), "--num", "0 0.5", "--den", "1 -0.5", "--output-bound", "0.1",
+          "--candidates", "offset", "--max-effects", "1"])
+    assert "--den starts" not in capsys.readouterr().err

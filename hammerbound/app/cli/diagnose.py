@@ -172,7 +172,16 @@ def _model(args):
                          "--num '0 0.5' --den '1 -0.5'; add --backlash 'ML CL MR CR' for a "
                          "backlash before it), or --model FIT.json (the JSON of "
                          "'hammerbound identify --json')")
-    A, B = as_polynomials((_coeffs(args.den, "--den"), _coeffs(args.num, "--num")))
+    den = _coeffs(args.den, "--den")
+    if den[0] != 1.0 and den[0] != 0.0:
+        import warnings
+
+        # new-user trial 21: continuous-time coefficients "4.5 1" were read as 4.5 + q^-1
+        warnings.warn(f"--den starts with {den[0]:g}, not 1: the model is read in powers of "
+                      f"q^-1 and divided by it (A = {np.round(den / den[0], 6).tolist()}); a "
+                      "continuous-time model (powers of s) must be discretised first",
+                      UserWarning, stacklevel=2)
+    A, B = as_polynomials((den, _coeffs(args.num, "--num")))
     if args.backlash is not None:
         gamma = _coeffs(args.backlash, "--backlash")
         if gamma.size != 4:

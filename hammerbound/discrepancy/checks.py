@@ -131,6 +131,7 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
         raise ParameterValidationError(
             f"refit must be 'linear' (refit B / output gain) or 'none'; got {refit!r}."
         )
+    check_scale(func, {"u": u, "y": y}, {"output_bound": bound})
     s = _with_dt(as_structure(model), data)
     s, skip, skip_note, allowance = _skip(s, u, bound, skip)
     if u.size - skip < 10:
@@ -146,7 +147,6 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
             "cannot be compared with data that were not excited - record data with a "
             "varying input."
         )
-    check_scale(func, {"u": u, "y": y}, {"output_bound": bound})
     return s, u, y, bound, refit == "linear", skip, data, (skip_note, allowance)
 
 
@@ -164,7 +164,8 @@ def _skip(s, u, bound, skip) -> tuple:
     s = replace(s, inner_start_free=free,
                 origin=None if origin is None else replace(origin, inner_start_free=free))
     if not auto:
-        return s, skip, f"skip={skip} given" if skip else "", 0.0
+        return s, skip, (f"skip={skip} given; the model's own start taken as known" if skip
+                         else ""), 0.0
     return (s, *initial_state_skip(s, u, bound))
 
 
@@ -176,9 +177,10 @@ def initial_state_skip(s, u, bound) -> tuple[int, str, float]:
     ``skip`` is where the start's largest possible effect on the output
     (:func:`~.fitting.start_spread`, with the absolute impulse response: review 52 found
     the gap's own response no bound) stays below :data:`START_EFFECT` of the output bound
-    for good; at most half the record. What a start can still do after it
-    (``allowance``) is said, and every verdict allows for it: consistency is decided
-    against ``output_bound + allowance``, and certified bounds hold for every start."""
+    for good; at most half the record. What a start can still do after it to the model as
+    given (``allowance``) is said; every fit's consistency is judged against the bound
+    plus its own allowance (:attr:`~.fitting.Fit.allowance`), and certified bounds hold
+    for every start."""
     from .fitting import design
 
     if not isinstance(s, RefinedModel):
@@ -192,15 +194,16 @@ def initial_state_skip(s, u, bound) -> tuple[int, str, float]:
     need = 0 if late.size == 0 else int(late[-1]) + 1
     skip = min(need, u.size // 2)
     left = float(np.max(effect[skip:], initial=0.0))
-    rest = (f"every verdict allows for the at most {left:.3g} it moves the "
-            f"{'scored samples' if skip else 'output'} (consistent: within "
-            f"{float(bound) + left:.6g}); skip=0: every sample, from the model's own start")
+    rest = (f"every verdict allows for what a start can still do to each fit there (at "
+            f"most {left:.3g} to the model as given); skip=K takes the model's own start as "
+            "known")
     if not skip:
         return 0, f"the backlash's start is not known: {rest}" if left > 0 else "", left
     capped = ", capped at half the record" if skip < need else ""
     return skip, (f"the backlash's start is not known: the first {skip} samples are not "
-                  f"scored (a start elsewhere in its first band moves them by more than "
-                  f"{100 * START_EFFECT:g} % of the output bound{capped}) and {rest}"), left
+                  f"scored (up to there a start elsewhere in its first band can move the "
+                  f"output by more than {100 * START_EFFECT:g} % of the output "
+                  f"bound{capped}) and {rest}"), left
 
 
 def candidate_names(candidates):

@@ -73,13 +73,17 @@ def diagnose(
         ``"none"``: the model is taken as exact; only the candidate's parameter (and the
         offset for ``offset``) is fitted.
     skip : int or "auto"
-        Number of initial samples excluded from every error (unknown initial state).
+        Number of initial samples excluded from every error.
         ``"auto"`` (default): 0, except for a model with a backlash (a
-        :class:`~hammerbound.HammersteinSystem` or a fitted identifier), whose initial
-        state is not known: then the samples up to where a start anywhere in its first
-        band moves the output by more than 1 % of ``output_bound`` (at most half the
-        record; :func:`~hammerbound.discrepancy.checks.initial_state_skip`). The report
-        says which (``skip``, ``skip_note``, the summary's ``scored samples`` line).
+        :class:`~hammerbound.HammersteinSystem`, a fitted identifier or a model of a
+        previous diagnosis), whose initial state is not known: then the samples up to
+        where a start anywhere in its first band moves the output by more than 1 % of
+        ``output_bound`` (at most half the record;
+        :func:`~hammerbound.discrepancy.checks.initial_state_skip`); every fit is judged
+        against the bound plus what a start can still do to it, and certified bounds
+        hold for every start. An int: that many samples, with the model's own start
+        taken as known. The report says which (``skip``, ``skip_note``, the summary's
+        ``scored samples`` line).
     max_delay : int
         Largest extra delay tried by ``delay`` (and lag examined in step 1).
     grid_size : int
@@ -132,7 +136,7 @@ def diagnose(
     """
     output_bound = renamed_value("diagnose", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, data, (skip_note, allowance) = validate(
+    s, u, y, bound, do_refit, skip, data, (skip_note, _) = validate(
         model, u, y, output_bound, refit, skip)
     names = candidate_names(candidates)
     max_delay = int_param("max_delay", max_delay, 1)
@@ -144,13 +148,11 @@ def diagnose(
     max_effects = max_effects_param(max_effects)
     bar = SearchProgress(progress)
     try:
-        # verdicts allow for what the backlash's unknown start can still do (outward)
-        report = _diagnose(s, u, y, bound + allowance, do_refit, skip, data, names,
-                           max_delay, grid_size, window, coef_box, min_improvement,
-                           max_effects, bar)
+        report = _diagnose(s, u, y, bound, do_refit, skip, data, names, max_delay,
+                           grid_size, window, coef_box, min_improvement, max_effects, bar)
     finally:
         bar.close()
-    report = replace(report, output_bound=bound, skip_note=skip_note,
+    report = replace(report, skip_note=skip_note,
                      disagreement=replace(report.disagreement, skip=skip, skip_note=skip_note))
     return of_central_model(model, report, do_refit)
 
@@ -191,10 +193,13 @@ class _Diagnosis:
 
     # ---- helpers ----------------------------------------------------------------------
     def ok(self, cf) -> bool:
-        return not np.any(outside(self.y, cf.prediction, self.bound, self.skip))
+        """Consistent: within the bound and what the backlash's unknown start can still do
+        to this fit (``Fit.allowance``)."""
+        return not np.any(outside(self.y, cf.prediction, self.bound + _allow(cf), self.skip))
 
-    def frac(self, pred) -> float:
-        return float(np.mean(outside(self.y, pred, self.bound, self.skip)[self.skip:]))
+    def frac(self, pred, allowance=0.0) -> float:
+        return float(np.mean(outside(self.y, pred, self.bound + allowance,
+                                     self.skip)[self.skip:]))
 
     def removed(self, err) -> float:
         """Fraction of the gap excess (gap_before - output_bound) that a fit removes."""
@@ -228,6 +233,7 @@ class _Diagnosis:
             self.s, d_before, self.u, self.y, self.bound, self.skip, window, self.max_delay,
             self.coef_box)
         self.gap_before = base_fit.error
+        self.allow_before = base_fit.allowance
         self.consistent_before = self.ok(base_fit)
         self.pred_before = base_fit.prediction
         self.base_model = rebuild(self.origin, self.do_refit, combo_before, d_before,
@@ -249,7 +255,8 @@ class _Diagnosis:
                 starts += [(*self.old_thetas, g) for g in e.seeds(fitted)]
                 self.single_fits[name] = self.fit((*old, e), starts=starts or None)
         return tuple(_candidate_fit(cf, self.gap_before, self.ok(cf),
-                                    self.frac(cf.prediction), self.removed(cf.error))
+                                    self.frac(cf.prediction, _allow(cf)),
+                                    self.removed(cf.error))
                      for cf in self.single_fits.values())
 
     def choose(self, max_effects):
@@ -288,16 +295,19 @@ class _Diagnosis:
         added = () if chosen is None else tuple(n for n in chosen.names if n not in self.have)
         if chosen is not None:
             refined, pred_after, gap_after = chosen.model, chosen.prediction, chosen.error
+            allow_after = _allow(chosen)
         else:
             refined, pred_after, gap_after = self.base_model, self.pred_before, self.gap_before
+            allow_after = self.allow_before
         msg = self._message(fits, combo_fits, chosen, added, closest, names, min_improvement)
         return DiagnosisReport(
             effect="+".join(added) if added else None,
             gap_before=self.gap_before, gap_after=gap_after, output_bound=self.bound,
             consistent_before=self.consistent_before,
-            consistent_after=not np.any(outside(self.y, pred_after, self.bound, self.skip)),
+            consistent_after=not np.any(outside(self.y, pred_after, self.bound + allow_after,
+                                                self.skip)),
             fraction_outside_before=self.disagreement.fraction_outside,
-            fraction_outside_after=self.frac(pred_after),
+            fraction_outside_after=self.frac(pred_after, allow_after),
             refined_model=refined, candidates=fits,
             disagreement=replace(self.disagreement,
                                  hints=self._hints(fits, added, closest)),
@@ -312,9 +322,10 @@ class _Diagnosis:
         )
 
     def _message(self, fits, combo_fits, chosen, added, closest, names, min_improvement):
-        msg = diagnosis_message(self.bound, self.gap_before, self.consistent_before, chosen,
-                                added, fits, combo_fits, closest, self.removed,
-                                min_improvement, self.old)
+        msg = diagnosis_message(self.bound + self.allow_before, self.gap_before,
+                                self.consistent_before, chosen, added, fits, combo_fits,
+                                closest, self.removed, min_improvement, self.old,
+                                None if chosen is None else self.bound + _allow(chosen))
         untried = [n for n in _effects.REGISTRY if n not in names]
         if not added and not self.consistent_before and untried:
             msg += (f" Not tried: {', '.join(untried)} (candidates='all' tries every "
@@ -346,6 +357,11 @@ class _Diagnosis:
         else:
             keep = {n for n, e in closest if self.removed(e) >= 0.5}
         return tuple(text for tag, text in self.tagged if tag is None or tag in keep)
+
+
+def _allow(cf) -> float:
+    """What the backlash's unknown start can still do to a fit (a Fit or a ComboFit)."""
+    return getattr(cf, "fit", cf).allowance
 
 
 def _candidate_fit(cf, gap_before, consistent, fraction, removed):

@@ -97,9 +97,8 @@ def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: 
     """
     output_bound = renamed_value("locate", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, _, (skip_note, allowance) = validate(
+    s, u, y, bound, do_refit, skip, _, (skip_note, _) = validate(
         model, u, y, output_bound, refit, skip, "locate")
-    bound = bound + allowance  # what the backlash's unknown start can still do (outward)
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin
@@ -131,7 +130,8 @@ def check_hints(origin, combo, u, y, bound, refit, skip, max_delay, gap, tagged)
     old = tuple(e for e, _ in combo)
     cfs = {t: fit_combination(pb, (*old, _effects.get(t))) for t in tags}
     errs = {t: cf.error for t, cf in cfs.items()}
-    ok = {t for t, cf in cfs.items() if not np.any(outside(y, cf.prediction, bound, skip))}
+    ok = {t for t, cf in cfs.items()
+          if not np.any(outside(y, cf.prediction, bound + cf.fit.allowance, skip))}
     keep = ok or {t for t, e in errs.items() if (gap - e) >= 0.5 * (gap - bound)}
     return tuple(text for t, text in tagged if t is None or t in keep)
 
@@ -189,7 +189,9 @@ def locate_design(s, d: Design, u, y, bound, skip, window, max_lag, coef_box=1e3
     else:
         lres = y - f
     scored = np.arange(y.size) >= skip
-    flagged = outside(y, y - lres, bound, skip)
+    # judged against the bound and what the backlash's unknown start can still do
+    near = bound + fit.allowance
+    flagged = outside(y, y - lres, near, skip)
     # where are the *largest* disagreements? (top quintile of the out-of-band samples)
     worst = flagged.copy()
     if np.any(flagged):
@@ -199,7 +201,7 @@ def locate_design(s, d: Design, u, y, bound, skip, window, max_lag, coef_box=1e3
     dc = _direction_correlation(s, u, y, f, Phi, skip)
     lag = _best_lag(y[skip:], nominal[skip:], max_lag)
     hints = []  # (candidate the hint points to, or None for a plain observation; text)
-    out_fit = outside(y, fit.prediction, bound, skip)
+    out_fit = outside(y, fit.prediction, near, skip)
     if not np.any(out_fit):
         hints.append((None, "the data are consistent with the model class under the output "
                             "bound"))
@@ -231,7 +233,7 @@ def locate_design(s, d: Design, u, y, bound, skip, window, max_lag, coef_box=1e3
         fraction_outside=float(np.mean(out_fit[skip:])),
         ls_fraction_outside=float(np.mean(flagged[skip:])),
         nominal_gap=float(np.max(np.abs(nres[skip:]))),
-        nominal_fraction_outside=float(np.mean(outside(y, nominal, bound, skip)[skip:])),
+        nominal_fraction_outside=float(np.mean(outside(y, nominal, near, skip)[skip:])),
         indices=np.flatnonzero(flagged),
         residual=resid,
         ls_residual=lres,

@@ -148,7 +148,10 @@ class Disagreement:
         (minimax over the refittable parameters, see ``refit``).
     gap_lower : float
         Rigorous lower bound of ``gap`` (weak duality); ``gap_lower > output_bound``
-        certifies that the model class is inconsistent with the data.
+        certifies that the model class is inconsistent with the data. The class is the
+        model with its refitted coefficients free (``B`` or a black box's gain, the LP
+        coefficients of added effects); the searched parameters of effects a previous
+        diagnosis added stay at their fitted values (recheck 52).
     fraction_outside : float
         Fraction of samples whose minimax-refit residual exceeds the output bound (the
         minimax fit spreads the error evenly, so this is often close to 1 when

@@ -351,14 +351,15 @@ def _pin_leading(pb: Problem, combo, d: Design, fit: Fit):
     origin, n = pb.origin, 0
     if not (pb.refit and origin.base is None and any(e.pins_leading for e, _ in combo)):
         return origin, d, fit, n
-    while np.isfinite(fit.error) and not np.any(outside(pb.y, fit.prediction, pb.bound, pb.skip)) \
+    while np.isfinite(fit.error) \
+            and not np.any(outside(pb.y, fit.prediction, pb.bound + fit.allowance, pb.skip)) \
             and origin._j0 + 1 < origin.B.size:  # keep one free coefficient
         pinned = replace(origin, b_free_from=origin._j0 + 1)
         d2 = design(pinned, pb.u, pb.refit, combo, pb.y, pb.bound)
         fit2 = fit_design(pb.y, d2, pb.skip, pb.coef_box, pb.bound)
         n += 1
         _tick(pb)
-        if np.any(outside(pb.y, fit2.prediction, pb.bound, pb.skip)):
+        if np.any(outside(pb.y, fit2.prediction, pb.bound + fit2.allowance, pb.skip)):
             break
         origin, d, fit = pinned, d2, fit2
     return origin, d, fit, n

@@ -46,9 +46,12 @@ def _num(v):
 
 
 def diagnosis_message(bound, gap_before, consistent_before, chosen, added, fits, combos,
-                      closest, removed, min_improvement, old):
+                      closest, removed, min_improvement, old, after_bound=None):
     """What the diagnosis found, in words: no missing effect, the effect(s) added, or why
-    none of the candidates is named."""
+    none of the candidates is named. ``bound`` judges the model before, ``after_bound`` the
+    chosen one (each the output bound plus what an unknown backlash start can still do to
+    that fit; default ``bound``)."""
+    after_bound = bound if after_bound is None else after_bound
     if consistent_before:
         msg = (
             f"No missing effect: the model (after refitting its parameters) reproduces the "
@@ -71,7 +74,7 @@ def diagnosis_message(bound, gap_before, consistent_before, chosen, added, fits,
         what = " + ".join(parts)
         if len(added) == 1 and not old:
             msg = (f"Missing effect: {what}; with it the data are consistent with the output "
-                   f"bound (gap {gap_before:.4g} -> {chosen.error:.4g} <= {bound:.4g}).")
+                   f"bound (gap {gap_before:.4g} -> {chosen.error:.4g} <= {after_bound:.4g}).")
             others = [c for c in fits if c.consistent and c.name != added[0]]
             if others:
                 msg += (" Also consistent, with a larger error or more parameters: "
@@ -80,7 +83,7 @@ def diagnosis_message(bound, gap_before, consistent_before, chosen, added, fits,
         else:
             msg = (f"Missing effects, fitted jointly: {what}; with them the data are "
                    f"consistent with the output bound (gap {gap_before:.4g} -> "
-                   f"{chosen.error:.4g} <= {bound:.4g}).")
+                   f"{chosen.error:.4g} <= {after_bound:.4g}).")
             if len(added) > 1:
                 best = min(fits, key=lambda c: c.minimax_error)
                 msg += (f" No single candidate is consistent (best: {best.name}, "

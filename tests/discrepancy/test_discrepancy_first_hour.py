@@ -427,7 +427,8 @@ def test_auto_skip_is_zero_for_a_linear_model():
     y = lfilter([0, 0.5], [1, -0.5], u)
     rep = diagnose(G, u, y, output_bound=0.01)
     assert rep.skip == 0 and rep.skip_note == ""
-    assert diagnose(G, u, y, output_bound=0.01, skip=5).skip_note == "skip=5 given"
+    assert diagnose(G, u, y, output_bound=0.01, skip=5).skip_note == (
+        "skip=5 given; the model's own start taken as known")
 
 
 @pytest.mark.parametrize("plant", ["first-order", "oscillating"])
@@ -493,3 +494,27 @@ def test_a_record_around_an_operating_point_is_told_to_use_deviations():
     assert "subtract it from both (deviation variables)" in rep.message
     dev = diagnose(G, u - 50, y - 50, output_bound=0.2, candidates=["delay"], max_effects=1)
     assert "starts far from" not in dev.message
+
+
+@pytest.mark.parametrize("case", ["refit B three times larger", "delay candidate"])
+def test_each_fit_gets_the_allowance_of_its_own_start_effect(case):
+    """Recheck 52: the allowance came from the model as given, so a refit with a larger B
+    (or a delay, which moves the start's effect later) was called inconsistent although
+    the truth, started at the top of its band, was in its class."""
+    gamma, a = (1.0, 0.3, 1.0, 0.3), [1.0, -0.95]
+    rng = np.random.default_rng(5)
+    u = np.concatenate([np.full(20, 0.3), np.repeat(rng.choice([-1.0, 1.0], 80), 8)])
+    if case == "delay candidate":
+        b_true, refit, cands = [0, 0, 0, 0, 0, 0.05], "none", ["delay"]
+    else:
+        b_true, refit, cands = [0, 0.15], "linear", ["offset"]
+    top = hammerstein(u, gamma, b_true, a, x0=0.6)  # the top of the first band [0, 0.6]
+    y = top + 0.05 * np.sign(top - hammerstein(u, gamma, b_true, a) + 1e-15)
+    H = HammersteinSystem(Backlash(*gamma), (a, [0.0, 0.05]))
+    rep = diagnose(H, u, y, output_bound=0.05, refit=refit, candidates=cands, max_effects=1)
+    if case == "delay candidate":  # the model without the delay is inconsistent, rightly
+        assert rep.effect == "delay" and rep.candidate("delay").consistent, rep.summary()
+        assert rep.candidate("delay").lower_bound <= 0.05 * (1 + 1e-9)
+    else:
+        assert rep.consistent_before and rep.gap_before_lower <= 0.05 * (1 + 1e-9), \
+            rep.summary()

@@ -173,3 +173,17 @@ def test_a_denominator_not_starting_with_one_is_said(tmp_path, capsys):
     main(["diagnose", str(rec), "--num", "0 0.5", "--den", "1 -0.5", "--output-bound", "0.1",
           "--candidates", "offset", "--max-effects", "1"])
     assert "--den starts" not in capsys.readouterr().err
+
+
+def test_the_record_read_is_said_first(tmp_path, capsys):
+    """New-user trial 21: diagnose did not echo which file, N, dt or columns it read (the
+    identify and eiv commands do)."""
+    u = _steps(np.random.default_rng(9))
+    rec = _write(tmp_path / "d.csv", u, lfilter([0.0, 0.5], [1.0, -0.5], u))
+    args = ["diagnose", str(rec), "--num", "0 0.5", "--den", "1 -0.5", "--output-bound",
+            "0.1", "--candidates", "offset", "--max-effects", "1"]
+    main(args)
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first == f"record {rec}: N = {u.size}, dt = not given, input 'u', output 'y'"
+    main([*args, "--json"])
+    assert json.loads(capsys.readouterr().out)["record"]["N"] == u.size

@@ -20,7 +20,7 @@ from .options import (
     progress_wanted,
     require,
 )
-from .printing import json_text
+from .printing import data_fields, json_text, record_line
 
 __all__ = ["add_arguments", "add_parser", "diagnose_cli_main", "run"]
 
@@ -153,7 +153,11 @@ def run(args) -> int:
                    progress=progress_wanted(args))
     if args.plot:
         _plot(rep, args.plot)
-    print(json_text(rep.to_dict()) if args.json else cli_terms(rep.summary()))
+    if args.json:
+        print(json_text({**rep.to_dict(), "record": data_fields(data)}))
+    else:  # what was read first, as identify and eiv do (new-user trial 21)
+        print("record " + record_line(args.data, data))
+        print(cli_terms(rep.summary()))
     return 0 if rep.consistent_after else 1
 
 

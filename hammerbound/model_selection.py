@@ -172,6 +172,13 @@ class OrderSelectionCV(BaseEstimator):
             return "empty", "fit", None, None
         except UnboundedSetError:
             return "unbounded", "fit", None, None
+        if getattr(est, "procedure_", None) == "one-record":
+            # its ends' points are verified members of the joint set; with none (the
+            # relaxation's bounds only) nothing is certified either way (new-user trial
+            # 22: the stage-2 consistency test was run on the joint problem and crashed)
+            if any(getattr(i, "point", None) is not None for i in est.one_record_.result.infos):
+                return "consistent", "witness", None, est
+            return "undecided", "fit", None, est
         lin = _linear_part(est)
         wit = [i.witness for i in lin.bound_info_ if getattr(i, "witness", None) is not None]
         if wit:  # an exact fit: its witnesses are verified points
@@ -221,10 +228,12 @@ class OrderSelectionCV(BaseEstimator):
         order = self._ranking(keep, rows)
         best = order[0]
         if rows[best]["status"] == "undecided":
+            how = ("raise time_limit to decide it" if rows[best]["by"] != "fit" else
+                   "a one-record fit certifies it by the verified points of method='exact'")
             warnings.warn(
                 f"the selected order {_label(cands[best])} is neither certified consistent "
                 f"nor certified inconsistent within time_limit={self.time_limit:g} s (lower "
-                "orders were certified inconsistent); raise time_limit to decide it.",
+                f"orders were certified inconsistent); {how}.",
                 SearchLimitWarning, stacklevel=2)
         self.cv_results_ = self._results(cands, rows, order, n_splits)
         self.consistency_ = decisions

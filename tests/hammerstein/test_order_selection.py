@@ -182,3 +182,32 @@ def test_parameters_are_checked():
             warnings.simplefilter("ignore")
             hb.OrderSelectionCV(LinearRegression(), {"fit_intercept": [True]}).fit(
                 u.reshape(-1, 1), y)
+
+
+@pytest.mark.deep  # 11 s (lp) and 17 s (exact): one-record fits of every fold
+@pytest.mark.parametrize("method", ["lp", "exact"])
+def test_a_one_record_identifier_is_decided_by_its_verified_points(method):
+    """New-user trial 22: the stage-2 consistency test was run on a one-record fit's joint
+    problem and crashed (AttributeError). Its ends' verified points certify consistency
+    (method 'exact'); the relaxation's bounds alone leave it undecided, said so."""
+    from oracles import play, random_steps
+    from sklearn.model_selection import TimeSeriesSplit
+
+    rng = np.random.default_rng(3)
+    u = random_steps(60, rng)
+    y = lfilter([0.0, 0.5], [1.0, -0.5], play(u, 1.0, 0.2, 1.0, 0.2))
+    y = y + rng.uniform(-0.02, 0.02, u.size)
+    ident = hb.HammersteinBacklashIdentifier(linear=hb.LinearEIVSetEstimator(
+        na=1, nb=1, output_bound=0.02, method=method, total_time_limit=10),
+        procedure="one-record")
+    sel = hb.OrderSelectionCV(ident, {"linear__nb": [1]}, cv=TimeSeriesSplit(2),
+                              time_limit=5)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        sel.fit(u, y)
+    status = sel.cv_results_["consistency"][0]
+    if method == "exact":
+        assert status == "consistent"
+    else:
+        assert status == "undecided"
+        assert any("verified points of method='exact'" in str(w.message) for w in seen)

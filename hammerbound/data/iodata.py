@@ -170,6 +170,8 @@ class IOData:
             if tt is not None:
                 t = "the frame's index"
                 names.setdefault("time_unit", "s")
+        elif t is None and tt is None:
+            _check_index_dt(_index_seconds(frame), dt, names)
         return cls._build(uu, yy, tt, t, dt, "the frame", str(u), str(y), names,
                           stamps=stamps)
 
@@ -431,6 +433,21 @@ def _in_time_unit(seconds, names):
             f"time_unit={unit!r} for a time column of date-times: give one of "
             f"{', '.join(_SECONDS)} (the date-times are converted to it), or none (s).")
     return seconds / _SECONDS[unit]
+
+
+def _check_index_dt(seconds, dt, names) -> None:
+    """A date-time index must agree with a ``dt`` given beside it (new-user trial 22: a gap
+    in the index was ignored once ``dt`` was given)."""
+    if seconds is None or dt is None:
+        return
+    from .timebase import uniform_step
+
+    unit = names.get("time_unit") or "s"
+    step = uniform_step(_in_time_unit(seconds, dict(names)), "index")
+    if abs(step - float(dt)) > 1e-6 * float(dt):
+        raise DataValidationError(
+            f"the frame's index steps by {step:g} {unit} but dt={dt:g} was given; drop dt "
+            "(the index gives it), or pass frame.reset_index(drop=True) to ignore the index.")
 
 
 def _index_seconds(frame):

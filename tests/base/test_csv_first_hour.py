@@ -294,3 +294,18 @@ def test_date_times_are_never_a_sample_counter_and_follow_a_given_time_unit(tmp_
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert hb.IOData.from_csv(offset, u="OP", y="PV").dt == 1.0
+
+
+def test_a_frames_date_time_index_must_agree_with_a_given_dt():
+    """New-user trial 22: with dt given, a gap in the frame's DatetimeIndex was ignored."""
+    pd = pytest.importorskip("pandas")
+    idx = pd.date_range("2026-01-01", periods=U.size, freq="100ms")
+    frame = pd.DataFrame({"cmd": U, "pos": Y}, index=idx)
+    assert hb.IOData.from_frame(frame, u="cmd", y="pos", dt=0.1).dt == 0.1
+    assert hb.IOData.from_frame(frame, u="cmd", y="pos", dt=100, time_unit="ms").dt == 100
+    with pytest.raises(DataValidationError, match=r"index\[3\] - index\[2\] = 0.2, expected "
+                                                  r"0.1 \(the most common step\)"):
+        hb.IOData.from_frame(frame.drop(frame.index[3]), u="cmd", y="pos", dt=0.1)
+    with pytest.raises(DataValidationError, match="steps by 0.1 s but dt=0.2 was given"):
+        hb.IOData.from_frame(frame, u="cmd", y="pos", dt=0.2)
+    assert hb.IOData.from_frame(frame.reset_index(drop=True), u="cmd", y="pos", dt=0.2).dt == 0.2

@@ -130,8 +130,11 @@ def test_a_frames_datetime_index_is_its_time_base():
     lag = pd.to_timedelta(0.5 * np.arange(n), unit="s")
     assert hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y}, index=lag)).dt == 0.5
     assert hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y})).dt is None
+    # a dt given must agree with the index (new-user trial 22: a gap was ignored beside it)
     assert hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y}, index=stamps),
-                                dt=2.0).dt == 2.0  # a dt given wins
+                                dt=10.0).dt == 10.0
+    with pytest.raises(DataValidationError, match="reset_index"):
+        hb.IOData.from_frame(pd.DataFrame({"u": u, "y": y}, index=stamps), dt=2.0)
     uneven = stamps.delete(3)
     with pytest.raises(DataValidationError, match="not uniformly sampled"):
         hb.IOData.from_frame(pd.DataFrame({"u": u[:-1], "y": y[:-1]}, index=uneven))

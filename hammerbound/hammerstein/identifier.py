@@ -424,11 +424,15 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if self.system_ is None:
             from ..exceptions import UnboundedSetError
 
-            raise UnboundedSetError(
-                "no central model: the record does not bound every parameter (see the "
-                "NotIdentifiedWarning of fit and the infinite ends of summary()); identify "
-                "from a record that reverses by more than the dead band and moves the input "
-                "often, or give a gamma_box / theta_box from what you know.")
+            details = getattr(getattr(self, "one_record_", None), "result", None)
+            timed = getattr(getattr(details, "details", None), "stopped_by_time", False)
+            raise UnboundedSetError(  # (the time limit named: new-user trial 22)
+                "no central model: " + ("the time limit stopped the search before every "
+                "parameter was bounded" if timed else "the record does not bound every "
+                "parameter") + " (see the NotIdentifiedWarning of fit and the infinite ends "
+                "of summary()); " + ("raise total_time_limit" if timed else "identify from a "
+                "record that reverses by more than the dead band and moves the input often")
+                + ", or give a gamma_box / theta_box from what you know.")
 
     def output_envelope(self, X, y=None, output_bound=None):
         """Guaranteed one-step-ahead band of the noise-free output.

@@ -121,3 +121,22 @@ def test_settled_steady_states_are_an_assumption_of_the_two_stage_fit():
     assert any("settled: a transient left counts against the steady-state output bound" in a
                for a in ident.assumptions_)
     assert "samples are settled" in ident.backlash_.summary()
+
+
+def test_no_central_model_names_the_time_limit_when_it_stopped_the_fit():
+    """New-user trial 22: after a fit stopped by its time limit, predict() said that "the
+    record does not bound every parameter" and advised another record."""
+    from hammerbound.exceptions import UnboundedSetError
+
+    u, y = _record()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        f = hb.HammersteinBacklashIdentifier(linear=hb.LinearEIVSetEstimator(
+            na=1, nb=2, nk=1, output_bound=0.02, method="exact",
+            total_time_limit=0.5)).fit(u, y)
+    assert f.one_record_.result.details.stopped_by_time
+    if f.system_ is not None:
+        pytest.skip("this machine bounded every parameter within the limit")
+    with pytest.raises(UnboundedSetError, match="the time limit stopped the search before "
+                                                "every parameter was bounded"):
+        f.predict(u)

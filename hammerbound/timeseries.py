@@ -5,7 +5,9 @@ fold) starts in the middle of the record, so a simulation from rest would score 
 transient of a zero initial state rather than the model. :func:`simulate_from_measured`
 therefore starts the recursion ``A(q^-1) w = B(q^-1) x`` from the *measured* outputs of the
 first ``n0`` samples of the segment (``n0 = max(na, last input lag)``) and simulates freely
-from there on: a multi-step (free-run) prediction, not a one-step-ahead one.
+from there on: a multi-step (free-run) prediction, not a one-step-ahead one. A backlash in
+front of it has a state that is not measured either: :func:`simulate_matched` starts it
+where, in its first band, the segment is matched best.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter, lfiltic
 
-__all__ = ["simulate_from_measured", "segment_r2"]
+__all__ = ["simulate_from_measured", "simulate_matched", "segment_r2"]
 
 
 def simulate_from_measured(A, B, x, y, n0: int) -> np.ndarray:
@@ -37,6 +39,30 @@ def simulate_from_measured(A, B, x, y, n0: int) -> np.ndarray:
     zi = lfiltic(B, A, y[n0 - 1::-1], x[n0 - 1::-1])
     w[n0:], _ = lfilter(B, A, x[n0:], zi=zi)
     return w
+
+
+def simulate_matched(system, u, y, n0: int) -> np.ndarray:
+    """:func:`simulate_from_measured` of a Hammerstein ``system`` whose backlash starts at
+    the state of its first band that matches ``y[n0:]`` best (least squares; bounded
+    search between the band's ends, which are also tried). New-user trial 22: started at
+    0, a held-out fold's score measured where the fold's backlash state happened to be
+    (R^2 0.988 against 0.9997 from its true state), and CV compared those states."""
+    from scipy.optimize import minimize_scalar
+
+    bl = system.backlash
+    lo, hi = bl.mr * (u[0] - bl.cr), bl.ml * (u[0] + bl.cl)
+
+    def run(x0):
+        return simulate_from_measured(system.A, system.B, bl.simulate(u, x0=x0), y, n0)
+
+    def sse(x0):
+        return float(np.sum((np.asarray(y, float)[n0:] - run(x0)[n0:]) ** 2))
+
+    starts = [lo, hi, float(np.clip(system.x0, lo, hi))] if hi > lo else [system.x0]
+    if hi > lo:
+        starts.append(float(minimize_scalar(sse, bounds=(lo, hi), method="bounded",
+                                            options={"xatol": 1e-9 * (hi - lo)}).x))
+    return run(min(starts, key=sse))
 
 
 def segment_r2(y, w, n0: int, sample_weight=None) -> float:

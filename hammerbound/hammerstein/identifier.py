@@ -377,35 +377,35 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         """Output of the central model simulated on input ``X``.
 
         ``X`` an array: from rest. ``X`` an :class:`~hammerbound.IOData`: the linear block
-        starts from the segment's *measured* outputs ``y[:n0]`` and runs freely from there
-        (see :meth:`score`).
+        starts from the segment's *measured* outputs ``y[:n0]`` and runs freely from there,
+        the backlash from the state in its first band that matches the segment best (see
+        :meth:`score`).
         """
         check_is_fitted(self, "bounds_")
         from ..data.iodata import IOData
-        from ..timeseries import simulate_from_measured
+        from ..timeseries import simulate_matched
 
         self._check_central()
         if isinstance(X, IOData):
-            x = self.system_.inner(X.u)
-            return simulate_from_measured(self.system_.A, self.system_.B, x, X.y,
-                                          self.linear_._n0())
+            return simulate_matched(self.system_, X.u, X.y, self.linear_._n0())
         u = as_signal("X", X)
         return self.system_.simulate(u)
 
     def score(self, X, y=None, sample_weight=None):
         """R^2 of the central model's free-run simulation on a (held-out) segment.
 
-        The backlash is simulated from its initial state (for a PRBS outside the dead zone
-        the state is on a line after the first sample, whatever it was); the linear block
-        starts from the measured outputs of the first ``n0 = max(na, last input lag)``
-        samples and runs on the input alone from there; R^2 is taken over ``t >= n0``. A
+        Neither state is measured: the linear block starts from the measured outputs of
+        the first ``n0 = max(na, last input lag)`` samples and runs on the input alone from
+        there, the backlash from the state in its first band that matches the segment best
+        (least squares; for a PRBS outside the dead zone the state is on a line after the
+        first sample anyway); R^2 is taken over ``t >= n0``. A
         multi-step (simulation) score, meaningful for a ``TimeSeriesSplit`` test fold:
         ``score(data) == r2_score(data.y[n0:], predict(data)[n0:])``. scikit-learn's
         scorers (``scoring="r2"``, ...) need ``y``: pass the IOData and ``data.y``.
         """
         check_is_fitted(self, "bounds_")
         from ..data.iodata import unpack
-        from ..timeseries import segment_r2, simulate_from_measured
+        from ..timeseries import segment_r2, simulate_matched
 
         self._check_central()
         X, y, _ = unpack(X, y, func="score")
@@ -416,8 +416,7 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
         if u.size <= n0 + 1:
             raise DataValidationError(
                 f"the scored segment needs more than n0 + 1 = {n0 + 1} samples; got {u.size}.")
-        w = simulate_from_measured(self.system_.A, self.system_.B, self.system_.inner(u), yy,
-                                   n0)
+        w = simulate_matched(self.system_, u, yy, n0)
         return segment_r2(yy, w, n0, sample_weight)
 
     def _check_central(self):

@@ -140,3 +140,26 @@ def test_no_central_model_names_the_time_limit_when_it_stopped_the_fit():
     with pytest.raises(UnboundedSetError, match="the time limit stopped the search before "
                                                 "every parameter was bounded"):
         f.predict(u)
+
+
+def test_a_held_out_segment_is_scored_from_its_best_matched_backlash_state(fitted):
+    """New-user trial 22: a held-out fold was simulated with the backlash at 0, so its
+    score measured where the fold's backlash state happened to be (R^2 0.988 against
+    0.9997 from its true state). The state is now matched to the segment, as the linear
+    block's is by its measured outputs."""
+    from sklearn.metrics import r2_score
+
+    from hammerbound.timeseries import simulate_from_measured
+
+    f, _, _ = fitted
+    rng = np.random.default_rng(12)
+    u = np.r_[np.full(30, 0.05), random_steps(90, rng)]  # a hold first: the state lingers
+    x = play(u, *GAMMA, x0=GAMMA[0] * (u[0] + GAMMA[1]))  # the top of its first band
+    y = lfilter([0.0, 0.5, 0.3], [1.0, -0.7, 0.0], x) + rng.uniform(-0.02, 0.02, u.size)
+    data = hb.IOData(u, y)
+    n0 = f.linear_._n0()
+    s = f.system_
+    from_zero = r2_score(y[n0:], simulate_from_measured(s.A, s.B, s.inner(u), y, n0)[n0:])
+    score = f.score(data)
+    assert score > 0.999 and score > from_zero + 0.005  # 0.99995 against 0.987
+    assert score == pytest.approx(r2_score(y[n0:], f.predict(data)[n0:]), abs=1e-12)

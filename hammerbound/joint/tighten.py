@@ -48,7 +48,9 @@ EMPTY_HINT = ("Likely causes, commonest first: (1) an output bound too small for
               "(m_r - m_l)); (6) a dead band [-c_l, c_r] that does not "
               "hold u = 0 (an offset, e.g. a valve's input in percent: shift u first, e.g. "
               "by the input at which the output rests, and y by that rest value; the model "
-              "has no output offset either).")
+              "has no output offset either); (7) samples that are not consecutive (a "
+              "cross-validation split such as KFold joins pieces of the record: use "
+              "TimeSeriesSplit).")
 
 def before_checklist(text: str, sentence: str) -> str:
     """``text`` (an empty verdict's message) with ``sentence`` put before its checklist

@@ -130,6 +130,9 @@ def test_a_swapped_record_is_told_it_may_be_swapped():
             ident.fit(y, u)
     text = str(info.value)  # the likeliest cause before the general checklist
     assert text.index("swapped") < text.index("Likely causes")
+    # new-user trial 22: KFold joined pieces of the record and got this checklist
+    assert "(7) samples that are not consecutive (a cross-validation split such as KFold" \
+        in " ".join(text.split())
 
 
 def test_a_not_identified_warning_blames_the_record_only_for_the_record_causes():

@@ -133,7 +133,7 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
         )
     check_scale(func, {"u": u, "y": y}, {"output_bound": bound})
     s = _with_dt(as_structure(model), data)
-    s, skip, skip_note, allowance = _skip(s, u, bound, skip)
+    s, skip, skip_note, _ = _skip(s, u, bound, skip)
     if u.size - skip < 10:
         auto = " by skip='auto'; skip=0 scores every sample" if skip_note.startswith("the") \
             else ""
@@ -147,7 +147,7 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
             "cannot be compared with data that were not excited - record data with a "
             "varying input."
         )
-    return s, u, y, bound, refit == "linear", skip, data, (skip_note, allowance)
+    return s, u, y, bound, refit == "linear", skip, data, skip_note
 
 
 def _skip(s, u, bound, skip) -> tuple:

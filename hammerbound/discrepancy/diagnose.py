@@ -136,8 +136,8 @@ def diagnose(
     """
     output_bound = renamed_value("diagnose", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, data, (skip_note, _) = validate(
-        model, u, y, output_bound, refit, skip)
+    s, u, y, bound, do_refit, skip, data, skip_note = validate(model, u, y, output_bound,
+                                                               refit, skip)
     names = candidate_names(candidates)
     max_delay = int_param("max_delay", max_delay, 1)
     max_delay = min(max_delay, u.size - skip - 2)

@@ -97,8 +97,8 @@ def locate(model, u, y=None, output_bound=None, *, refit: str = "linear", skip: 
     """
     output_bound = renamed_value("locate", "output_bound", output_bound, "noise_bound",
                                  noise_bound)
-    s, u, y, bound, do_refit, skip, _, (skip_note, _) = validate(
-        model, u, y, output_bound, refit, skip, "locate")
+    s, u, y, bound, do_refit, skip, _, skip_note = validate(model, u, y, output_bound, refit,
+                                                            skip, "locate")
     window = int_param("window", window, 1)
     max_lag = int_param("max_lag", max_lag, 0)
     origin = s if s.origin is None else s.origin

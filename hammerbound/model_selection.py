@@ -228,13 +228,13 @@ class OrderSelectionCV(BaseEstimator):
         order = self._ranking(keep, rows)
         best = order[0]
         if rows[best]["status"] == "undecided":
-            how = ("raise time_limit to decide it" if rows[best]["by"] != "fit" else
-                   "a one-record fit certifies it by the verified points of method='exact'")
+            why = (f"within time_limit={self.time_limit:g} s (lower orders were certified "
+                   "inconsistent); raise time_limit to decide it" if rows[best]["by"] != "fit"
+                   else "by its one-record fit, whose relaxation gives no verified point; "
+                   "method='exact' certifies it by its ends' points")  # recheck 52b
             warnings.warn(
                 f"the selected order {_label(cands[best])} is neither certified consistent "
-                f"nor certified inconsistent within time_limit={self.time_limit:g} s (lower "
-                f"orders were certified inconsistent); {how}.",
-                SearchLimitWarning, stacklevel=2)
+                f"nor certified inconsistent {why}.", SearchLimitWarning, stacklevel=2)
         self.cv_results_ = self._results(cands, rows, order, n_splits)
         self.consistency_ = decisions
         self.n_splits_ = n_splits

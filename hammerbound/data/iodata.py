@@ -438,11 +438,11 @@ def _in_time_unit(seconds, names):
 def _check_index_dt(seconds, dt, names) -> None:
     """A date-time index must agree with a ``dt`` given beside it (new-user trial 22: a gap
     in the index was ignored once ``dt`` was given)."""
-    if seconds is None or dt is None:
-        return
+    if seconds is None or dt is None or not float(dt) > 0 or len(seconds) < 2:
+        return  # (dt itself is checked where it is used)
     from .timebase import uniform_step
 
-    unit = names.get("time_unit") or "s"
+    unit = names.setdefault("time_unit", "s")  # the unit the index was checked in
     step = uniform_step(_in_time_unit(seconds, dict(names)), "index")
     if abs(step - float(dt)) > 1e-6 * float(dt):
         raise DataValidationError(

@@ -422,9 +422,12 @@ class HammersteinBacklashIdentifier(RegressorMixin, BaseEstimator):
     def _check_central(self):
         if self.system_ is None:
             from ..exceptions import UnboundedSetError
+            from ..joint.prior import reversal_summary
 
-            details = getattr(getattr(self, "one_record_", None), "result", None)
-            timed = getattr(getattr(details, "details", None), "stopped_by_time", False)
+            fit = getattr(self, "one_record_", None)
+            details = getattr(getattr(fit, "result", None), "details", None)
+            timed = getattr(details, "stopped_by_time", False) and not (  # recheck 52b
+                reversal_summary(fit.problem.u)["monotone"])  # no time bounds c then
             raise UnboundedSetError(  # (the time limit named: new-user trial 22)
                 "no central model: " + ("the time limit stopped the search before every "
                 "parameter was bounded" if timed else "the record does not bound every "

@@ -210,4 +210,5 @@ def test_a_one_record_identifier_is_decided_by_its_verified_points(method):
         assert status == "consistent"
     else:
         assert status == "undecided"
-        assert any("verified points of method='exact'" in str(w.message) for w in seen)
+        assert any("method='exact' certifies it by its ends' points" in str(w.message)
+                   for w in seen)

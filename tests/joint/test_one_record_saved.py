@@ -184,3 +184,21 @@ def test_the_matched_backlash_start_is_the_least_squares_one_not_a_local_one():
     best = min(np.sum((y[2:] - simulate_from_measured(a, b, bl.simulate(u, x0=g), y, 2)[2:])
                       ** 2) for g in grid)
     assert np.sum((y[2:] - w[2:]) ** 2) <= best + 1e-9
+
+
+def test_no_central_model_blames_an_input_that_never_reverses_even_at_the_limit():
+    """Recheck 52b: a never-reversing input cannot bound the dead band whatever the time,
+    but a fit stopped by its limit was told to raise total_time_limit."""
+    from hammerbound.exceptions import UnboundedSetError
+
+    u = np.linspace(-1.0, 1.0, 80)  # never reverses
+    y = lfilter([0.0, 0.5, 0.3], [1.0, -0.7, 0.0], play(u, *GAMMA))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        f = hb.HammersteinBacklashIdentifier(linear=hb.LinearEIVSetEstimator(
+            na=1, nb=2, nk=1, output_bound=0.02, method="exact",
+            total_time_limit=0.5)).fit(u, y)
+    if f.system_ is not None:
+        pytest.skip("every parameter bounded")  # not expected: c cannot be bounded
+    with pytest.raises(UnboundedSetError, match="the record does not bound every parameter"):
+        f.predict(u)

@@ -235,10 +235,12 @@ def _report_unidentified(problem, bounds, prior, stopped_by_time=False, lps_stop
              "The other intervals rest on the default backlash box (in assumptions_): a "
              "slope or dead band beyond it (e.g. a state that starts on a line far from "
              "the record's inputs) could lie outside them. ")
-    lead = _lead(stopped_by_time, [c for _, c in found])
+    # an input that never reverses is the cause whatever the time (recheck 52b)
+    timed = stopped_by_time and not all(c.startswith(_RECORD_CAUSES) for _, c in found)
+    lead = _lead(timed, [c for _, c in found])
     warnings.warn(f"{lead} {names}: {causes}. Those ends are {what}. "
-                  + rests + _scale_hint(problem, bounds, {n for n, _ in found}, stopped_by_time)
-                  + _advice(stopped_by_time, lps_stopped, prior.user_given, pace),
+                  + rests + _scale_hint(problem, bounds, {n for n, _ in found}, timed)
+                  + _advice(timed, lps_stopped, prior.user_given, pace),
                   # warn -> here -> fit_one_record -> _fit_one_record -> fit -> the caller
                   NotIdentifiedWarning, stacklevel=5)
     return gb, tuple(found)

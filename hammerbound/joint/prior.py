@@ -111,7 +111,8 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
     array marking the prior limits that are assumptions (not the chapter's model);
     ``stopped_by_time``: the time limit stopped the search; ``lps_stopped``: that many
     relaxation LPs ended before optimality (their own time limit, or a solver failure);
-    either is then the cause named, not the input; ``method``: the method that ran (the
+    either is then the cause named, unless the input never reverses (which no time
+    changes); ``method``: the method that ran (the
     exact one is suggested only after the LP method); ``rtol``: of :func:`at_prior_limit`.
     """
     rev = reversal_summary(u)
@@ -122,7 +123,10 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
                 continue
             if not at_prior_limit(bounds[i, j], prior, i, j, rtol):
                 continue
-            if stopped_by_time:
+            if rev["monotone"]:  # first: no time or LP changes this (recheck 52b)
+                cause = ("the input never reverses, so only one line of the backlash is "
+                         "ever active")
+            elif stopped_by_time:
                 cause = ("the time limit stopped the search before the record bounded it "
                          "(raise total_time_limit)")
             elif lps_stopped:
@@ -131,9 +135,6 @@ def unidentified(u, names, bounds, prior, assumed, *, stopped_by_time=False, lps
                          "LP_TIME_LIMIT s, or HiGHS could not solve them), so the search "
                          "may not have bounded it; "
                          "rescaling the data or a narrower gamma_box may help")
-            elif rev["monotone"]:
-                cause = ("the input never reverses, so only one line of the backlash is "
-                         "ever active")
             elif name.startswith("c") or name.startswith("m"):
                 fix = ("a narrower gamma_box from what you know of the actuator, or "
                        "method='exact', usually bounds it" if method == "lp" else

@@ -268,5 +268,4 @@ def joint_samples(problem, box, seeds, n, random_state=None, max_tries=None, pro
     if len(out) < n:
         raise SolverError(f"only {len(out)} of {n} points of the one-record set were "
                           f"verified in {tries} attempts; ask for fewer samples.")
-    return JointSamples.of(out, problem.theta_names, problem.na,
-                           1.0 if problem.gain is None else float(problem.gain), tries)
+    return JointSamples.of(out, problem.theta_names, problem.na, float(problem.gain), tries)

@@ -79,9 +79,11 @@ def with_hints(exc, est, problem, data):
                      "KFold), they are not consecutive: use TimeSeriesSplit, or pass "
                      "IOData, which refuses such cuts.")
     first = str(exc)
-    if not isinstance(exc, EmptyFeasibleSetError):
-        return type(exc)(" ".join(h for h in (first, *map(str, parts)) if h), **kw)
-    return type(exc)(LazyText(lambda: " ".join(h for h in (first, *map(str, parts)) if h)),
+
+    def text():
+        return " ".join(h for h in (first, *map(str, parts)) if h)
+
+    return type(exc)(LazyText(text) if isinstance(exc, EmptyFeasibleSetError) else text(),
                      **kw)
 
 

@@ -50,7 +50,7 @@ def simulate_matched(system, u, y, n0: int) -> np.ndarray:
     from scipy.optimize import minimize_scalar
 
     bl = system.backlash
-    lo, hi = bl.mr * (u[0] - bl.cr), bl.ml * (u[0] + bl.cl)
+    lo, hi = float(bl.right(u[0])), float(bl.left(u[0]))  # its first band
 
     def run(x0):
         return simulate_from_measured(system.A, system.B, bl.simulate(u, x0=x0), y, n0)

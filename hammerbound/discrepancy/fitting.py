@@ -340,7 +340,7 @@ def start_spread(bl, x, extend, num, den) -> np.ndarray:
     between the backlash outputs from the two ends of its first band (the play operator is
     monotone in its start, so every start's output lies between them). Review 52: the
     gap's own response, ``|h * d|``, is no bound when ``h`` changes sign."""
-    R0, L0 = bl.mr * (x[0] - bl.cr), bl.ml * (x[0] + bl.cl)
+    R0, L0 = float(bl.right(x[0])), float(bl.left(x[0]))
     d = np.abs(inner_backlash(bl, x, L0, extend) - inner_backlash(bl, x, R0, extend))
     imp = np.zeros(x.size)
     imp[0] = 1.0

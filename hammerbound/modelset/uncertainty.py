@@ -338,11 +338,11 @@ def _unbounded_message(kind, grid):
     # constant; review 52: the ratio to its size named A for a box 1e-7 wide)
     a_far = d["amin"][[i, j]] / max(grid.LA, 1e-300)
     b_far = d["b0"][[i, j]] / max(grid.LB0, 1e-300)
-    a_near = float(np.min(a_far)) <= float(np.min(b_far))
-    k = [i, j][int(np.argmin(a_far if a_near or kind == "additive" else b_far))]
+    blame_a = kind == "additive" or float(np.min(a_far)) <= float(np.min(b_far))
+    k = [i, j][int(np.argmin(a_far if blame_a else b_far))]
     w = grid.omega[k]
     at = f"near w = {w:.4g} rad/{'s' if grid.dt != 1.0 else 'sample'}"
-    if kind == "additive" or d["amin"][k] == 0 or a_near:
+    if blame_a or d["amin"][k] == 0:
         grid_words = ("" if d["amin"][k] == 0 else
                       f"; |A| >= {d['amin'][k]:.3g} at the proof grid's points there, too "
                       "little for the proof between them: a larger n_grid may do")

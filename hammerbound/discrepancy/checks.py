@@ -133,10 +133,11 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
         )
     check_scale(func, {"u": u, "y": y}, {"output_bound": bound})
     s = _with_dt(as_structure(model), data)
-    s, skip, skip_note, _ = _skip(s, u, bound, skip)
+    asked = skip
+    s, skip, skip_note = _skip(s, u, bound, skip)
     if u.size - skip < 10:
-        auto = " by skip='auto'; skip=0 scores every sample" if skip_note.startswith("the") \
-            else ""
+        auto = (" by skip='auto'; skip=0 scores every sample" if isinstance(asked, str) and skip
+                else "")
         raise DataValidationError(
             f"only {u.size - skip} scored samples (length {u.size}, skip {skip}{auto}); at "
             "least 10 are needed - record longer data."
@@ -151,7 +152,7 @@ def validate(model, u, y, output_bound, refit, skip, func="diagnose"):
 
 
 def _skip(s, u, bound, skip) -> tuple:
-    """``(structure, skip, why, allowance)``. ``skip="auto"``: :func:`initial_state_skip`, and the
+    """``(structure, skip, why)``. ``skip="auto"``: :func:`initial_state_skip`, and the
     backlash's start is free in every certified bound (``inner_start_free``); an int is the
     user's, and the model's own start is taken as known."""
     auto = isinstance(skip, str) and skip == "auto"
@@ -165,8 +166,8 @@ def _skip(s, u, bound, skip) -> tuple:
                 origin=None if origin is None else replace(origin, inner_start_free=free))
     if not auto:
         return s, skip, (f"skip={skip} given; the model's own start taken as known" if skip
-                         else ""), 0.0
-    return (s, *initial_state_skip(s, u, bound))
+                         else "")
+    return (s, *initial_state_skip(s, u, bound)[:2])
 
 
 def initial_state_skip(s, u, bound) -> tuple[int, str, float]:
